@@ -1,0 +1,141 @@
+# facetd — one entry point: make, make run, make test, make bench,
+# make fuzz, make install (DESTDIR, PREFIX), make deps.
+#
+# Layout (see README): lib/ → build/libfacet.a (geometry, libc/libm only),
+# proto/ → build/libfacetproto.a, scanner/ → build/libfacetscan.a,
+# daemon/ → build/facetd and build/facet. `make SANITIZE=1 …` builds the
+# same under AddressSanitizer + UndefinedBehaviorSanitizer in build/asan.
+
+PREFIX  ?= /usr/local
+DESTDIR ?=
+CC      ?= cc
+SANITIZE ?= 0
+
+ifeq ($(SANITIZE),1)
+B := build/asan
+SANFLAGS := -fsanitize=address,undefined -fno-sanitize-recover=all \
+            -fno-omit-frame-pointer
+OPT := -O1 -g
+else
+B := build
+SANFLAGS :=
+OPT := -O2 -g
+endif
+
+# Libraries come from pkg-config, evaluated lazily so that `make deps`
+# works on a machine that does not have them yet.
+PKG_PROTO   := jansson
+PKG_SCANNER := libusb-1.0 hidapi-hidraw libudev
+PKG_DAEMON  := libmicrohttpd sqlite3 libsystemd
+PKG_TEST    := cmocka
+PKG_MOCK    := umockdev-1.0 glib-2.0 gobject-2.0
+pkg_cflags = $(shell pkg-config --cflags $(1) 2>/dev/null)
+pkg_libs   = $(shell pkg-config --libs $(1) 2>/dev/null)
+
+override CFLAGS += -std=c11 -D_GNU_SOURCE -Wall -Wextra -Wpedantic -Werror \
+    -Wshadow -Wno-unused-parameter -ffp-contract=off -MMD -MP \
+    $(OPT) $(SANFLAGS) -Ilib -Iproto -Iscanner -Idaemon
+override LDFLAGS += $(SANFLAGS)
+LDLIBS_BASE := -lm -lpthread
+
+LIB_SRCS     := $(sort $(wildcard lib/*.c))
+PROTO_SRCS   := $(sort $(wildcard proto/*.c))
+SCANNER_SRCS := $(sort $(filter-out scanner/mock_%.c,$(wildcard scanner/*.c)))
+DAEMON_MAINS := daemon/facetd.c daemon/facet.c
+CLI_SRCS     := $(sort $(wildcard daemon/cmd_*.c))
+DAEMON_SRCS  := $(sort $(filter-out $(DAEMON_MAINS) $(CLI_SRCS),$(wildcard daemon/*.c)))
+UNIT_SRCS    := $(sort $(wildcard tests/unit/test_*.c))
+BENCH_SRCS   := $(sort $(wildcard tests/bench/bench_*.c))
+TOOL_SRCS    := $(sort $(wildcard tests/tools/*.c))
+TESTLIB_SRCS := $(sort $(wildcard tests/support/*.c))
+
+obj = $(patsubst %.c,$(B)/obj/%.o,$(1))
+
+LIBFACET  := $(B)/libfacet.a
+LIBPROTO  := $(B)/libfacetproto.a
+LIBSCAN   := $(B)/libfacetscan.a
+LIBDAEMON := $(B)/libfacetdaemon.a
+FACETD    := $(B)/facetd
+FACET     := $(B)/facet
+UNIT_BINS := $(patsubst tests/unit/%.c,$(B)/tests/%,$(UNIT_SRCS))
+BENCH_BINS:= $(patsubst tests/bench/%.c,$(B)/bench/%,$(BENCH_SRCS))
+TOOL_BINS := $(patsubst tests/tools/%.c,$(B)/tools/%,$(TOOL_SRCS))
+
+ALL_LIBS = $(LIBDAEMON) $(LIBSCAN) $(LIBPROTO) $(LIBFACET)
+ALL_LDLIBS = $(call pkg_libs,$(PKG_DAEMON) $(PKG_SCANNER) $(PKG_PROTO)) $(LDLIBS_BASE)
+
+.SECONDARY:
+.PHONY: all deps test bench fuzz run install clean check-deps
+all: $(LIBFACET) $(LIBPROTO) $(FACET) $(if $(wildcard daemon/facetd.c),$(FACETD))
+
+$(B)/obj/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) $(call pkg_cflags,$(PKG_PROTO) $(PKG_SCANNER) $(PKG_DAEMON)) -c $< -o $@
+
+$(B)/obj/tests/%.o: tests/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) -Itests/support $(call pkg_cflags,$(PKG_PROTO) $(PKG_DAEMON) $(PKG_TEST)) -c $< -o $@
+
+$(LIBFACET): $(call obj,$(LIB_SRCS))
+	@mkdir -p $(dir $@)
+	rm -f $@ && $(AR) rcs $@ $^
+$(LIBPROTO): $(call obj,$(PROTO_SRCS))
+	@mkdir -p $(dir $@)
+	rm -f $@ && $(AR) rcs $@ $^
+$(LIBSCAN): $(call obj,$(SCANNER_SRCS))
+	@mkdir -p $(dir $@)
+	rm -f $@ && $(AR) rcs $@ $^
+$(LIBDAEMON): $(call obj,$(DAEMON_SRCS))
+	@mkdir -p $(dir $@)
+	rm -f $@ && $(AR) rcs $@ $^
+
+$(FACET): $(call obj,daemon/facet.c $(CLI_SRCS)) $(ALL_LIBS)
+	$(CC) $(LDFLAGS) -o $@ $^ $(ALL_LDLIBS)
+$(FACETD): $(call obj,daemon/facetd.c) $(ALL_LIBS)
+	$(CC) $(LDFLAGS) -o $@ $^ $(ALL_LDLIBS)
+
+$(B)/tests/%: $(B)/obj/tests/unit/%.o $(call obj,$(TESTLIB_SRCS)) $(ALL_LIBS)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) -o $@ $^ $(call pkg_libs,$(PKG_TEST)) $(ALL_LDLIBS)
+$(B)/bench/%: $(B)/obj/tests/bench/%.o $(call obj,$(TESTLIB_SRCS)) $(ALL_LIBS)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) -o $@ $^ $(ALL_LDLIBS)
+$(B)/tools/%: $(B)/obj/tests/tools/%.o $(call obj,$(TESTLIB_SRCS)) $(ALL_LIBS)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) -o $@ $^ $(ALL_LDLIBS)
+
+# Debian 12 packages the project builds, tests and runs with.
+DEB_PKGS := build-essential pkg-config libjansson-dev libmicrohttpd-dev \
+    libsqlite3-dev libsystemd-dev libusb-1.0-0-dev libhidapi-dev libudev-dev \
+    libcmocka-dev umockdev libumockdev-dev libglib2.0-dev curl systemd \
+    clang libclang-rt-14-dev wrk
+deps:
+	@sh tests/tools/install-deps.sh $(DEB_PKGS)
+
+test: deps
+	@$(MAKE) --no-print-directory all-tests SANITIZE=$(SANITIZE)
+	@sh tests/run.sh $(B)
+
+.PHONY: all-tests
+all-tests: all $(UNIT_BINS) $(TOOL_BINS)
+
+bench: all $(BENCH_BINS) $(TOOL_BINS)
+	@sh tests/bench/run.sh $(B)
+
+run: deps
+	@$(MAKE) --no-print-directory all
+	@mkdir -p var
+	@if [ -x $(FACETD) ]; then \
+	  echo "facetd on http://127.0.0.1:8080, store in ./var (Ctrl-C stops)"; \
+	  exec $(FACETD) --listen 127.0.0.1:8080 --state-dir ./var; \
+	else $(FACET) --help; fi
+
+install: all
+	install -d $(DESTDIR)$(PREFIX)/bin
+	install -m 0755 $(FACET) $(DESTDIR)$(PREFIX)/bin/facet
+	if [ -x $(FACETD) ]; then install -m 0755 $(FACETD) $(DESTDIR)$(PREFIX)/bin/facetd; fi
+
+clean:
+	rm -rf build
+
+-include $(shell find build -name '*.d' 2>/dev/null)

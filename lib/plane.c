@@ -1,0 +1,174 @@
+/* plane.c — plane fitting and intersection (seed 000 §2.5, §2.6.3). */
+#include "plane.h"
+
+#include <errno.h>
+#include <math.h>
+#include <string.h>
+
+#include "vec.h"
+
+void geo_sym3_eigen(double m[3][3], double ret_values[3],
+                    double ret_vectors[3][3])
+{
+    double a[3][3], v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            a[i][j] = i <= j ? m[i][j] : m[j][i];
+
+    for (int sweep = 0; sweep < 50; sweep++) {
+        double off = fabs(a[0][1]) + fabs(a[0][2]) + fabs(a[1][2]);
+        double diag = fabs(a[0][0]) + fabs(a[1][1]) + fabs(a[2][2]);
+        if (off == 0.0 || off <= 1e-300 || off < 1e-18 * diag)
+            break;
+        for (int p = 0; p < 2; p++) {
+            for (int q = p + 1; q < 3; q++) {
+                if (a[p][q] == 0.0)
+                    continue;
+                double theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+                double t = (theta >= 0 ? 1.0 : -1.0) /
+                           (fabs(theta) + sqrt(theta * theta + 1.0));
+                double c = 1.0 / sqrt(t * t + 1.0), s = t * c;
+                for (int k = 0; k < 3; k++) { /* A = Jᵀ A J */
+                    double akp = a[k][p], akq = a[k][q];
+                    a[k][p] = c * akp - s * akq;
+                    a[k][q] = s * akp + c * akq;
+                }
+                for (int k = 0; k < 3; k++) {
+                    double apk = a[p][k], aqk = a[q][k];
+                    a[p][k] = c * apk - s * aqk;
+                    a[q][k] = s * apk + c * aqk;
+                }
+                for (int k = 0; k < 3; k++) {
+                    double vkp = v[k][p], vkq = v[k][q];
+                    v[k][p] = c * vkp - s * vkq;
+                    v[k][q] = s * vkp + c * vkq;
+                }
+            }
+        }
+    }
+    int order[3] = {0, 1, 2};
+    for (int i = 0; i < 3; i++)
+        for (int j = i + 1; j < 3; j++)
+            if (a[order[j]][order[j]] < a[order[i]][order[i]]) {
+                int t = order[i];
+                order[i] = order[j];
+                order[j] = t;
+            }
+    for (int k = 0; k < 3; k++) {
+        ret_values[k] = a[order[k]][order[k]];
+        for (int i = 0; i < 3; i++)
+            ret_vectors[k][i] = v[i][order[k]];
+        geo_vnormalize(ret_vectors[k]);
+    }
+}
+
+int geo_plane_fit(const double *pts, const double *w, size_t n,
+                  const double orient[3], double ret[4])
+{
+    if (n < 3)
+        return -EINVAL;
+    double wsum = 0, c[3] = {0, 0, 0};
+    for (size_t i = 0; i < n; i++) {
+        double wi = w ? w[i] : 1.0;
+        wsum += wi;
+        geo_vmadd(c, wi, pts + 3 * i, c);
+    }
+    if (!(wsum > 0))
+        return -EINVAL;
+    geo_vscale(c, 1.0 / wsum, c);
+
+    double cov[3][3] = {{0}};
+    for (size_t i = 0; i < n; i++) {
+        double wi = w ? w[i] : 1.0, d[3];
+        geo_vsub(pts + 3 * i, c, d);
+        for (int r = 0; r < 3; r++)
+            for (int s = r; s < 3; s++)
+                cov[r][s] += wi * d[r] * d[s];
+    }
+    double values[3], vectors[3][3];
+    geo_sym3_eigen(cov, values, vectors);
+    /* collinear (or coincident) points: two vanishing eigenvalues */
+    if (!(values[1] > 1e-24 * (values[2] > 0 ? values[2] : 1.0)) ||
+        !(values[2] > 0))
+        return -EINVAL;
+    double nrm[3] = {vectors[0][0], vectors[0][1], vectors[0][2]};
+    if (orient && geo_vdot(nrm, orient) < 0)
+        geo_vscale(nrm, -1.0, nrm);
+    ret[0] = nrm[0];
+    ret[1] = nrm[1];
+    ret[2] = nrm[2];
+    ret[3] = -geo_vdot(nrm, c);
+    return 0;
+}
+
+int geo_plane_from_point_normal(const double p[3], const double n[3],
+                                double ret[4])
+{
+    double u[3] = {n[0], n[1], n[2]};
+    if (!(geo_vnormalize(u) > 0))
+        return -EINVAL;
+    ret[0] = u[0];
+    ret[1] = u[1];
+    ret[2] = u[2];
+    ret[3] = -geo_vdot(u, p);
+    return 0;
+}
+
+int geo_plane_from_points(const double a[3], const double b[3],
+                          const double c[3], double ret[4])
+{
+    double ab[3], ac[3], n[3];
+    geo_vsub(b, a, ab);
+    geo_vsub(c, a, ac);
+    geo_vcross(ab, ac, n);
+    return geo_plane_from_point_normal(a, n, ret);
+}
+
+bool geo_plane_intersect3(const double p1[4], const double p2[4],
+                          const double p3[4], double ret[3])
+{
+    double n23[3], n31[3], n12[3];
+    geo_vcross(p2, p3, n23);
+    geo_vcross(p3, p1, n31);
+    geo_vcross(p1, p2, n12);
+    double det = geo_vdot(p1, n23);
+    double scale = geo_vlen(p1) * geo_vlen(p2) * geo_vlen(p3);
+    if (!(fabs(det) > 1e-12 * scale))
+        return false;
+    for (int k = 0; k < 3; k++)
+        ret[k] = -(p1[3] * n23[k] + p2[3] * n31[k] + p3[3] * n12[k]) / det;
+    return true;
+}
+
+bool geo_spd3_solve(double m[3][3], const double b[3], double x[3])
+{
+    double l[3][3] = {{0}};
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j <= i; j++) {
+            double s = i <= j ? m[i][j] : m[j][i];
+            for (int k = 0; k < j; k++)
+                s -= l[i][k] * l[j][k];
+            if (i == j) {
+                if (!(s > 0))
+                    return false;
+                l[i][i] = sqrt(s);
+            } else {
+                l[i][j] = s / l[j][j];
+            }
+        }
+    }
+    double y[3];
+    for (int i = 0; i < 3; i++) {
+        double s = b[i];
+        for (int k = 0; k < i; k++)
+            s -= l[i][k] * y[k];
+        y[i] = s / l[i][i];
+    }
+    for (int i = 2; i >= 0; i--) {
+        double s = y[i];
+        for (int k = i + 1; k < 3; k++)
+            s -= l[k][i] * x[k];
+        x[i] = s / l[i][i];
+    }
+    return true;
+}

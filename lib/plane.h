@@ -1,0 +1,45 @@
+/* plane.h — planes a·x+b·y+c·z+d = 0 with (a,b,c) a unit normal: least
+ * squares fits (seed 000 §2.5), three-plane intersection, and the
+ * symmetric 3×3 eigen-solver behind the fit. Pure functions, thread-safe. */
+#ifndef GEO_PLANE_H
+#define GEO_PLANE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+/* Least-squares plane of n points (pts: 3·n doubles x,y,z,…) (seed 000 §2.5.1): minimises
+ * Σ wᵢ (a·xᵢ+b·yᵢ+c·zᵢ+d)² with |(a,b,c)| = 1, i.e. the eigenvector of the
+ * smallest eigenvalue of the weighted covariance, through the weighted
+ * centroid. w may be NULL (all weights 1). If orient is non-NULL the
+ * normal is turned to have a non-negative dot product with it. Returns 0,
+ * or -EINVAL when n < 3, weights sum to 0, or the points are collinear
+ * within rounding (ret is then left unchanged). */
+int geo_plane_fit(const double *pts, const double *w, size_t n,
+                  const double orient[3], double ret[4]);
+
+/* Plane through p with unit normal n (n need not be unit: it is
+ * normalised). Returns -EINVAL for a zero normal. */
+int geo_plane_from_point_normal(const double p[3], const double n[3],
+                                double ret[4]);
+
+/* Plane through a, b, c, normal (b−a)×(c−a) normalised. -EINVAL when
+ * collinear. */
+int geo_plane_from_points(const double a[3], const double b[3],
+                          const double c[3], double ret[4]);
+
+/* The common point of three planes. Returns false (ret unchanged) when the
+ * normals are linearly dependent: |det| ≤ 1e-12 · |n1|·|n2|·|n3|. */
+bool geo_plane_intersect3(const double p1[4], const double p2[4],
+                          const double p3[4], double ret[3]);
+
+/* Eigen-decomposition of the symmetric 3×3 matrix m (row-major, only the
+ * upper triangle read, m not modified) by cyclic Jacobi rotations: ret_values ascending,
+ * ret_vectors[k] the unit eigenvector of ret_values[k]. */
+void geo_sym3_eigen(double m[3][3], double ret_values[3],
+                    double ret_vectors[3][3]);
+
+/* Solves the symmetric positive-definite 3×3 system m x = b by Cholesky.
+ * m is not modified. Returns false when m is not positive definite (x unchanged). */
+bool geo_spd3_solve(double m[3][3], const double b[3], double x[3]);
+
+#endif

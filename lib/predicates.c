@@ -1,0 +1,270 @@
+/* predicates.c — filtered exact orientation predicates.
+ *
+ * Fast path: the determinant in doubles and Shewchuk's error bound on it
+ * (J. R. Shewchuk, "Adaptive Precision Floating-Point Arithmetic and Fast
+ * Robust Geometric Predicates", 1997, bounds errboundA). If |det| exceeds
+ * the bound its sign is the exact sign. Otherwise the determinant is
+ * rebuilt exactly as a nonoverlapping expansion: every difference of inputs
+ * is a two-term expansion (Two_Diff), products are formed with
+ * Scale-Expansion, sums with Grow-Expansion, and the sign of an expansion
+ * is the sign of its largest (last) component. */
+#include "predicates.h"
+
+#include <math.h>
+
+#define EPS 0x1.0p-53 /* half an ulp of 1: the unit roundoff */
+#define O2D_BOUND ((3.0 + 16.0 * EPS) * EPS)
+#define O3D_BOUND ((7.0 + 56.0 * EPS) * EPS)
+/* a·x+b·y+c·z+d: three products and three sums, γ4 with slack */
+#define PLANE_BOUND ((5.0 + 64.0 * EPS) * EPS)
+/* Below this magnitude products may underflow and the bounds stop holding:
+ * always take the exact path there. */
+#define TINY 0x1.0p-900
+
+/* Splits a into hi + lo with 26 significant bits each (Dekker). */
+static inline void split(double a, double *hi, double *lo)
+{
+    const double splitter = 134217729.0; /* 2^27 + 1 */
+    double c = splitter * a;
+    double abig = c - a;
+    *hi = c - abig;
+    *lo = a - *hi;
+}
+
+static inline void two_product(double a, double b, double *x, double *y)
+{
+    double ahi, alo, bhi, blo;
+    *x = a * b;
+    split(a, &ahi, &alo);
+    split(b, &bhi, &blo);
+    double err1 = *x - ahi * bhi;
+    double err2 = err1 - alo * bhi;
+    double err3 = err2 - ahi * blo;
+    *y = alo * blo - err3;
+}
+
+static inline void two_sum(double a, double b, double *x, double *y)
+{
+    *x = a + b;
+    double bv = *x - a;
+    double av = *x - bv;
+    *y = (a - av) + (b - bv);
+}
+
+static inline void fast_two_sum(double a, double b, double *x, double *y)
+{
+    *x = a + b;
+    *y = b - (*x - a);
+}
+
+static inline void two_diff(double a, double b, double *x, double *y)
+{
+    *x = a - b;
+    double bv = a - *x;
+    double av = *x + bv;
+    *y = (a - av) + (bv - b);
+}
+
+/* h = e + b; e has elen components in increasing magnitude; h has room
+ * for elen + 1. Returns h's length (zero components dropped, at least 1). */
+static int grow_expansion(int elen, const double *e, double b, double *h)
+{
+    double q = b;
+    int hn = 0;
+    for (int i = 0; i < elen; i++) {
+        double qnew, hh;
+        two_sum(q, e[i], &qnew, &hh);
+        q = qnew;
+        if (hh != 0.0)
+            h[hn++] = hh;
+    }
+    if (q != 0.0 || hn == 0)
+        h[hn++] = q;
+    return hn;
+}
+
+/* h = e + f, via one grow per component of f; h has room for elen+flen.
+ * tmp has room for elen+flen too. */
+static int expansion_sum(int elen, const double *e, int flen, const double *f,
+                         double *h, double *tmp)
+{
+    int n = elen;
+    for (int i = 0; i < elen; i++)
+        h[i] = e[i];
+    for (int j = 0; j < flen; j++) {
+        n = grow_expansion(n, h, f[j], tmp);
+        for (int i = 0; i < n; i++)
+            h[i] = tmp[i];
+    }
+    return n;
+}
+
+/* h = e · b; h has room for 2·elen. */
+static int scale_expansion(int elen, const double *e, double b, double *h)
+{
+    double q, hh, p1, p0, sum;
+    int hn = 0;
+    two_product(e[0], b, &q, &hh);
+    if (hh != 0.0)
+        h[hn++] = hh;
+    for (int i = 1; i < elen; i++) {
+        two_product(e[i], b, &p1, &p0);
+        two_sum(q, p0, &sum, &hh);
+        if (hh != 0.0)
+            h[hn++] = hh;
+        fast_two_sum(p1, sum, &q, &hh);
+        if (hh != 0.0)
+            h[hn++] = hh;
+    }
+    if (q != 0.0 || hn == 0)
+        h[hn++] = q;
+    return hn;
+}
+
+/* h = e · f; h has room for 2·elen·flen. */
+static int expansion_product(int elen, const double *e, int flen,
+                             const double *f, double *h)
+{
+    double part[64], acc[256], tmp[256];
+    int n = 0;
+    for (int j = 0; j < flen; j++) {
+        int pn = scale_expansion(elen, e, f[j], part);
+        if (n == 0) {
+            for (int i = 0; i < pn; i++)
+                acc[i] = part[i];
+            n = pn;
+        } else {
+            n = expansion_sum(n, acc, pn, part, acc, tmp);
+        }
+    }
+    for (int i = 0; i < n; i++)
+        h[i] = acc[i];
+    return n;
+}
+
+static int expansion_sign(int n, const double *e)
+{
+    double top = e[n - 1];
+    return (top > 0.0) - (top < 0.0);
+}
+
+static int negate(int n, double *e)
+{
+    for (int i = 0; i < n; i++)
+        e[i] = -e[i];
+    return n;
+}
+
+/* Exact a·b − c·d for two-term expansions; h has room for 16. */
+static int minor2(const double a[2], const double b[2], const double c[2],
+                  const double d[2], double *h)
+{
+    double ab[8], cd[8], tmp[16];
+    int abn = expansion_product(2, a, 2, b, ab);
+    int cdn = expansion_product(2, c, 2, d, cd);
+    negate(cdn, cd);
+    return expansion_sum(abn, ab, cdn, cd, h, tmp);
+}
+
+static int sign_of(double v)
+{
+    return (v > 0.0) - (v < 0.0);
+}
+
+static int orient2d_exact(const double a[2], const double b[2],
+                          const double c[2])
+{
+    double acx[2], acy[2], bcx[2], bcy[2], det[16];
+    two_diff(a[0], c[0], &acx[1], &acx[0]);
+    two_diff(a[1], c[1], &acy[1], &acy[0]);
+    two_diff(b[0], c[0], &bcx[1], &bcx[0]);
+    two_diff(b[1], c[1], &bcy[1], &bcy[0]);
+    int n = minor2(acx, bcy, acy, bcx, det);
+    return expansion_sign(n, det);
+}
+
+int geo_orient2d(const double a[2], const double b[2], const double c[2])
+{
+    double left = (a[0] - c[0]) * (b[1] - c[1]);
+    double right = (a[1] - c[1]) * (b[0] - c[0]);
+    double det = left - right;
+    double bound = O2D_BOUND * (fabs(left) + fabs(right));
+    if (fabs(det) > bound && fabs(det) > TINY)
+        return sign_of(det);
+    return orient2d_exact(a, b, c);
+}
+
+int geo_orient2d_proj(const double a[3], const double b[3], const double c[3],
+                      int drop)
+{
+    int u = (drop + 1) % 3, v = (drop + 2) % 3;
+    double pa[2] = {a[u], a[v]}, pb[2] = {b[u], b[v]}, pc[2] = {c[u], c[v]};
+    return geo_orient2d(pa, pb, pc);
+}
+
+/* Shewchuk's orient3d(a,b,c,d) = det[a−d; b−d; c−d], positive when d is
+ * below; ours is its negation (positive when d is on the normal's side). */
+static int orient3d_exact(const double a[3], const double b[3],
+                          const double c[3], const double d[3])
+{
+    double ad[3][2], bd[3][2], cd[3][2];
+    for (int k = 0; k < 3; k++) {
+        two_diff(a[k], d[k], &ad[k][1], &ad[k][0]);
+        two_diff(b[k], d[k], &bd[k][1], &bd[k][0]);
+        two_diff(c[k], d[k], &cd[k][1], &cd[k][0]);
+    }
+    double m1[16], m2[16], m3[16];
+    int n1 = minor2(bd[1], cd[2], bd[2], cd[1], m1); /* bdy·cdz − bdz·cdy */
+    int n2 = minor2(cd[1], ad[2], cd[2], ad[1], m2); /* cdy·adz − cdz·ady */
+    int n3 = minor2(ad[1], bd[2], ad[2], bd[1], m3); /* ady·bdz − adz·bdy */
+    double t1[64], t2[64], t3[64], s[128], det[192], tmp[192];
+    int k1 = expansion_product(n1, m1, 2, ad[0], t1);
+    int k2 = expansion_product(n2, m2, 2, bd[0], t2);
+    int k3 = expansion_product(n3, m3, 2, cd[0], t3);
+    int sn = expansion_sum(k1, t1, k2, t2, s, tmp);
+    int dn = expansion_sum(sn, s, k3, t3, det, tmp);
+    return -expansion_sign(dn, det);
+}
+
+int geo_orient3d(const double a[3], const double b[3], const double c[3],
+                 const double d[3])
+{
+    double adx = a[0] - d[0], ady = a[1] - d[1], adz = a[2] - d[2];
+    double bdx = b[0] - d[0], bdy = b[1] - d[1], bdz = b[2] - d[2];
+    double cdx = c[0] - d[0], cdy = c[1] - d[1], cdz = c[2] - d[2];
+
+    double bdxcdy = bdx * cdy, cdxbdy = cdx * bdy;
+    double cdxady = cdx * ady, adxcdy = adx * cdy;
+    double adxbdy = adx * bdy, bdxady = bdx * ady;
+
+    double det = adz * (bdxcdy - cdxbdy) + bdz * (cdxady - adxcdy) +
+                 cdz * (adxbdy - bdxady);
+    double permanent = (fabs(bdxcdy) + fabs(cdxbdy)) * fabs(adz) +
+                       (fabs(cdxady) + fabs(adxcdy)) * fabs(bdz) +
+                       (fabs(adxbdy) + fabs(bdxady)) * fabs(cdz);
+    if (fabs(det) > O3D_BOUND * permanent && fabs(det) > TINY)
+        return -sign_of(det);
+    return orient3d_exact(a, b, c, d);
+}
+
+static int plane_sign_exact(const double plane[4], const double p[3])
+{
+    double acc[8], tmp[8], prod[2];
+    int n = 1;
+    acc[0] = plane[3];
+    for (int k = 0; k < 3; k++) {
+        two_product(plane[k], p[k], &prod[1], &prod[0]);
+        n = expansion_sum(n, acc, 2, prod, acc, tmp);
+    }
+    return expansion_sign(n, acc);
+}
+
+int geo_plane_sign(const double plane[4], const double p[3])
+{
+    double t0 = plane[0] * p[0], t1 = plane[1] * p[1], t2 = plane[2] * p[2];
+    double v = ((t0 + t1) + t2) + plane[3];
+    double mag = fabs(t0) + fabs(t1) + fabs(t2) + fabs(plane[3]);
+    if (fabs(v) > PLANE_BOUND * mag && fabs(v) > TINY)
+        return sign_of(v);
+    return plane_sign_exact(plane, p);
+}

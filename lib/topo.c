@@ -1,0 +1,297 @@
+/* topo.c — adjacency by a hash of undirected edges; vertex fans by walking
+ * across edges without assuming consistent orientation (so a flipped facet
+ * still has neighbours, which orientation repair needs). */
+#include "topo.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+static uint64_t edge_key(uint32_t a, uint32_t b)
+{
+    return a < b ? ((uint64_t)a << 32) | b : ((uint64_t)b << 32) | a;
+}
+
+static uint64_t mix64(uint64_t x)
+{
+    x ^= x >> 33;
+    x *= 0xff51afd7ed558ccdULL;
+    x ^= x >> 33;
+    x *= 0xc4ceb9fe1a85ec53ULL;
+    x ^= x >> 33;
+    return x;
+}
+
+geo_topo *geo_topo_free(geo_topo *t)
+{
+    if (!t)
+        return NULL;
+    free(t->corner_facet);
+    free(t->mate);
+    free(t->edge_kind);
+    free(t->vstart);
+    free(t->vcorners);
+    free(t->vertex_kind);
+    free(t);
+    return NULL;
+}
+
+/* Pairs corners sharing an undirected edge; fills mate, edge_kind and the
+ * edge counters. */
+static int pair_edges(const geo_poly *p, geo_topo *t)
+{
+    uint32_t nc = t->ncorners;
+    size_t cap = 16;
+    while (cap < 2 * (size_t)nc)
+        cap <<= 1;
+    uint64_t *keys = malloc(cap * sizeof *keys);
+    uint32_t *heads = malloc(cap * sizeof *heads);
+    uint32_t *chain = malloc(((size_t)nc + 1) * sizeof *chain);
+    uint32_t *slot_of = malloc(((size_t)nc + 1) * sizeof *slot_of);
+    if (!keys || !heads || !chain || !slot_of) {
+        free(keys), free(heads), free(chain), free(slot_of);
+        return -ENOMEM;
+    }
+    for (size_t i = 0; i < cap; i++)
+        heads[i] = GEO_NONE;
+
+    for (uint32_t c = 0; c < nc; c++) {
+        uint32_t a = p->fidx[c], b = p->fidx[geo_topo_next(p, t, c)];
+        uint64_t key = edge_key(a, b);
+        size_t s = mix64(key) & (cap - 1);
+        while (heads[s] != GEO_NONE && keys[s] != key)
+            s = (s + 1) & (cap - 1);
+        if (heads[s] == GEO_NONE) {
+            keys[s] = key;
+            chain[c] = GEO_NONE;
+            t->nedges++;
+        } else {
+            chain[c] = heads[s];
+        }
+        heads[s] = c;
+        slot_of[c] = (uint32_t)s;
+    }
+
+    for (size_t s = 0; s < cap; s++) {
+        uint32_t c0 = heads[s];
+        if (c0 == GEO_NONE)
+            continue;
+        uint32_t c1 = chain[c0];
+        if (c1 == GEO_NONE) {
+            t->mate[c0] = GEO_NONE;
+            t->edge_kind[c0] = GEO_EDGE_BOUNDARY;
+            t->nboundary_edges++;
+        } else if (chain[c1] == GEO_NONE) {
+            bool same = p->fidx[c0] == p->fidx[c1];
+            uint8_t kind = same ? GEO_EDGE_FLIPPED : GEO_EDGE_INTERIOR;
+            t->mate[c0] = c1;
+            t->mate[c1] = c0;
+            t->edge_kind[c0] = t->edge_kind[c1] = kind;
+            if (same)
+                t->nflipped_edges++;
+        } else {
+            for (uint32_t c = c0; c != GEO_NONE; c = chain[c]) {
+                t->mate[c] = GEO_NONE;
+                t->edge_kind[c] = GEO_EDGE_NONMANIFOLD;
+            }
+            t->nnonmanifold_edges++;
+        }
+    }
+    free(keys), free(heads), free(chain), free(slot_of);
+    return 0;
+}
+
+/* The corner of vertex v in the facet across the edge owned by corner e,
+ * or GEO_NONE when that edge has no single mate. *ret_via receives the
+ * mate (the neighbour's owner of the crossed edge). */
+static uint32_t cross_edge(const geo_poly *p, const geo_topo *t, uint32_t v,
+                           uint32_t e, uint32_t *ret_via)
+{
+    uint32_t m = t->mate[e];
+    if (m == GEO_NONE)
+        return GEO_NONE;
+    *ret_via = m;
+    return p->fidx[m] == v ? m : geo_topo_next(p, t, m);
+}
+
+/* Walks from corner k0 of vertex v, leaving first through the edge that is
+ * not `via`, appending corners to out; stops at a free edge, at k0 (sets
+ * *ret_closed) or at a corner already taken. Returns the count appended. */
+static uint32_t walk_fan(const geo_poly *p, const geo_topo *t, uint32_t v,
+                         uint32_t k0, uint32_t via, uint8_t *taken,
+                         uint32_t *out, bool *ret_closed)
+{
+    uint32_t n = 0, k = k0;
+    *ret_closed = false;
+    for (;;) {
+        uint32_t exit = via == k ? geo_topo_prev(p, t, k) : k;
+        uint32_t next_via;
+        uint32_t k1 = cross_edge(p, t, v, exit, &next_via);
+        if (k1 == GEO_NONE)
+            return n;
+        if (k1 == k0) {
+            *ret_closed = true;
+            return n;
+        }
+        if (taken[k1])
+            return n;
+        taken[k1] = 1;
+        out[n++] = k1;
+        k = k1;
+        via = next_via;
+    }
+}
+
+static int order_fans(const geo_poly *p, geo_topo *t)
+{
+    uint32_t nv = t->nverts, nc = t->ncorners;
+    uint32_t *fill = calloc((size_t)nv + 1, sizeof *fill);
+    uint32_t *raw = malloc(((size_t)nc + 1) * sizeof *raw);
+    uint8_t *taken = calloc((size_t)nc + 1, 1);
+    uint32_t *bufa = malloc(((size_t)nc + 1) * sizeof *bufa);
+    uint32_t *bufb = malloc(((size_t)nc + 1) * sizeof *bufb);
+    if (!fill || !raw || !taken || !bufa || !bufb) {
+        free(fill), free(raw), free(taken), free(bufa), free(bufb);
+        return -ENOMEM;
+    }
+    for (uint32_t c = 0; c < nc; c++)
+        t->vstart[p->fidx[c] + 1]++;
+    for (uint32_t v = 0; v < nv; v++)
+        t->vstart[v + 1] += t->vstart[v];
+    for (uint32_t c = 0; c < nc; c++) {
+        uint32_t v = p->fidx[c];
+        raw[t->vstart[v] + fill[v]++] = c;
+    }
+
+    for (uint32_t v = 0; v < nv; v++) {
+        uint32_t lo = t->vstart[v], hi = t->vstart[v + 1], out = lo;
+        if (lo == hi) {
+            t->vertex_kind[v] = GEO_VERTEX_ISOLATED;
+            continue;
+        }
+        uint32_t fans = 0;
+        bool closed_all = true, bad_edge = false;
+        for (uint32_t i = lo; i < hi; i++) {
+            uint32_t k0 = raw[i];
+            uint8_t kin = t->edge_kind[geo_topo_prev(p, t, k0)];
+            uint8_t kout = t->edge_kind[k0];
+            if (kin == GEO_EDGE_NONMANIFOLD || kout == GEO_EDGE_NONMANIFOLD)
+                bad_edge = true;
+            if (taken[k0])
+                continue;
+            taken[k0] = 1;
+            fans++;
+            bool closed;
+            /* leave through the in-edge first */
+            uint32_t na = walk_fan(p, t, v, k0, k0, taken, bufa, &closed);
+            if (closed) {
+                t->vcorners[out++] = k0;
+                memcpy(t->vcorners + out, bufa, na * sizeof *bufa);
+                out += na;
+                continue;
+            }
+            closed_all = false;
+            bool dummy;
+            uint32_t nb = walk_fan(p, t, v, k0, geo_topo_prev(p, t, k0),
+                                   taken, bufb, &dummy);
+            for (uint32_t j = nb; j-- > 0;)
+                t->vcorners[out++] = bufb[j];
+            t->vcorners[out++] = k0;
+            memcpy(t->vcorners + out, bufa, na * sizeof *bufa);
+            out += na;
+        }
+        if (fans > 1 || bad_edge) {
+            t->vertex_kind[v] = GEO_VERTEX_NONMANIFOLD;
+            t->nnonmanifold_vertices++;
+        } else {
+            t->vertex_kind[v] =
+                closed_all ? GEO_VERTEX_INTERIOR : GEO_VERTEX_BOUNDARY;
+        }
+    }
+    free(fill), free(raw), free(taken), free(bufa), free(bufb);
+    return 0;
+}
+
+geo_topo *geo_topo_build(const geo_poly *p, geo_err *err)
+{
+    geo_topo *t = calloc(1, sizeof *t);
+    if (!t)
+        goto oom;
+    uint32_t nc = geo_poly_ncorners(p);
+    t->nverts = p->nverts;
+    t->nfacets = p->nfacets;
+    t->ncorners = nc;
+    t->corner_facet = malloc(((size_t)nc + 1) * sizeof *t->corner_facet);
+    t->mate = malloc(((size_t)nc + 1) * sizeof *t->mate);
+    t->edge_kind = malloc((size_t)nc + 1);
+    t->vstart = calloc((size_t)p->nverts + 1, sizeof *t->vstart);
+    t->vcorners = malloc(((size_t)nc + 1) * sizeof *t->vcorners);
+    t->vertex_kind = malloc((size_t)p->nverts + 1);
+    if (!t->corner_facet || !t->mate || !t->edge_kind || !t->vstart ||
+        !t->vcorners || !t->vertex_kind)
+        goto oom;
+    for (uint32_t f = 0; f < p->nfacets; f++)
+        for (uint32_t c = p->fstart[f]; c < p->fstart[f + 1]; c++)
+            t->corner_facet[c] = f;
+    if (pair_edges(p, t) < 0 || order_fans(p, t) < 0)
+        goto oom;
+    return t;
+oom:
+    geo_err_set(err, -ENOMEM, "out of memory building the topology");
+    return geo_topo_free(t);
+}
+
+/* The boundary corner that follows boundary corner c around its hole:
+ * walk the fan of c's end vertex from c's facet to the next free edge. */
+static uint32_t next_boundary(const geo_poly *p, const geo_topo *t,
+                              uint32_t c)
+{
+    uint32_t k = geo_topo_next(p, t, c), v = p->fidx[k], via = c;
+    for (uint32_t guard = 0; guard <= t->ncorners; guard++) {
+        uint32_t exit = via == k ? geo_topo_prev(p, t, k) : k;
+        uint8_t kind = t->edge_kind[exit];
+        if (kind == GEO_EDGE_BOUNDARY)
+            return exit;
+        if (kind == GEO_EDGE_NONMANIFOLD)
+            return GEO_NONE;
+        uint32_t nv;
+        uint32_t k1 = cross_edge(p, t, v, exit, &nv);
+        if (k1 == GEO_NONE)
+            return GEO_NONE;
+        k = k1;
+        via = nv;
+    }
+    return GEO_NONE;
+}
+
+int geo_topo_boundary_loops(const geo_poly *p, const geo_topo *t,
+                            uint32_t **ret_start, uint32_t **ret_corners,
+                            uint32_t *ret_nloops)
+{
+    uint32_t nb = t->nboundary_edges;
+    uint32_t *start = malloc(((size_t)nb + 2) * sizeof *start);
+    uint32_t *corners = malloc(((size_t)nb + 1) * sizeof *corners);
+    uint8_t *used = calloc((size_t)t->ncorners + 1, 1);
+    if (!start || !corners || !used) {
+        free(start), free(corners), free(used);
+        return -ENOMEM;
+    }
+    uint32_t nloops = 0, n = 0;
+    start[0] = 0;
+    for (uint32_t c0 = 0; c0 < t->ncorners; c0++) {
+        if (t->edge_kind[c0] != GEO_EDGE_BOUNDARY || used[c0])
+            continue;
+        uint32_t c = c0;
+        while (c != GEO_NONE && !used[c]) {
+            used[c] = 1;
+            corners[n++] = c;
+            c = next_boundary(p, t, c);
+        }
+        start[++nloops] = n;
+    }
+    free(used);
+    *ret_start = start;
+    *ret_corners = corners;
+    *ret_nloops = nloops;
+    return 0;
+}

@@ -1,0 +1,82 @@
+/* vec.h — small inline 3-vector helpers (double[3]); no allocation. */
+#ifndef GEO_VEC_H
+#define GEO_VEC_H
+
+#include <math.h>
+
+static inline void geo_vsub(const double a[3], const double b[3], double r[3])
+{
+    r[0] = a[0] - b[0];
+    r[1] = a[1] - b[1];
+    r[2] = a[2] - b[2];
+}
+
+static inline void geo_vadd(const double a[3], const double b[3], double r[3])
+{
+    r[0] = a[0] + b[0];
+    r[1] = a[1] + b[1];
+    r[2] = a[2] + b[2];
+}
+
+static inline void geo_vscale(const double a[3], double s, double r[3])
+{
+    r[0] = a[0] * s;
+    r[1] = a[1] * s;
+    r[2] = a[2] * s;
+}
+
+/* r = a + s·b */
+static inline void geo_vmadd(const double a[3], double s, const double b[3],
+                             double r[3])
+{
+    r[0] = a[0] + s * b[0];
+    r[1] = a[1] + s * b[1];
+    r[2] = a[2] + s * b[2];
+}
+
+static inline double geo_vdot(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static inline void geo_vcross(const double a[3], const double b[3], double r[3])
+{
+    double x = a[1] * b[2] - a[2] * b[1];
+    double y = a[2] * b[0] - a[0] * b[2];
+    double z = a[0] * b[1] - a[1] * b[0];
+    r[0] = x;
+    r[1] = y;
+    r[2] = z;
+}
+
+static inline double geo_vlen(const double a[3])
+{
+    return sqrt(geo_vdot(a, a));
+}
+
+static inline double geo_vdist(const double a[3], const double b[3])
+{
+    double d[3];
+    geo_vsub(a, b, d);
+    return geo_vlen(d);
+}
+
+/* Normalises a in place; returns its former length (0 leaves a as is). */
+static inline double geo_vnormalize(double a[3])
+{
+    double l = geo_vlen(a);
+    if (l > 0.0) {
+        a[0] /= l;
+        a[1] /= l;
+        a[2] /= l;
+    }
+    return l;
+}
+
+/* Signed distance-like value of p to plane (a,b,c,d): a·x+b·y+c·z+d. */
+static inline double geo_plane_eval(const double plane[4], const double p[3])
+{
+    return plane[0] * p[0] + plane[1] * p[1] + plane[2] * p[2] + plane[3];
+}
+
+#endif

@@ -1,0 +1,56 @@
+#!/bin/sh
+# Runs every unit test binary (cmocka, TAP output) and every integration
+# test script (TAP output), then prints "N passed, N failed".
+# Usage: tests/run.sh BUILD_DIR [FILTER]
+set -u
+B=${1:-build}
+FILTER=${2:-}
+pass=0
+fail=0
+log=$(mktemp)
+trap 'rm -f "$log"' EXIT
+
+count() { # $1 = name; reads TAP from $log
+    p=$(grep -c '^ok ' "$log")
+    f=$(grep -c '^not ok ' "$log")
+    pass=$((pass + p))
+    fail=$((fail + f))
+    if [ "$f" -gt 0 ]; then
+        grep -B2 -A12 '^not ok ' "$log" | head -n 80
+    fi
+}
+
+export CMOCKA_MESSAGE_OUTPUT=TAP
+export FACET_BUILD="$B"
+for t in "$B"/tests/test_*; do
+    [ -x "$t" ] || continue
+    case "$t" in *"$FILTER"*) ;; *) continue ;; esac
+    name=$(basename "$t")
+    start=$(date +%s%N)
+    "$t" >"$log" 2>&1
+    rc=$?
+    count "$name"
+    if [ $rc -ne 0 ] && ! grep -q '^not ok ' "$log"; then
+        echo "$name: exited with status $rc"
+        tail -n 30 "$log"
+        fail=$((fail + 1))
+    fi
+    printf '# %-40s %6d ms\n' "$name" $((($(date +%s%N) - start) / 1000000))
+done
+for t in tests/integration/*.sh; do
+    [ -f "$t" ] || continue
+    case "$t" in *"$FILTER"*) ;; *) continue ;; esac
+    name=$(basename "$t" .sh)
+    start=$(date +%s%N)
+    bash "$t" "$B" >"$log" 2>&1
+    rc=$?
+    count "$name"
+    if [ $rc -ne 0 ] && ! grep -q '^not ok ' "$log"; then
+        echo "$name: exited with status $rc"
+        tail -n 30 "$log"
+        fail=$((fail + 1))
+    fi
+    printf '# %-40s %6d ms\n' "$name" $((($(date +%s%N) - start) / 1000000))
+done
+echo "$pass passed, $fail failed"
+[ "$fail" -eq 0 ]

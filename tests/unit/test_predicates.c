@@ -1,0 +1,171 @@
+/* test_predicates.c — the filtered predicates give the exact sign, also
+ * where naive double arithmetic gets it wrong. Exact references come from
+ * integer arithmetic on coordinates that are exact multiples of 2^-k. */
+#include "testutil.h"
+
+#include <math.h>
+
+#include "ctx.h"
+#include "predicates.h"
+
+__extension__ typedef __int128 i128;
+
+static int sign128(i128 v) { return (v > 0) - (v < 0); }
+
+/* Exact orient3d on integer coordinates (|x| < 2^30: products fit). */
+static int orient3d_int(const int64_t a[3], const int64_t b[3],
+                        const int64_t c[3], const int64_t d[3])
+{
+    i128 ab[3], ac[3], ad[3];
+    for (int k = 0; k < 3; k++) {
+        ab[k] = b[k] - a[k];
+        ac[k] = c[k] - a[k];
+        ad[k] = d[k] - a[k];
+    }
+    i128 nx = ab[1] * ac[2] - ab[2] * ac[1];
+    i128 ny = ab[2] * ac[0] - ab[0] * ac[2];
+    i128 nz = ab[0] * ac[1] - ab[1] * ac[0];
+    return sign128(ad[0] * nx + ad[1] * ny + ad[2] * nz);
+}
+
+static void test_orient3d_simple_signs(void **state)
+{
+    (void)state;
+    double a[3] = {0, 0, 0}, b[3] = {1, 0, 0}, c[3] = {0, 1, 0};
+    double up[3] = {0.2, 0.3, 1}, down[3] = {0.2, 0.3, -1},
+           on[3] = {5, -7, 0};
+    assert_int_equal(geo_orient3d(a, b, c, up), 1);
+    assert_int_equal(geo_orient3d(a, b, c, down), -1);
+    assert_int_equal(geo_orient3d(a, b, c, on), 0);
+}
+
+/* Points on the plane x+y+z = 1 scaled far from the origin with tiny
+ * offsets: the naive determinant's rounding error dominates. */
+static void test_orient3d_matches_exact_near_degenerate(void **state)
+{
+    (void)state;
+    uint64_t rng = 12345;
+    int zeros = 0;
+    for (int trial = 0; trial < 20000; trial++) {
+        int64_t P[4][3];
+        const int64_t base = (int64_t)1 << 28;
+        for (int i = 0; i < 4; i++) {
+            int64_t x = (int64_t)(geo_rand_next(&rng) % 2001) - 1000;
+            int64_t y = (int64_t)(geo_rand_next(&rng) % 2001) - 1000;
+            P[i][0] = base + x;
+            P[i][1] = base + y;
+            P[i][2] = -(x + y) + (int64_t)(geo_rand_next(&rng) % 3) - 1;
+        }
+        double D[4][3];
+        for (int i = 0; i < 4; i++)
+            for (int k = 0; k < 3; k++)
+                D[i][k] = (double)P[i][k] * 0x1.0p-20;
+        int exact = orient3d_int(P[0], P[1], P[2], P[3]);
+        assert_int_equal(geo_orient3d(D[0], D[1], D[2], D[3]), exact);
+        if (exact == 0)
+            zeros++;
+    }
+    /* the generator must produce exactly coplanar cases too */
+    assert_true(zeros > 100);
+}
+
+/* Shewchuk's classic example: points near the line y = x, where naive
+ * orient2d returns wrong and inconsistent signs. */
+static void test_orient2d_beats_naive(void **state)
+{
+    (void)state;
+    double b[2] = {12, 12}, c[2] = {24, 24};
+    int naive_wrong = 0;
+    for (int i = 0; i < 256; i++)
+        for (int j = 0; j < 256; j++) {
+            double a[2] = {0.5 + i * 0x1.0p-53, 0.5 + j * 0x1.0p-53};
+            /* exact: (b−a)×(c−a) = 12·(ay − ax), since b and c lie on
+             * the line y = x */
+            int exact = (a[1] > a[0]) - (a[1] < a[0]);
+            int got = geo_orient2d(a, b, c);
+            assert_int_equal(got, exact);
+            double naive = (b[0] - a[0]) * (c[1] - a[1]) -
+                           (b[1] - a[1]) * (c[0] - a[0]);
+            int ns = (naive > 0) - (naive < 0);
+            if (ns != exact)
+                naive_wrong++;
+        }
+    /* the test is meaningful only if naive arithmetic does fail here */
+    assert_true(naive_wrong > 1000);
+}
+
+static void test_orient3d_beats_naive(void **state)
+{
+    (void)state;
+    /* The 2D example lifted: plane z = 0 through three points, the query
+     * point perturbed by one ulp around the plane x = y containing b, c. */
+    double b[3] = {12, 12, 0}, c[3] = {24, 24, 0}, e[3] = {24, 24, 1};
+    int naive_wrong = 0;
+    for (int i = 0; i < 128; i++)
+        for (int j = 0; j < 128; j++) {
+            double a[3] = {0.5 + i * 0x1.0p-53, 0.5 + j * 0x1.0p-53, 0};
+            int got = geo_orient3d(b, c, e, a);
+            /* normal (c−b)×(e−b) = (12,12,0)×(12,12,1) = (12,−12,0):
+             * the positive side is x > y */
+            int exact = (a[0] > a[1]) - (a[0] < a[1]);
+            assert_int_equal(got, exact);
+            double u[3], v[3], w[3];
+            for (int k = 0; k < 3; k++) {
+                u[k] = c[k] - b[k];
+                v[k] = e[k] - b[k];
+                w[k] = a[k] - b[k];
+            }
+            double naive = w[0] * (u[1] * v[2] - u[2] * v[1]) +
+                           w[1] * (u[2] * v[0] - u[0] * v[2]) +
+                           w[2] * (u[0] * v[1] - u[1] * v[0]);
+            if (((naive > 0) - (naive < 0)) != exact)
+                naive_wrong++;
+        }
+    assert_true(naive_wrong > 0);
+}
+
+static void test_plane_sign_exact(void **state)
+{
+    (void)state;
+    /* plane 0.1·x − 0.1·y + 0 = 0 with doubles 0.1: the product rounding
+     * must not decide the sign */
+    double plane[4] = {0.1, -0.1, 0, 0};
+    double p[3] = {3.0, 3.0, 7};
+    assert_int_equal(geo_plane_sign(plane, p), 0);
+    double q[3] = {nextafter(3.0, 4.0), 3.0, 7};
+    assert_int_equal(geo_plane_sign(plane, q), 1);
+    double r[3] = {3.0, nextafter(3.0, 4.0), 7};
+    assert_int_equal(geo_plane_sign(plane, r), -1);
+    /* d that cancels a product exactly only in exact arithmetic */
+    double pl2[4] = {0.1, 0, 0, -0.1 * 3.0};
+    double s[3] = {3.0, 0, 0};
+    /* 0.1·3.0 exact ≠ fl(0.1·3.0): sign decided by the rounding residue */
+    double hi = 0.1 * 3.0;
+    double lo = fma(0.1, 3.0, -hi);
+    int expect = (lo > 0) - (lo < 0);
+    assert_int_equal(geo_plane_sign(pl2, s), expect);
+}
+
+static void test_orient2d_proj_axes(void **state)
+{
+    (void)state;
+    double a[3] = {0, 0, 0}, b[3] = {1, 0, 0}, c[3] = {0, 1, 0};
+    assert_int_equal(geo_orient2d_proj(a, b, c, 2), 1);
+    double a2[3] = {0, 0, 0}, b2[3] = {0, 1, 0}, c2[3] = {0, 0, 1};
+    assert_int_equal(geo_orient2d_proj(a2, b2, c2, 0), 1);
+    double a3[3] = {0, 0, 0}, b3[3] = {0, 0, 1}, c3[3] = {1, 0, 0};
+    assert_int_equal(geo_orient2d_proj(a3, b3, c3, 1), 1);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_orient3d_simple_signs),
+        cmocka_unit_test(test_orient3d_matches_exact_near_degenerate),
+        cmocka_unit_test(test_orient2d_beats_naive),
+        cmocka_unit_test(test_orient3d_beats_naive),
+        cmocka_unit_test(test_plane_sign_exact),
+        cmocka_unit_test(test_orient2d_proj_axes),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
