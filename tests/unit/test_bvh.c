@@ -1,0 +1,189 @@
+/* test_bvh.c — every BVH query returns exactly what a brute-force scan of
+ * the boxes returns (random boxes, many duplicates), and the pair tasks
+ * partition the self-pairs. */
+#include "testutil.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bvh.h"
+
+enum { N = 3000 };
+
+static geo_bbox *random_boxes(uint32_t n, uint64_t seed)
+{
+    geo_bbox *b = malloc(n * sizeof *b);
+    for (uint32_t i = 0; i < n; i++) {
+        for (int k = 0; k < 3; k++) {
+            /* a coarse grid gives many identical centroids */
+            double c = (double)(geo_rand_next(&seed) % 40) * 0.25;
+            double e = geo_rand_unit(&seed) * 0.5;
+            b[i].lo[k] = c - e;
+            b[i].hi[k] = c + e;
+        }
+    }
+    return b;
+}
+
+static bool collect(void *user, uint32_t item)
+{
+    unsigned char *seen = user;
+    seen[item]++;
+    return true;
+}
+
+static void test_query_box_matches_brute_force(void **state)
+{
+    (void)state;
+    geo_bbox *b = random_boxes(N, 1);
+    geo_bvh *h = geo_bvh_build(b, N, NULL);
+    assert_non_null(h);
+    uint64_t rng = 99;
+    for (int q = 0; q < 200; q++) {
+        geo_bbox qb;
+        for (int k = 0; k < 3; k++) {
+            double c = geo_rand_unit(&rng) * 10, e = geo_rand_unit(&rng);
+            qb.lo[k] = c - e;
+            qb.hi[k] = c + e;
+        }
+        unsigned char seen[N] = {0};
+        geo_bvh_query_box(h, &qb, collect, seen);
+        for (uint32_t i = 0; i < N; i++)
+            assert_int_equal(seen[i], geo_bbox_overlap(&b[i], &qb) ? 1 : 0);
+    }
+    geo_bvh_free(h);
+    free(b);
+}
+
+static void test_query_plane_is_conservative(void **state)
+{
+    (void)state;
+    geo_bbox *b = random_boxes(N, 2);
+    geo_bvh *h = geo_bvh_build(b, N, NULL);
+    uint64_t rng = 5;
+    for (int q = 0; q < 100; q++) {
+        double pl[4] = {geo_rand_unit(&rng) - 0.5, geo_rand_unit(&rng) - 0.5,
+                        geo_rand_unit(&rng) - 0.5, 0};
+        pl[3] = -(pl[0] + pl[1] + pl[2]) * 5;
+        unsigned char seen[N] = {0};
+        geo_bvh_query_plane(h, pl, collect, seen);
+        for (uint32_t i = 0; i < N; i++) {
+            /* a box with corners on both sides (or on) must be reported */
+            int pos = 0, neg = 0;
+            for (int c = 0; c < 8; c++) {
+                double p[3] = {(c & 1) ? b[i].hi[0] : b[i].lo[0],
+                               (c & 2) ? b[i].hi[1] : b[i].lo[1],
+                               (c & 4) ? b[i].hi[2] : b[i].lo[2]};
+                double v = pl[0] * p[0] + pl[1] * p[1] + pl[2] * p[2] + pl[3];
+                pos |= v >= 0;
+                neg |= v <= 0;
+            }
+            if (pos && neg)
+                assert_int_equal(seen[i], 1);
+            assert_true(seen[i] <= 1);
+        }
+    }
+    geo_bvh_free(h);
+    free(b);
+}
+
+static void test_query_ray_finds_every_hit_box(void **state)
+{
+    (void)state;
+    geo_bbox *b = random_boxes(N, 3);
+    geo_bvh *h = geo_bvh_build(b, N, NULL);
+    uint64_t rng = 11;
+    for (int q = 0; q < 20; q++) {
+        double o[3] = {geo_rand_unit(&rng) * 10, geo_rand_unit(&rng) * 10,
+                       geo_rand_unit(&rng) * 10};
+        double d[3] = {geo_rand_unit(&rng) - 0.5, geo_rand_unit(&rng) - 0.5,
+                       q % 5 == 0 ? 0 : geo_rand_unit(&rng) - 0.5};
+        unsigned char seen[N] = {0};
+        geo_bvh_query_ray(h, o, d, INFINITY, collect, seen);
+        /* brute force: sample the ray densely; any sample inside a box
+         * means that box must have been reported */
+        for (uint32_t i = 0; i < N; i++) {
+            bool hit = false;
+            for (int s = 0; s <= 1000 && !hit; s++) {
+                double t = s * 0.04, p[3];
+                for (int k = 0; k < 3; k++)
+                    p[k] = o[k] + t * d[k];
+                hit = geo_bbox_contains(&b[i], p);
+            }
+            if (hit)
+                assert_int_equal(seen[i], 1);
+        }
+    }
+    geo_bvh_free(h);
+    free(b);
+}
+
+typedef struct pairs {
+    uint32_t n;
+    uint8_t *count; /* N*N */
+} pairs;
+
+static bool count_pair(void *user, uint32_t a, uint32_t b)
+{
+    pairs *p = user;
+    if (a > b) {
+        uint32_t t = a;
+        a = b;
+        b = t;
+    }
+    p->count[(size_t)a * p->n + b]++;
+    return true;
+}
+
+static void test_pair_tasks_report_each_overlap_once(void **state)
+{
+    (void)state;
+    const uint32_t n = 800;
+    geo_bbox *b = random_boxes(n, 4);
+    geo_bvh *h = geo_bvh_build(b, n, NULL);
+    for (uint32_t cap = 1; cap <= 512; cap *= 8) {
+        uint32_t ta[512], tb[512];
+        uint32_t nt = geo_bvh_pair_tasks(h, ta, tb, cap);
+        assert_true(nt >= 1 && nt <= cap);
+        pairs p = {n, calloc((size_t)n * n, 1)};
+        for (uint32_t t = 0; t < nt; t++)
+            geo_bvh_pairs(h, ta[t], tb[t], count_pair, &p);
+        for (uint32_t i = 0; i < n; i++)
+            for (uint32_t j = i + 1; j < n; j++)
+                assert_int_equal(p.count[(size_t)i * n + j],
+                                 geo_bbox_overlap(&b[i], &b[j]) ? 1 : 0);
+        free(p.count);
+    }
+    geo_bvh_free(h);
+    free(b);
+}
+
+static void test_empty_and_single(void **state)
+{
+    (void)state;
+    geo_bvh *h = geo_bvh_build(NULL, 0, NULL);
+    assert_non_null(h);
+    geo_bbox q = {{0, 0, 0}, {1, 1, 1}};
+    unsigned char seen[1] = {0};
+    assert_true(geo_bvh_query_box(h, &q, collect, seen));
+    uint32_t ta[4], tb[4];
+    assert_int_equal(geo_bvh_pair_tasks(h, ta, tb, 4), 0);
+    geo_bvh_free(h);
+    h = geo_bvh_build(&q, 1, NULL);
+    geo_bvh_query_box(h, &q, collect, seen);
+    assert_int_equal(seen[0], 1);
+    geo_bvh_free(h);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_query_box_matches_brute_force),
+        cmocka_unit_test(test_query_plane_is_conservative),
+        cmocka_unit_test(test_query_ray_finds_every_hit_box),
+        cmocka_unit_test(test_pair_tasks_report_each_overlap_once),
+        cmocka_unit_test(test_empty_and_single),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
