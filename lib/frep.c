@@ -45,6 +45,8 @@ struct geo_frep {
     uint32_t nkids, cap_kids;
     geo_frep_op *ops;
     uint32_t nops;
+    uint32_t *pieces; /* roots of the min/max-free subtrees */
+    uint32_t npieces;
     double lo[3], hi[3];
 };
 
@@ -61,6 +63,7 @@ geo_frep *geo_frep_free(geo_frep *f)
         free(f->kids);
         free(f->amps);
         free(f->ops);
+        free(f->pieces);
         free(f);
     }
     return NULL;
@@ -340,9 +343,45 @@ int geo_frep_finish(geo_frep *f, uint32_t root, const double lo[3],
                                GEO_FREP_MAX_OPS);
         return geo_err_set(err, rc, "out of memory");
     }
+    /* pieces: subtrees without min/max, NEG wrappers looked through (the
+     * zero set is the same), whose parent is a min/max or a NEG */
+    uint8_t *has = malloc((size_t)e.n + 1);
+    uint32_t *parent = malloc(((size_t)e.n + 1) * sizeof *parent);
+    uint32_t *pieces = malloc(((size_t)e.n + 1) * sizeof *pieces);
+    if (!has || !parent || !pieces) {
+        free(has), free(parent), free(pieces), free(e.ops);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    for (uint32_t i = 0; i < e.n; i++) {
+        const geo_frep_op *o = &e.ops[i];
+        parent[i] = UINT32_MAX;
+        if (o->code == GEO_FREP_OP_PRIM) {
+            has[i] = 0;
+        } else if (o->code == GEO_FREP_OP_NEG) {
+            has[i] = has[i - 1];
+            parent[i - 1] = i;
+        } else {
+            uint32_t b = i - 1, a = e.ops[b].start - 1;
+            has[i] = has[a] || has[b] || o->code == GEO_FREP_OP_MIN ||
+                     o->code == GEO_FREP_OP_MAX;
+            parent[a] = parent[b] = i;
+        }
+    }
+    uint32_t np = 0;
+    for (uint32_t i = 0; i < e.n; i++) {
+        if (has[i] || e.ops[i].code == GEO_FREP_OP_NEG)
+            continue;
+        uint32_t up = parent[i];
+        if (up == UINT32_MAX || has[up] || e.ops[up].code == GEO_FREP_OP_NEG)
+            pieces[np++] = i;
+    }
+    free(has), free(parent);
     free(f->ops);
+    free(f->pieces);
     f->ops = e.ops;
     f->nops = e.n;
+    f->pieces = pieces;
+    f->npieces = np;
     memcpy(f->lo, lo, sizeof f->lo);
     memcpy(f->hi, hi, sizeof f->hi);
     return 0;
@@ -648,4 +687,48 @@ void geo_frep_bound(const geo_frep *f, const double lo[3], const double hi[3],
     }
     geo_frep_specialize(f, f->ops, f->nops, lo, hi, ret_range, NULL, s);
     free(s);
+}
+
+double geo_frep_project(const geo_frep *f, double p[3], double tol,
+                        double max_step)
+{
+    double g[3], v = geo_frep_eval_grad(f, p, g);
+    double gg = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
+    if (!(gg > 0))
+        return INFINITY;
+    double dev = fabs(v) / sqrt(gg);
+    for (int it = 0; it < 8 && dev > tol; it++) {
+        double q[3], s = v / gg;
+        if (fabs(s) * sqrt(gg) > max_step)
+            break;
+        for (int k = 0; k < 3; k++)
+            q[k] = p[k] - s * g[k];
+        double g2[3], v2 = geo_frep_eval_grad(f, q, g2);
+        double gg2 = g2[0] * g2[0] + g2[1] * g2[1] + g2[2] * g2[2];
+        if (!(gg2 > 0) || !(fabs(v2) < fabs(v)))
+            break;
+        memcpy(p, q, sizeof q);
+        memcpy(g, g2, sizeof g);
+        v = v2;
+        gg = gg2;
+        dev = fabs(v) / sqrt(gg);
+    }
+    return dev;
+}
+
+uint32_t geo_frep_pieces_at(const geo_frep *f, const double p[3], double tol,
+                            uint32_t *ret, uint32_t cap)
+{
+    uint32_t n = 0;
+    for (uint32_t k = 0; k < f->npieces; k++) {
+        uint32_t r = f->pieces[k], s = f->ops[r].start;
+        double g[3], v = geo_frep_run_grad(f, f->ops + s, r - s + 1, p, g);
+        double gl = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+        if (fabs(v) <= tol * gl) {
+            if (n < cap)
+                ret[n] = r;
+            n++;
+        }
+    }
+    return n;
 }

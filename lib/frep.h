@@ -145,6 +145,22 @@ double geo_frep_run_piece(const geo_frep *f, const geo_frep_op *ops,
                           uint32_t n, const double p[3], double ret_grad[3],
                           uint32_t *ret_piece);
 
+/* The smooth pieces of F passing through p: the roots (indices in the
+ * program) of the maximal subtrees without min/max whose value is zero
+ * at p within tol·|∇|, at most cap of them into ret (in program order).
+ * Returns how many there are (may exceed cap). A point on a crease of
+ * two pieces gets two, on a corner three. */
+uint32_t geo_frep_pieces_at(const geo_frep *f, const double p[3], double tol,
+                            uint32_t *ret, uint32_t cap);
+
+/* Moves p onto the surface F = 0 by Newton steps along ∇F,
+ * p ← p − F(p)·∇F/|∇F|², at most 8 of them, until |F|/|∇F| ≤ tol. A step
+ * longer than max_step, a vanishing gradient or a step that does not
+ * reduce |F| stops the iteration and keeps the best point seen. Returns
+ * the final |F|/|∇F| (INFINITY where ∇F = 0). */
+double geo_frep_project(const geo_frep *f, double p[3], double tol,
+                        double max_step);
+
 /* An enclosure [ret_range[0], ret_range[1]] of F over the box [lo, hi]
  * with the whole program (after geo_frep_finish). Allocates 16 bytes per
  * instruction of scratch; on out-of-memory the enclosure is (−∞, +∞),

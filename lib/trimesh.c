@@ -30,6 +30,7 @@ void geo_tmesh_destroy(geo_tmesh *m)
     free(m->v);
     free(m->t);
     free(m->dead);
+    free(m->tag);
     geo_edgemap_destroy(&m->he);
     memset(m, 0, sizeof *m);
 }
@@ -63,6 +64,10 @@ static int reserve_tris(geo_tmesh *m, uint32_t extra)
     if (!nd)
         return -ENOMEM;
     m->dead = nd;
+    uint8_t *ng = realloc(m->tag, nc);
+    if (!ng)
+        return -ENOMEM;
+    m->tag = ng;
     m->cap_t = nc;
     return 0;
 }
@@ -89,7 +94,8 @@ static void put_tri(geo_tmesh *m, uint32_t t, uint32_t a, uint32_t b,
     geo_edgemap_put(&m->he, geo_edge_key(c, a), 3 * t + 2);
 }
 
-int64_t geo_tmesh_add(geo_tmesh *m, uint32_t a, uint32_t b, uint32_t c)
+int64_t geo_tmesh_add(geo_tmesh *m, uint32_t a, uint32_t b, uint32_t c,
+                      uint8_t tag)
 {
     if (geo_tmesh_find(m, a, b) != UINT32_MAX ||
         geo_tmesh_find(m, b, c) != UINT32_MAX ||
@@ -99,6 +105,7 @@ int64_t geo_tmesh_add(geo_tmesh *m, uint32_t a, uint32_t b, uint32_t c)
         reserve_edges(m, 3) < 0)
         return -ENOMEM;
     put_tri(m, m->nt, a, b, c);
+    m->tag[m->nt] = tag;
     return m->nt++;
 }
 
@@ -123,6 +130,7 @@ int geo_tmesh_split_tri(geo_tmesh *m, uint32_t t, uint32_t x)
     uint32_t a = m->t[t][0], b = m->t[t][1], c = m->t[t][2];
     forget(m, t);
     put_tri(m, t, a, b, x);
+    m->tag[m->nt] = m->tag[m->nt + 1] = m->tag[t];
     put_tri(m, m->nt++, b, c, x);
     put_tri(m, m->nt++, c, a, x);
     return 0;
@@ -145,6 +153,7 @@ int geo_tmesh_split_edge(geo_tmesh *m, uint32_t a, uint32_t b, uint32_t x)
                  r = m->t[t][(k + 2) % 3];
         forget(m, t);
         put_tri(m, t, p, x, r);
+        m->tag[m->nt] = m->tag[t];
         put_tri(m, m->nt++, x, q, r);
     }
     return 0;

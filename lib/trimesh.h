@@ -24,6 +24,7 @@ typedef struct geo_tmesh {
     uint32_t nv, cap_v;
     uint32_t (*t)[3];
     uint8_t *dead;
+    uint8_t *tag;   /* per triangle, the caller's; split pieces inherit */
     uint32_t nt, cap_t;
     geo_edgemap he; /* directed edge → half-edge id */
 } geo_tmesh;
@@ -38,9 +39,11 @@ void geo_tmesh_destroy(geo_tmesh *m);
 /* Appends a vertex; returns its index or -ENOMEM. */
 int64_t geo_tmesh_add_vertex(geo_tmesh *m, const double p[3]);
 
-/* Appends triangle (a, b, c); returns its id, -EEXIST when one of its
- * directed edges is already stored (nothing changes), or -ENOMEM. */
-int64_t geo_tmesh_add(geo_tmesh *m, uint32_t a, uint32_t b, uint32_t c);
+/* Appends triangle (a, b, c) with tag `tag`; returns its id, -EEXIST
+ * when one of its directed edges is already stored (nothing changes), or
+ * -ENOMEM. */
+int64_t geo_tmesh_add(geo_tmesh *m, uint32_t a, uint32_t b, uint32_t c,
+                      uint8_t tag);
 
 /* Removes triangle t (marks it dead, forgets its edges). */
 void geo_tmesh_remove(geo_tmesh *m, uint32_t t);
