@@ -367,6 +367,10 @@ static int relax(refiner *R, uint32_t a, uint32_t b)
         return 0;
     if (geo_edgemap_get(&R->outside, geo_edge_ukey(c, d)) != UINT32_MAX)
         return 0;
+    /* nor create an edge across a feature of the surface */
+    if (R->o.crosses_feature &&
+        R->o.crosses_feature(R->o.project_user, pc, pd))
+        return 0;
     /* the flipped pair must not fold over */
     double ns[3], e1[3], e2[3], t1[3], t2[3];
     geo_vadd(n1, n2, ns);
@@ -1061,7 +1065,7 @@ int geo_fill_holes(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
     geo_fill_stats st = {0};
     filler F = {.p = p, .o = o};
     geo_topo *t = NULL;
-    uint32_t *lstart = NULL, *lcorn = NULL, nloops = 0, *w = NULL;
+    uint32_t *lstart = NULL, *lcorn = NULL, nloops = 0, *w = NULL, *cs = NULL;
     geo_poly *q = NULL;
     uint8_t *in_region = NULL;
     t = geo_topo_build(p, err);
@@ -1078,35 +1082,44 @@ int geo_fill_holes(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
                                 1) < 0)
                 goto oom;
     }
-    st.nholes = nloops;
-    st.holes = calloc((size_t)nloops + 1, sizeof *st.holes);
     w = malloc(((size_t)t->nboundary_edges + 1) * sizeof *w);
-    if (!st.holes || !w)
+    cs = malloc(((size_t)nloops + 2) * sizeof *cs);
+    st.holes = calloc((size_t)nloops + 1, sizeof *st.holes);
+    if (!w || !cs || !st.holes)
         goto oom;
+    /* closed loops as vertex cycles, already reversed: a patch runs
+     * against the loop's facets */
+    uint32_t nclosed = 0, nw = 0;
+    cs[0] = 0;
     for (uint32_t l = 0; l < nloops; l++) {
-        if ((l & 63) == 0 &&
-            (rc = geo_ctx_progress(ctx, 0.5 * l / (nloops + 1.0))) < 0)
-            goto fail;
-        geo_hole_report *rep = &st.holes[l];
         uint32_t n = lstart[l + 1] - lstart[l];
         const uint32_t *lc = lcorn + lstart[l];
-        rep->nverts = n;
-        rep->first_vertex = p->fidx[lc[0]];
-        /* a loop: each edge ends where the next begins, cyclically */
         bool closed = n >= 1;
         for (uint32_t k = 0; k < n && closed; k++) {
             uint32_t end = p->fidx[geo_topo_next(p, t, lc[k])];
             closed = end == p->fidx[lc[(k + 1) % n]];
         }
         if (!closed) {
+            geo_hole_report *rep = &st.holes[st.nholes++];
+            rep->nverts = n;
+            rep->first_vertex = p->fidx[lc[0]];
             rep->status = GEO_HOLE_NOT_A_LOOP;
             st.nopen++;
             continue;
         }
-        /* the patch runs against the loop's facets */
         for (uint32_t k = 0; k < n; k++)
-            w[k] = p->fidx[lc[n - 1 - k]];
-        if ((rc = fill_loop(&F, w, n, rep)) < 0)
+            w[nw++] = p->fidx[lc[n - 1 - k]];
+        cs[++nclosed] = nw;
+    }
+    for (uint32_t l = 0; l < nclosed; l++) {
+        if ((l & 63) == 0 &&
+            (rc = geo_ctx_progress(ctx, 0.5 * l / (nclosed + 1.0))) < 0)
+            goto fail;
+        geo_hole_report *rep = &st.holes[st.nholes++];
+        uint32_t n = cs[l + 1] - cs[l];
+        rep->nverts = n;
+        rep->first_vertex = w[cs[l]];
+        if ((rc = fill_loop(&F, w + cs[l], n, rep)) < 0)
             goto fail;
         if (rep->status == GEO_HOLE_FILLED)
             st.nfilled++;
@@ -1147,7 +1160,7 @@ fail:
 done:
     geo_poly_free(q);
     geo_topo_free(t);
-    free(lstart), free(lcorn), free(w), free(in_region);
+    free(lstart), free(lcorn), free(w), free(cs), free(in_region);
     free(F.tris), free(F.log);
     geo_edgemap_destroy(&F.edges);
     if (rc < 0 || !stats)

@@ -4,7 +4,10 @@
  * density of the surrounding mesh and faired.
  *
  * 1. Loops. Boundary edges (used by one facet) are walked into loops with
- *    lib/topo.h, split at non-manifold vertices.
+ *    lib/topo.h, split at non-manifold vertices (two holes touching at a
+ *    vertex are filled separately, so that vertex stays non-manifold: a
+ *    caller that wants it manifold removes its facets first, merging the
+ *    holes, as the F-rep triangulator does).
  * 2. Minimum-weight triangulation. For a loop v_0 … v_{n−1}, W_{i,k} is
  *    the least weight of a triangulation of (v_i … v_k): W_{i,i+1} = 0,
  *    W_{i,k} = min_{i<m<k} W_{i,m} + W_{m,k} + ω(v_i, v_m, v_k), with the
@@ -30,9 +33,10 @@
  *    triangle's three edges are "restored": an interior edge is flipped
  *    when the angles opposite it sum to more than π (the opposite vertex
  *    inside the other triangle's circumsphere) and the flipped pair neither
- *    folds nor bends by more than hard_angle_deg. A hard edge — an edge of
+ *    folds, nor bends by more than hard_angle_deg, nor makes an edge that
+ *    opts.crosses_feature rejects. A hard edge — an edge of
  *    the region as given whose dihedral angle exceeds hard_angle_deg (or
- *    that opts.hard_edge says crosses a hard edge of the surface), or a
+ *    that opts.hard_edge says lies along a feature of the surface), or a
  *    piece of one — is never flipped; it is split at
  *    S = (s(P)·Q + s(Q)·P)/(s(P)+s(Q)) when √2·|PQ| > (s(P)+s(Q))/2, each
  *    of its two triangles into two (fig. 12). Passes repeat until no
@@ -106,12 +110,16 @@ typedef struct geo_fill_opts {
      * points where the construction puts them. Called from the calling
      * thread only. */
     void (*project)(void *user, double p[3]);
-    /* Whether the segment p–q crosses a hard edge of that surface; NULL
-     * means unknown, and then an edge is hard when the dihedral angle of
-     * its two triangles exceeds hard_angle_deg. Called from the calling
-     * thread only. */
+    /* Whether the segment p–q lies along a hard edge (a feature line) of
+     * that surface; NULL means unknown, and then an edge is hard when the
+     * dihedral angle of its two triangles exceeds hard_angle_deg. */
     bool (*hard_edge)(void *user, const double p[3], const double q[3]);
-    void *project_user; /* user argument of project and hard_edge */
+    /* Whether the segment p–q would cut across a feature line; a flip
+     * never creates such an edge. NULL: no such test. */
+    bool (*crosses_feature)(void *user, const double p[3], const double q[3]);
+    /* user argument of the callbacks, which are called from the calling
+     * thread only */
+    void *project_user;
 } geo_fill_opts;
 
 /* Fills the defaults above. */

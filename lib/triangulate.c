@@ -10,6 +10,7 @@
 #include <time.h>
 
 #include "frep_grid.h"
+#include "topo.h"
 #include "vec.h"
 
 void geo_tri_opts_default(geo_tri_opts *o)
@@ -72,7 +73,7 @@ static geo_ctx sub_ctx(const geo_ctx *outer, subrange *s, double a, double b)
 
 typedef struct surface {
     const geo_frep *f;
-    double tol, max_step, cos_hard, crease_tol;
+    double tol, max_step, crease_tol;
 } surface;
 
 static void project_cb(void *user, double p[3])
@@ -81,33 +82,85 @@ static void project_cb(void *user, double p[3])
     geo_frep_project(s->f, p, s->tol, s->max_step);
 }
 
-/* A hard edge of an F-rep surface is a crease between smooth pieces: an
- * edge lying on one (both ends on the same two pieces, as the crease
- * recovery leaves them) or crossing one whose normals differ by more than
- * the hard angle. A smooth surface has none, however coarse the
- * sampling. */
-static bool hard_cb(void *user, const double p[3], const double q[3])
+/* How many smooth pieces of F the points p and q have in common (pieces
+ * through a point: lib/frep.h); UINT32_MAX when neither lies on any
+ * piece within the tolerance. */
+static uint32_t common_pieces(const surface *s, const double p[3],
+                              const double q[3])
 {
-    const surface *s = user;
     uint32_t a[4], b[4];
     uint32_t na = geo_frep_pieces_at(s->f, p, s->crease_tol, a, 4);
     uint32_t nb = geo_frep_pieces_at(s->f, q, s->crease_tol, b, 4);
+    if (na == 0 || nb == 0)
+        return UINT32_MAX;
     uint32_t common = 0;
     for (uint32_t i = 0; i < na && i < 4; i++)
         for (uint32_t j = 0; j < nb && j < 4; j++)
             common += a[i] == b[j];
-    if (common >= 2)
-        return true;
-    if (common == 1)
-        return false;
-    uint32_t n, pp, pq;
-    const geo_frep_op *prog = geo_frep_program(s->f, &n);
-    double gp[3], gq[3];
-    geo_frep_run_piece(s->f, prog, n, p, gp, &pp);
-    geo_frep_run_piece(s->f, prog, n, q, gq, &pq);
-    if (pp == pq || geo_vnormalize(gp) == 0 || geo_vnormalize(gq) == 0)
-        return false;
-    return geo_vdot(gp, gq) < s->cos_hard;
+    return common;
+}
+
+/* The hard edges of an F-rep surface are its creases (every one: they
+ * are known exactly); an edge lies along one when both its ends are on
+ * the same two pieces, as the crease recovery leaves them. A smooth
+ * surface has none, however coarse the sampling. */
+static bool hard_cb(void *user, const double p[3], const double q[3])
+{
+    uint32_t c = common_pieces(user, p, q);
+    return c != UINT32_MAX && c >= 2;
+}
+
+/* An edge whose ends share no piece cuts across a crease. */
+static bool crosses_cb(void *user, const double p[3], const double q[3])
+{
+    return common_pieces(user, p, q) == 0;
+}
+
+/* A cell of the contour graph that visits a point twice leaves that point
+ * pinched between two fans of quads. Removing the point's triangles turns
+ * the holes around it into one, which the filler then closes as a disk
+ * without the point. Repeats while pinches remain (a few rounds at most;
+ * they are rare and isolated). flat is kept aligned with the facets. */
+static int unpinch(geo_poly *m, uint8_t **flat, uint32_t *ret_n,
+                   geo_err *err)
+{
+    *ret_n = 0;
+    for (int round = 0; round < 8; round++) {
+        geo_topo *t = geo_topo_build(m, err);
+        if (!t)
+            return -ENOMEM;
+        if (t->nnonmanifold_vertices == 0) {
+            geo_topo_free(t);
+            return 0;
+        }
+        bool *keep = malloc(((size_t)m->nfacets + 1) * sizeof *keep);
+        uint32_t *fmap = malloc(((size_t)m->nfacets + 1) * sizeof *fmap);
+        if (!keep || !fmap) {
+            free(keep), free(fmap);
+            geo_topo_free(t);
+            return geo_err_set(err, -ENOMEM, "out of memory");
+        }
+        for (uint32_t f = 0; f < m->nfacets; f++)
+            keep[f] = true;
+        for (uint32_t v = 0; v < m->nverts; v++) {
+            if (t->vertex_kind[v] != GEO_VERTEX_NONMANIFOLD)
+                continue;
+            (*ret_n)++;
+            for (uint32_t k = t->vstart[v]; k < t->vstart[v + 1]; k++)
+                keep[t->corner_facet[t->vcorners[k]]] = false;
+        }
+        geo_topo_free(t);
+        uint32_t nf = m->nfacets;
+        int rc = geo_poly_compact(m, keep, NULL, fmap);
+        if (rc == 0)
+            for (uint32_t f = 0; f < nf; f++)
+                if (fmap[f] != UINT32_MAX)
+                    (*flat)[fmap[f]] = (*flat)[f];
+        free(keep), free(fmap);
+        if (rc < 0)
+            return geo_err_set(err, rc, "out of memory");
+    }
+    return 0;
 }
 
 int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
@@ -152,6 +205,8 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
         geo_err_set(err, rc, "out of memory");
         goto fail;
     }
+    if ((rc = unpinch(mesh, &flat, &rep.npinched, err)) < 0)
+        goto fail;
     if ((rc = geo_ctx_progress(ctx, 0.55)) < 0) {
         geo_err_set(err, rc, "canceled");
         goto fail;
@@ -159,8 +214,7 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
     rep.t_connect = now() - t;
     t = now();
 
-    surface surf = {f, 1e-12 * g->side, 8.0 * g->hx,
-                    cos(o.hard_angle_deg * M_PI / 180.0), 1e-9 * g->side};
+    surface surf = {f, 1e-12 * g->side, 8.0 * g->hx, 1e-9 * g->side};
     geo_fill_opts fo;
     geo_fill_opts_default(&fo);
     fo.weight = o.fill;
@@ -170,6 +224,7 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
     fo.hard_angle_deg = o.hard_angle_deg;
     fo.project = project_cb;
     fo.hard_edge = hard_cb;
+    fo.crosses_feature = crosses_cb;
     fo.project_user = &surf;
     /* holes first, refinement after the creases are recovered: a
      * centroid of a triangle lying on one smooth piece then stays on it */

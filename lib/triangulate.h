@@ -67,6 +67,7 @@ typedef struct geo_tri_report {
     geo_fill_stats fill;        /* owns fill.holes */
     geo_sharpen_stats sharpen;
     uint32_t npoints;           /* surface points found by sampling */
+    uint32_t npinched;          /* pinched points removed before filling */
     uint64_t nevals, nboxes;    /* point and interval evaluations */
     double voxel[3];            /* voxel size (x, y, z) */
     int64_t self_intersections; /* −1 when not measured */
