@@ -5,9 +5,9 @@
  * Invariants: every facet is read as the fan (v0, vi, vi+1); a crossing is
  * counted only when all the signs that define it are non-zero, and any
  * zero sign either settles the point as boundary (it lies on the facet)
- * or makes the ray degenerate (a new one is cast). Counts are kept per
- * facet and added at the end of the facet, so a facet that turns out to
- * hold the point in its plane contributes nothing. */
+ * or makes the ray degenerate (a new one is cast). A point in the plane
+ * of an exactly planar facet but off it is where the fan's signed cover
+ * is zero: that facet contributes nothing to any ray from the point. */
 #include "inside.h"
 
 #include <errno.h>
@@ -177,11 +177,12 @@ double geo_winding_number(const geo_poly *p, const double q[3])
 
 /* ---- the prepared classifier ------------------------------------------- */
 
-/* One facet in a grid cell: its yz box and largest x, copied next to the
- * facet index so the scan of a cell reads one contiguous array. */
+/* One fan triangle (v0, vi, vi+1) of a facet in a grid cell: its yz box
+ * and largest x, copied next to its facet and i so the scan of a cell
+ * reads one contiguous array. */
 typedef struct cell_ref {
     double ylo, yhi, zlo, zhi, xmax;
-    uint32_t facet;
+    uint32_t facet, i;
 } cell_ref;
 
 struct geo_inside {
@@ -190,7 +191,8 @@ struct geo_inside {
     geo_bbox box;     /* facets' box; empty (lo > hi) without facets */
     double center[3]; /* of box */
     double diag;      /* box diagonal */
-    /* yz grid: cell (iy, iz) = cell_start[iy·gz + iz] .. of refs */
+    /* yz grid of fan triangles: cell (iy, iz) = refs from
+     * cell_start[iy·gz + iz] to cell_start[iy·gz + iz + 1] */
     uint32_t gy, gz;
     double y0, z0, sy, sz; /* index = (coordinate − origin) · scale */
     uint32_t *cell_start;  /* gy·gz + 1 */
@@ -223,81 +225,161 @@ static uint32_t cell_index(double x, double origin, double scale, uint32_t g)
     return (uint32_t)t;
 }
 
-/* References per facet allowed before the grid is made coarser: keeps
- * memory O(facets) when long facets span many cells. */
-enum { GRID_REFS_PER_FACET = 24, GRID_MAX_SIDE = 2048 };
+/* References per triangle allowed before the grid is made coarser: keeps
+ * memory O(corners) when long slivers span many cells. */
+enum { GRID_CELLS_PER_TRI = 4, GRID_REFS_PER_TRI = 32, GRID_MAX_SIDE = 4096 };
+
+static void tri_box(const geo_poly *p, uint32_t f, uint32_t i, geo_bbox *ret)
+{
+    const uint32_t *v = geo_poly_facet(p, f);
+    geo_bbox_empty(ret);
+    geo_bbox_add(ret, p->verts[v[0]]);
+    geo_bbox_add(ret, p->verts[v[i]]);
+    geo_bbox_add(ret, p->verts[v[i + 1]]);
+}
+
+/* Runs the statement after it for every fan triangle (v0, vi, vi+1) of
+ * every facet f. */
+#define FOR_EACH_TRI(p, f, i)                                                \
+    for (uint32_t f = 0; f < (p)->nfacets; f++)                              \
+        for (uint32_t i = 1; i + 1 < geo_poly_facet_size((p), f); i++)
+
+/* The z range of the part of triangle t (projected to yz) inside the
+ * slab Y0 ≤ y ≤ Y1: its vertices in the slab and its edges' crossings of
+ * the slab's lines. False when the triangle misses the slab. Floating
+ * point: callers pad the range (it only prunes). */
+static bool slab_zrange(const double *t[3], double Y0, double Y1,
+                        double *ret_lo, double *ret_hi)
+{
+    double lo = INFINITY, hi = -INFINITY;
+    for (int e = 0; e < 3; e++) {
+        const double *P = t[e], *Q = t[(e + 1) % 3];
+        if (Y0 <= P[1] && P[1] <= Y1) {
+            lo = fmin(lo, P[2]);
+            hi = fmax(hi, P[2]);
+        }
+        double lines[2] = {Y0, Y1};
+        for (int k = 0; k < 2; k++) {
+            double Yc = lines[k];
+            if (!((P[1] < Yc && Yc < Q[1]) || (Q[1] < Yc && Yc < P[1])))
+                continue;
+            double z = P[2] + (Yc - P[1]) / (Q[1] - P[1]) * (Q[2] - P[2]);
+            z = fmax(fmin(P[2], Q[2]), fmin(fmax(P[2], Q[2]), z));
+            lo = fmin(lo, z);
+            hi = fmax(hi, z);
+        }
+    }
+    *ret_lo = lo;
+    *ret_hi = hi;
+    return lo <= hi;
+}
+
+/* Visits every cell that fan triangle (f, i) may touch in the yz
+ * projection, row by row: in each row the cells between the padded z
+ * range of the triangle's part in that row's slab. Padding (relative
+ * 1e-6 of a cell, 1e-12 of the coordinates) covers the rounding of cell
+ * bounds and of the clipping, so a point whose cell is skipped cannot lie
+ * in the triangle's projection. Work is proportional to the rows and
+ * cells touched: long slivers span many cells' boxes but few cells.
+ * fill NULL counts into ix->cell_start[cell + 1]; else appends the
+ * triangle's reference at fill[cell]. Returns the number of cells. */
+static size_t grid_tri(geo_inside *ix, uint32_t f, uint32_t i, uint32_t *fill)
+{
+    const geo_poly *p = ix->p;
+    const uint32_t *v = geo_poly_facet(p, f);
+    const double *t[3] = {p->verts[v[0]], p->verts[v[i]], p->verts[v[i + 1]]};
+    geo_bbox b;
+    tri_box(p, f, i, &b);
+    uint32_t y0 = cell_index(b.lo[1], ix->y0, ix->sy, ix->gy),
+             y1 = cell_index(b.hi[1], ix->y0, ix->sy, ix->gy),
+             z0 = cell_index(b.lo[2], ix->z0, ix->sz, ix->gz),
+             z1 = cell_index(b.hi[2], ix->z0, ix->sz, ix->gz);
+    cell_ref r = {b.lo[1], b.hi[1], b.lo[2], b.hi[2], b.hi[0], f, i};
+    double cy = ix->sy > 0 ? 1.0 / ix->sy : 0, cz = ix->sz > 0 ? 1.0 / ix->sz : 0;
+    double pad_y = 1e-6 * cy + 1e-12 * (fabs(b.lo[1]) + fabs(b.hi[1]));
+    double pad_z = 1e-6 * cz + 1e-12 * (fabs(b.lo[2]) + fabs(b.hi[2]));
+    size_t n = 0;
+    for (uint32_t y = y0; y <= y1; y++) {
+        uint32_t za = z0, zb = z1;
+        if (y0 != y1) {
+            double lo, hi;
+            double Y0 = y == y0 ? b.lo[1] : ix->y0 + y * cy - pad_y;
+            double Y1 = y == y1 ? b.hi[1] : ix->y0 + (y + 1) * cy + pad_y;
+            if (!slab_zrange(t, Y0, Y1, &lo, &hi))
+                continue;
+            uint32_t a = cell_index(lo - pad_z, ix->z0, ix->sz, ix->gz),
+                     c = cell_index(hi + pad_z, ix->z0, ix->sz, ix->gz);
+            za = a > z0 ? a : z0;
+            zb = c < z1 ? c : z1;
+        }
+        for (uint32_t z = za; z <= zb; z++) {
+            size_t cell = (size_t)y * ix->gz + z;
+            if (fill)
+                ix->refs[fill[cell]++] = r;
+            else
+                ix->cell_start[cell + 1]++;
+            n++;
+        }
+    }
+    return n;
+}
 
 static int build_grid(geo_inside *ix, geo_err *err)
 {
     const geo_poly *p = ix->p;
-    uint32_t nf = p->nfacets;
+    size_t ntri = 0;
+    FOR_EACH_TRI(p, f, i)
+        ntri++;
     double ey = ix->box.hi[1] - ix->box.lo[1], ez = ix->box.hi[2] - ix->box.lo[2];
-    /* about two cells per facet, square in yz */
-    double cells = 2.0 * (nf ? nf : 1);
+    double cells = (double)GRID_CELLS_PER_TRI * (double)(ntri ? ntri : 1);
     uint32_t gy = 1, gz = 1;
-    if (nf > 0 && ey > 0 && ez > 0) {
-        double s = sqrt(cells / (ey * ez));
+    if (ntri > 0 && ey > 0 && ez > 0) {
+        double s = sqrt(cells / (ey * ez)); /* square cells */
         gy = (uint32_t)fmin(GRID_MAX_SIDE, fmax(1, ceil(ey * s)));
         gz = (uint32_t)fmin(GRID_MAX_SIDE, fmax(1, ceil(ez * s)));
-    } else if (nf > 0 && ey > 0) {
+    } else if (ntri > 0 && ey > 0) {
         gy = (uint32_t)fmin(GRID_MAX_SIDE, cells);
-    } else if (nf > 0 && ez > 0) {
+    } else if (ntri > 0 && ez > 0) {
         gz = (uint32_t)fmin(GRID_MAX_SIDE, cells);
     }
-    uint32_t(*range)[4] = malloc(((size_t)nf + 1) * sizeof *range);
-    if (!range)
-        goto oom;
-    size_t total;
+    size_t budget = (size_t)GRID_REFS_PER_TRI * ntri + 1024, total;
     for (;;) {
         ix->gy = gy, ix->gz = gz;
         ix->y0 = ix->box.lo[1], ix->z0 = ix->box.lo[2];
         ix->sy = ey > 0 ? gy / ey : 0;
         ix->sz = ez > 0 ? gz / ez : 0;
+        free(ix->cell_start);
+        ix->cell_start = calloc((size_t)gy * gz + 1, sizeof *ix->cell_start);
+        if (!ix->cell_start)
+            goto oom;
         total = 0;
-        for (uint32_t f = 0; f < nf; f++) {
-            geo_bbox b;
-            geo_poly_facet_bbox(p, f, &b);
-            range[f][0] = cell_index(b.lo[1], ix->y0, ix->sy, gy);
-            range[f][1] = cell_index(b.hi[1], ix->y0, ix->sy, gy);
-            range[f][2] = cell_index(b.lo[2], ix->z0, ix->sz, gz);
-            range[f][3] = cell_index(b.hi[2], ix->z0, ix->sz, gz);
-            total += (size_t)(range[f][1] - range[f][0] + 1) *
-                     (range[f][3] - range[f][2] + 1);
+        FOR_EACH_TRI(p, f, i) {
+            total += grid_tri(ix, f, i, NULL);
+            if (total > budget)
+                break;
         }
-        if (total <= (size_t)GRID_REFS_PER_FACET * nf + 1024 ||
-            (gy == 1 && gz == 1))
+        if (total <= budget || (gy == 1 && gz == 1))
             break;
         gy = gy > 1 ? gy / 2 : 1;
         gz = gz > 1 ? gz / 2 : 1;
     }
+    if (total > UINT32_MAX)
+        goto oom;
     size_t ncells = (size_t)gy * gz;
-    ix->cell_start = calloc(ncells + 1, sizeof *ix->cell_start);
+    for (size_t cell = 0; cell < ncells; cell++)
+        ix->cell_start[cell + 1] += ix->cell_start[cell];
     ix->refs = malloc((total + 1) * sizeof *ix->refs);
-    if (!ix->cell_start || !ix->refs)
-        goto oom;
-    for (uint32_t f = 0; f < nf; f++)
-        for (uint32_t y = range[f][0]; y <= range[f][1]; y++)
-            for (uint32_t z = range[f][2]; z <= range[f][3]; z++)
-                ix->cell_start[(size_t)y * gz + z + 1]++;
-    for (size_t c = 0; c < ncells; c++)
-        ix->cell_start[c + 1] += ix->cell_start[c];
     uint32_t *fill = malloc((ncells + 1) * sizeof *fill);
-    if (!fill)
+    if (!ix->refs || !fill) {
+        free(fill);
         goto oom;
-    memcpy(fill, ix->cell_start, ncells * sizeof *fill);
-    for (uint32_t f = 0; f < nf; f++) {
-        geo_bbox b;
-        geo_poly_facet_bbox(p, f, &b);
-        cell_ref r = {b.lo[1], b.hi[1], b.lo[2], b.hi[2], b.hi[0], f};
-        for (uint32_t y = range[f][0]; y <= range[f][1]; y++)
-            for (uint32_t z = range[f][2]; z <= range[f][3]; z++)
-                ix->refs[fill[(size_t)y * gz + z]++] = r;
     }
+    memcpy(fill, ix->cell_start, ncells * sizeof *fill);
+    FOR_EACH_TRI(p, f, i)
+        grid_tri(ix, f, i, fill);
     free(fill);
-    free(range);
     return 0;
 oom:
-    free(range);
     return geo_err_set(err, -ENOMEM, "out of memory building the point grid");
 }
 
@@ -470,54 +552,39 @@ int geo_inside_ray(const geo_inside *ix, const double q[3],
 
 enum axis_status { AXIS_OK = 0, AXIS_BOUNDARY, AXIS_DEGENERATE };
 
-static inline double min3(double a, double b, double c)
+/* Whether the ray q + t·(1,0,0), t > 0, crosses fan triangle (a, b, c)
+ * of facet f. In the yz projection the ray is the point q: it passes
+ * through the triangle iff q lies strictly inside the projected triangle
+ * (orient2d signs all equal to the triangle's, s = the sign of its
+ * normal's x), and it meets the plane ahead of q iff q lies on the side
+ * of the plane opposite to s. *ret_cross is 1 for a crossing, else 0. */
+static enum axis_status axis_tri(const geo_poly *p, uint32_t f, uint32_t i,
+                                 const double q[3], int *ret_cross)
 {
-    return fmin(a, fmin(b, c));
-}
-static inline double max3(double a, double b, double c)
-{
-    return fmax(a, fmax(b, c));
-}
-
-/* Crossings of the ray q + t·(1,0,0), t > 0, with facet f's fan. In the
- * yz projection the ray is the point q: it passes through a triangle iff
- * q lies strictly inside the projected triangle (orient2d signs all equal
- * to the triangle's, s = sign of its normal's x), and it meets the plane
- * ahead of q iff q lies on the side of the plane opposite to s. */
-static enum axis_status axis_facet(const geo_poly *p, uint32_t f,
-                                   const double q[3], int *ret_crossings)
-{
-    uint32_t n = geo_poly_facet_size(p, f);
     const uint32_t *v = geo_poly_facet(p, f);
-    const double *a = p->verts[v[0]];
-    int crossings = 0;
-    for (uint32_t i = 1; i + 1 < n; i++) {
-        const double *b = p->verts[v[i]], *c = p->verts[v[i + 1]];
-        if (max3(a[0], b[0], c[0]) < q[0] ||
-            q[1] < min3(a[1], b[1], c[1]) || q[1] > max3(a[1], b[1], c[1]) ||
-            q[2] < min3(a[2], b[2], c[2]) || q[2] > max3(a[2], b[2], c[2]))
-            continue;
-        int o1 = geo_orient2d_proj(a, b, q, 0);
-        int o2 = geo_orient2d_proj(b, c, q, 0);
-        int o3 = geo_orient2d_proj(c, a, q, 0);
-        if ((o1 > 0 || o2 > 0 || o3 > 0) && (o1 < 0 || o2 < 0 || o3 < 0))
-            continue;
-        if (o1 == 0 || o2 == 0 || o3 == 0)
-            return AXIS_DEGENERATE;
-        int sq = geo_orient3d(a, b, c, q);
-        if (sq == 0) {
-            if (geo_point_on_facet(p, f, q))
-                return AXIS_BOUNDARY;
-            /* only an exactly planar facet can hold q in a triangle's
-             * plane inside its projection yet off the facet: q is where
-             * the fan's signed cover is zero, the facet adds nothing */
-            *ret_crossings = 0;
-            return AXIS_OK;
-        }
-        if (sq == -o1)
-            crossings++;
+    const double *a = p->verts[v[0]], *b = p->verts[v[i]],
+                 *c = p->verts[v[i + 1]];
+    *ret_cross = 0;
+    int o1 = geo_orient2d_proj(a, b, q, 0);
+    int o2 = geo_orient2d_proj(b, c, q, 0);
+    if (o1 * o2 < 0)
+        return AXIS_OK;
+    int o3 = geo_orient2d_proj(c, a, q, 0);
+    if ((o1 > 0 || o2 > 0 || o3 > 0) && (o1 < 0 || o2 < 0 || o3 < 0))
+        return AXIS_OK;
+    if (o1 == 0 || o2 == 0 || o3 == 0)
+        return AXIS_DEGENERATE;
+    int sq = geo_orient3d(a, b, c, q);
+    if (sq == 0) {
+        if (geo_point_on_facet(p, f, q))
+            return AXIS_BOUNDARY;
+        /* only an exactly planar facet holds q in a triangle's plane,
+         * inside its projection, yet off the facet: q is where the fan's
+         * signed cover is zero, and every triangle of the facet has q in
+         * its plane too, so the facet adds nothing */
+        return AXIS_OK;
     }
-    *ret_crossings = crossings;
+    *ret_cross = sq == -o1;
     return AXIS_OK;
 }
 
@@ -534,14 +601,14 @@ static enum axis_status axis_test(const geo_inside *ix, const double q[3],
         if (q[0] > r->xmax || q[1] < r->ylo || q[1] > r->yhi ||
             q[2] < r->zlo || q[2] > r->zhi)
             continue;
-        int c = 0;
-        enum axis_status s = axis_facet(ix->p, r->facet, q, &c);
+        int cross;
+        enum axis_status s = axis_tri(ix->p, r->facet, r->i, q, &cross);
         if (s != AXIS_OK) {
             if (s == AXIS_BOUNDARY)
                 *ret_loc = GEO_LOC_BOUNDARY;
             return s;
         }
-        parity ^= (unsigned)c & 1u;
+        parity ^= (unsigned)cross;
     }
     *ret_loc = parity ? GEO_LOC_INSIDE : GEO_LOC_OUTSIDE;
     return AXIS_OK;

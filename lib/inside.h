@@ -21,8 +21,8 @@
  * (an orient3d of zero) and shot again in another seeded random direction
  * (seed 003's ray test: "re-shoot"); a point on a facet's plane but off the
  * facet is not a degeneracy. The first ray a batch casts runs along +x
- * through a 2D grid of the facets' yz boxes; only when that ray is
- * degenerate is the point handed to the random-ray test.
+ * through a 2D grid of the fan triangles' yz boxes; only when that ray
+ * is degenerate is the point handed to the random-ray test.
  *
  * What the methods need. The ray tests decide by parity (seed 003 rules
  * 1–2) and are right for closed surfaces, whatever the facet orientation.

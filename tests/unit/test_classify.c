@@ -10,6 +10,7 @@
 
 #include "classify.h"
 #include "gen_convex.h"
+#include "model_io.h"
 #include "predicates.h"
 
 __extension__ typedef __int128 i128;
@@ -345,6 +346,41 @@ static void test_facet_convexity_of_polygons(void **state)
     geo_poly_free(p);
 }
 
+/* The sample stones: the truth and the scans are convex (the scans are
+ * intersections of half-spaces with rounded vertices, still exactly
+ * convex by conv3), the self-intersecting one and the non-convex prisms
+ * are not. */
+static void test_conv3_on_sample_models(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *name;
+        bool convex;
+        uint32_t nonconvex_facets;
+    } cases[] = {
+        {"brilliant.truth.json", true, 0},
+        {"brilliant.scan-k100.json", true, 0},
+        {"brilliant.scan-k400.json", true, 0},
+        {"brilliant.selfint.json", false, 2},
+        {"l-prism.json", false, 2},
+        {"notch-cube.json", false, 2},
+    };
+    for (size_t m = 0; m < sizeof cases / sizeof cases[0]; m++) {
+        geo_err err = {{0}};
+        geo_poly *p = proto_model_read_file(tu_model_path(cases[m].name),
+                                            PROTO_FMT_UNKNOWN, NULL, &err);
+        assert_non_null(p);
+        geo_conv3_result r;
+        assert_int_equal(geo_conv3(p, NULL, &r), 0);
+        assert_int_equal(r.convex, cases[m].convex);
+        uint32_t nc = 0;
+        for (uint32_t f = 0; f < p->nfacets; f++)
+            nc += !geo_facet_is_convex(p, f);
+        assert_int_equal(nc, cases[m].nonconvex_facets);
+        geo_poly_free(p);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -358,6 +394,7 @@ int main(void)
         cmocka_unit_test(test_conv3_finds_the_nonconvex_facet_with_witnesses),
         cmocka_unit_test(test_conv3_stops_when_canceled),
         cmocka_unit_test(test_facet_convexity_of_polygons),
+        cmocka_unit_test(test_conv3_on_sample_models),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
