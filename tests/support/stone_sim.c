@@ -218,7 +218,10 @@ static void add_inclined(plane_list *l, double phi, double alpha, double r,
     add_plane(l, n, p0);
 }
 
-static void brilliant(plane_list *l, uint64_t *rng)
+/* A round brilliant with `fold` mains (8: the classic 57-facet crown and
+ * pavilion pattern with a 64-facet girdle; 16: a "jubilee" with twice the
+ * facets, for large scans). */
+static void brilliant(plane_list *l, uint64_t *rng, int fold)
 {
     const double R = 3.25, deg = M_PI / 180;
     double girdle = 0.03 * 2 * R * (1 + jitter(rng, 0.2));
@@ -227,31 +230,32 @@ static void brilliant(plane_list *l, uint64_t *rng)
     double pav = (40.75 + jitter(rng, 0.6)) * deg;
     double table_h = zt + (R * (1 - (0.56 + jitter(rng, 0.02)))) * tan(crown);
     double rot = jitter(rng, M_PI);
-    /* girdle: 64 vertical planes */
-    for (int k = 0; k < 64; k++) {
-        double phi = rot + k * 2 * M_PI / 64, n[3] = {cos(phi), sin(phi), 0};
+    int ngirdle = 8 * fold;
+    for (int k = 0; k < ngirdle; k++) {
+        double phi = rot + k * 2 * M_PI / ngirdle, n[3] = {cos(phi), sin(phi), 0};
         double p0[3] = {R * n[0], R * n[1], 0};
         add_plane(l, n, p0);
     }
     double up[3] = {0, 0, 1}, top[3] = {0, 0, table_h};
     add_plane(l, up, top);
-    for (int k = 0; k < 8; k++) {
-        double phi = rot + k * M_PI / 4;
+    double w = M_PI / fold; /* half the angle between mains */
+    for (int k = 0; k < fold; k++) {
+        double phi = rot + k * 2 * w;
         add_inclined(l, phi, crown, R, zt, 1); /* bezel */
         /* star: shallower, between bezels, reaching the table edge */
         double star = crown * (0.62 + jitter(rng, 0.03));
-        double rs = R * (0.56 + 0.5 * (1 - 0.56)) * cos(M_PI / 8);
+        double rs = R * (0.56 + 0.5 * (1 - 0.56)) * cos(w);
         double zs = zt + (R - rs) * tan(crown) * 0.98;
-        add_inclined(l, phi + M_PI / 8, star, rs, zs, 1);
+        add_inclined(l, phi + w, star, rs, zs, 1);
         /* upper girdle halves: steeper, either side of the bezel corner */
         double ug = crown * (1.12 + jitter(rng, 0.02));
-        add_inclined(l, phi + M_PI / 8 - M_PI / 32, ug, R, zt, 1);
-        add_inclined(l, phi + M_PI / 8 + M_PI / 32, ug, R, zt, 1);
+        add_inclined(l, phi + w - w / 4, ug, R, zt, 1);
+        add_inclined(l, phi + w + w / 4, ug, R, zt, 1);
         /* pavilion main and lower girdle halves */
         add_inclined(l, phi, pav, R, zb, -1);
         double lg = pav * (1.03 + jitter(rng, 0.005));
-        add_inclined(l, phi + M_PI / 8 - M_PI / 32, lg, R, zb, -1);
-        add_inclined(l, phi + M_PI / 8 + M_PI / 32, lg, R, zb, -1);
+        add_inclined(l, phi + w - w / 4, lg, R, zb, -1);
+        add_inclined(l, phi + w + w / 4, lg, R, zb, -1);
     }
 }
 
@@ -312,8 +316,8 @@ geo_poly *sim_stone(enum sim_cut cut, uint64_t seed)
 {
     uint64_t rng = seed * 0x9e3779b97f4a7c15ULL + 1;
     plane_list l = {0};
-    if (cut == SIM_BRILLIANT)
-        brilliant(&l, &rng);
+    if (cut == SIM_BRILLIANT || cut == SIM_JUBILEE)
+        brilliant(&l, &rng, cut == SIM_JUBILEE ? 16 : 8);
     else
         step_cut(&l, &rng, cut == SIM_EMERALD);
     geo_poly *p = sim_halfspace_intersection(l.v, l.n, 10.0);

@@ -22,7 +22,9 @@
 
 #include "poly.h"
 
-enum sim_cut { SIM_BRILLIANT, SIM_PRINCESS, SIM_EMERALD };
+/* Cuts: a round brilliant (121 facets), princess, emerald, and a
+ * 16-fold brilliant with twice the facets (large scans for benchmarks). */
+enum sim_cut { SIM_BRILLIANT, SIM_PRINCESS, SIM_EMERALD, SIM_JUBILEE };
 
 /* The true stone of the given cut, about 6.5 mm across, with proportions
  * drawn from seed. NULL on out-of-memory. Valid convex polyhedron. */
