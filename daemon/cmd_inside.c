@@ -28,9 +28,10 @@ static const char USAGE[] =
     "is \"inside\" or \"outside\".\n"
     "\n"
     "  --threads N  threads to use (default: all processors)\n"
-    "  --method M   ray: ray parity (closed models); winding: generalized\n"
-    "               winding number (models with holes; slower);\n"
-    "               auto (default): ray for closed models, else winding\n"
+    "  --method M   ray: ray parity (closed models, any facet orientation);\n"
+    "               winding: generalized winding number (models with\n"
+    "               holes; facets listed outward; slower); auto (default):\n"
+    "               ray when every edge has two facets, else winding\n"
     "  --seed S     seed of the re-shot random rays (default 1); answers\n"
     "               do not depend on it for closed models\n"
     "\n"
@@ -50,14 +51,16 @@ static int parse_count(const char *opt, const char *s, unsigned long max,
     return CLI_OK;
 }
 
-/* The method for "auto": the ray parity needs a closed surface. */
+/* The method for "auto": ray parity needs a closed surface (every edge in
+ * two facets) but not a consistent orientation, so a flipped facet does
+ * not send a model to the slower winding number. */
 static int closed_model(const geo_poly *p, bool *ret_closed)
 {
     geo_err err;
     geo_topo *t = geo_topo_build(p, &err);
     if (!t)
         return -ENOMEM;
-    *ret_closed = geo_topo_is_closed_manifold(t);
+    *ret_closed = t->nboundary_edges == 0 && t->nnonmanifold_edges == 0;
     geo_topo_free(t);
     return 0;
 }

@@ -524,7 +524,7 @@ int geo_inside_ray(const geo_inside *ix, const double q[3],
         reach = 1.0;
     for (unsigned shot = 1; shot <= GEO_INSIDE_MAX_SHOTS; shot++) {
         double d[3];
-        if (shot == 1 && dir0) {
+        if (shot == 1 && dir0 && geo_vlen(dir0) > 0) {
             memcpy(d, dir0, sizeof d);
             geo_vnormalize(d);
         } else {

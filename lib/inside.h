@@ -105,8 +105,8 @@ const geo_bbox *geo_inside_bbox(const geo_inside *ix);
  * Rule 3: q on a facet → GEO_LOC_BOUNDARY; rules 1–2: an odd number of
  * crossings → GEO_LOC_INSIDE, even or none → GEO_LOC_OUTSIDE; a
  * degenerate hit (through an edge or vertex, or along a plane) → a new
- * direction. dir0, if not NULL, is the direction of the first shot
- * (any length but non-zero). *rng is the generator state (advanced).
+ * direction. dir0, if not NULL and not zero, is the direction of the
+ * first shot (any length). *rng is the generator state (advanced).
  * *ret_shots, if not NULL, receives the number of rays cast (0 when gab3
  * decided). Exact; thread-safe with a separate rng per thread. */
 int geo_inside_ray(const geo_inside *ix, const double q[3],

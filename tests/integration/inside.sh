@@ -63,6 +63,9 @@ head -c 40000 "$tmp/many.json" | sed 's/,\[[^]]*$/]/' >"$tmp/few.json"
 "$F" inside "$M/brilliant.scan-k400.json" "$tmp/few.json" --method winding >"$tmp/w.out"
 check "the winding number gives the ray's answers on the closed stone" \
     '[ "$(tr , "\n" <"$tmp/w.out" | wc -l)" -gt 500 ] && cmp -s "$tmp/r.out" "$tmp/w.out"'
+out=$("$F" inside "$M/notch-cube.flipped.json" "$tmp/p.json")
+check "a flipped facet does not change the answers (ray parity)" \
+    '[ "$out" = "[\"inside\",\"outside\",\"boundary\",\"boundary\",\"outside\",\"boundary\",\"boundary\"]" ]'
 out=$(echo '[[0,0,-1],[0,0,0.5]]' | "$F" inside "$M/brilliant.holes.json" -)
 check "a model with holes is classified by the winding number" \
     '[ "$out" = "[\"inside\",\"inside\"]" ]'

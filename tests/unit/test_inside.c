@@ -244,6 +244,9 @@ static void test_ray_through_edge_or_vertex_is_shot_again(void **state)
     double toward[3] = {1, 1, 1};
     assert_int_equal(geo_inside_ray(ix, c, toward, &rng, &shots), IN);
     assert_true(shots >= 2);
+    /* a zero first direction is replaced by a random one */
+    double zero[3] = {0, 0, 0};
+    assert_int_equal(geo_inside_ray(ix, c, zero, &rng, &shots), IN);
     /* a generic direction needs one shot */
     double gen[3] = {0.31, 0.17, 0.93};
     assert_int_equal(geo_inside_ray(ix, c, gen, &rng, &shots), IN);
