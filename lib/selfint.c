@@ -247,6 +247,12 @@ void geo_facet_shape_of(const geo_poly *p, uint32_t f, geo_facet_shape *ret)
     ret->axis = (int8_t)axis;
 
     ret->turn = (int8_t)turn_in_axis(p, f, axis);
+    ret->simple = !geo_facet_self_intersects(p, f, ret);
+    ret->convex = ret->simple;
+    for (uint32_t i = 0; i < n && ret->convex; i++)
+        ret->convex = geo_orient2d_proj(V(p, fv[(i + n - 1) % n]), V(p, fv[i]),
+                                        V(p, fv[(i + 1) % n]), axis) *
+                          ret->turn >= 0;
 }
 
 /* ------------------------------------------------ own-polygon tests */
@@ -257,13 +263,28 @@ static bool edges_meet(const geo_poly *p, const uint32_t *fv, uint32_t n,
                        int axis, uint32_t i, uint32_t j)
 {
     uint32_t i1 = (i + 1) % n, j1 = (j + 1) % n;
-    bool excl_a = fv[i] == fv[j] || fv[i] == fv[j1];
-    bool excl_b = fv[i1] == fv[j] || fv[i1] == fv[j1];
     double a[2], b[2], c[2], d[2];
     proj(V(p, fv[i]), axis, a);
     proj(V(p, fv[i1]), axis, b);
     proj(V(p, fv[j]), axis, c);
     proj(V(p, fv[j1]), axis, d);
+    if (i1 == j || j1 == i) {
+        /* consecutive edges x→y→z: beyond y they meet only when z turns
+         * straight back along x→y (a spike); one orient2d, never on a
+         * repeated point */
+        const double *x = i1 == j ? a : c, *y = i1 == j ? b : a,
+                     *z = i1 == j ? d : b;
+        if (geo_orient2d(x, y, z) != 0)
+            return false;
+        /* collinear: overlap when z lies on y's side towards x; two
+         * coincident vertices touch as well */
+        int k = x[0] != y[0] ? 0 : 1;
+        if (x[k] == y[k] || (y[0] == z[0] && y[1] == z[1]))
+            return true;
+        return cmp(z[k], y[k]) == cmp(x[k], y[k]);
+    }
+    bool excl_a = fv[i] == fv[j] || fv[i] == fv[j1];
+    bool excl_b = fv[i1] == fv[j] || fv[i1] == fv[j1];
     return seg_contact(a, b, excl_a, excl_b, c, d);
 }
 
@@ -311,6 +332,9 @@ bool geo_facet_self_intersects(const geo_poly *p, uint32_t f,
         return false;
     uint32_t n = geo_poly_facet_size(p, f);
     const uint32_t *fv = geo_poly_facet(p, f);
+    if (n == 3)
+        return false; /* a triangle of three distinct, non-collinear
+                         points never touches itself */
     int axis = s->axis;
     enum { SMALL = 24 };
     /* large facets: sweep along the first projected coordinate so only
@@ -343,22 +367,6 @@ bool geo_facet_self_intersects(const geo_poly *p, uint32_t f,
     free(spans);
     free(ids);
     return hit;
-}
-
-bool geo_facet_is_convex(const geo_poly *p, uint32_t f,
-                         const geo_facet_shape *s)
-{
-    if (s->degenerate)
-        return false;
-    uint32_t n = geo_poly_facet_size(p, f);
-    const uint32_t *fv = geo_poly_facet(p, f);
-    for (uint32_t i = 0; i < n; i++) {
-        int o = geo_orient2d_proj(V(p, fv[(i + n - 1) % n]), V(p, fv[i]),
-                                  V(p, fv[(i + 1) % n]), s->axis);
-        if (o * s->turn < 0)
-            return false;
-    }
-    return !geo_facet_self_intersects(p, f, s);
 }
 
 /* -------------------------------------------------------- pair test */
@@ -640,6 +648,33 @@ static bool edges_hit(const geo_poly *p, const facet_ref *F,
     return false;
 }
 
+/* Convex F and G share exactly the edge uw (positions iu, iw in F, ju in
+ * G). In F's projection, if every other vertex of G lies strictly on the
+ * other side of the line uw than F, the projections meet only on that
+ * line, and each facet's points projecting there form just the edge uw:
+ * the pair is legal. A sufficient test, not a necessary one: false means
+ * "decide by the general path". Well conditioned where the side tests of
+ * the general path are not (nearly coplanar neighbours, like a scan's
+ * slivers). */
+static bool separated_by_shared_edge(const geo_poly *p, const facet_ref *F,
+                                     const facet_ref *G, const int32_t *gpos,
+                                     uint32_t iu, uint32_t iw)
+{
+    int axis = F->s->axis;
+    const double *u = V(p, F->v[iu]), *w = V(p, F->v[iw]);
+    int side_f = 0;
+    for (uint32_t i = 0; i < F->n && !side_f; i++)
+        if (i != iu && i != iw)
+            side_f = geo_orient2d_proj(u, w, V(p, F->v[i]), axis);
+    if (!side_f)
+        return false;
+    for (uint32_t j = 0; j < G->n; j++)
+        if (gpos[j] < 0 &&
+            geo_orient2d_proj(u, w, V(p, G->v[j]), axis) != -side_f)
+            return false;
+    return true;
+}
+
 static bool pair_test(const geo_poly *p, const facet_ref *F,
                       const facet_ref *G, pair_scratch *sc)
 {
@@ -657,6 +692,16 @@ static bool pair_test(const geo_poly *p, const facet_ref *F,
                 nshared++;
                 break;
             }
+    }
+    if (nshared == 2 && F->s->convex && G->s->convex) {
+        int32_t iu = -1, iw = -1;
+        for (uint32_t i = 0; i < F->n; i++)
+            if (fpos[i] >= 0)
+                iu < 0 ? (iu = (int32_t)i) : (iw = (int32_t)i);
+        if (is_edge(F, iu, iw) && is_edge(G, fpos[iu], fpos[iw]) &&
+            separated_by_shared_edge(p, F, G, gpos, (uint32_t)iu,
+                                     (uint32_t)iw))
+            return false;
     }
     bool pos = false, neg = false;
     for (uint32_t j = 0; j < G->n; j++) {
@@ -867,8 +912,10 @@ static void run_shapes(void *arg, size_t i)
         unsigned char fl = 0;
         if (s->degenerate)
             fl = GEO_SI_DEGENERATE;
-        else if (geo_facet_self_intersects(j->p, f, s))
-            fl = GEO_SI_SELF;
+        else if (!s->simple)
+            fl = GEO_SI_SELF | GEO_SI_NONCONVEX;
+        else if (!s->convex)
+            fl = GEO_SI_NONCONVEX;
         atomic_init(&j->flags[f], fl);
     }
 }
