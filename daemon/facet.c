@@ -16,6 +16,8 @@ static int cmd_version(int argc, char **argv)
 static const cli_command commands[] = {
     {"version", "print the version", cmd_version},
     {"convert", "convert a model between file formats", cmd_convert},
+    {"inspect", "print a model's statistics and defects as JSON", cmd_inspect},
+    {"orient", "make a model's facets consistent and outward", cmd_orient},
 };
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
 
