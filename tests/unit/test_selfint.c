@@ -276,6 +276,35 @@ static void test_edge_in_plane_across_facet_counts(void **state)
     }
 }
 
+static void test_segment_meets_facet_three_ways(void **state)
+{
+    (void)state;
+    const double v[][3] = {SQUARE};
+    const uint32_t sizes[] = {4}, idx[] = {0, 1, 2, 3};
+    geo_poly *p = mk(v, 4, sizes, 1, idx);
+    geo_facet_shape s;
+    geo_facet_shape_of(p, 0, &s);
+    static const struct {
+        double a[3], b[3];
+        int want;
+    } cases[] = {
+        {{1, 1, -1}, {1.2, 0.9, 1}, 1},  /* through the interior */
+        {{3, 1, -1}, {3, 1, 1}, -1},     /* beside it */
+        {{1, 0, -1}, {1, 0, 1}, 0},      /* through an edge */
+        {{2, 2, -1}, {2, 2, 1}, 0},      /* through a corner */
+        {{1, 1, 0}, {1, 1, 1}, 0},       /* an endpoint on the facet */
+        {{3, 3, 0}, {3, 3, 1}, -1},      /* an endpoint on the plane only */
+        {{-1, 1, 0}, {3, 1, 0}, 0},      /* in the plane, across it */
+        {{-1, 3, 0}, {3, 3, 0}, -1},     /* in the plane, beside it */
+        {{1, 1, 1}, {1, 1, 2}, -1},      /* short of the plane */
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++)
+        assert_int_equal(geo_segment_meets_facet(p, 0, &s, cases[i].a,
+                                                 cases[i].b),
+                         cases[i].want);
+    geo_poly_free(p);
+}
+
 static void test_own_polygon_self_intersection(void **state)
 {
     (void)state;
@@ -656,6 +685,7 @@ int main(void)
         cmocka_unit_test(test_nonconvex_facets),
         cmocka_unit_test(test_crossing_along_a_diagonal_counts),
         cmocka_unit_test(test_edge_in_plane_across_facet_counts),
+        cmocka_unit_test(test_segment_meets_facet_three_ways),
         cmocka_unit_test(test_own_polygon_self_intersection),
         cmocka_unit_test(test_large_facet_sweep_matches_quadratic),
         cmocka_unit_test(test_degenerate_facets_are_flagged_not_paired),
