@@ -131,7 +131,8 @@ static int shell_depths(const geo_poly *p, const uint32_t *shell,
                 break;
             if (r.degenerate)
                 continue;
-            qsort(r.hits, r.nhits, sizeof *r.hits, cmp_u32);
+            if (r.nhits)
+                qsort(r.hits, r.nhits, sizeof *r.hits, cmp_u32);
             for (size_t i = 0, j; i < r.nhits; i = j) {
                 for (j = i; j < r.nhits && r.hits[j] == r.hits[i]; j++)
                     ;
