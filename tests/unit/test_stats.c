@@ -59,6 +59,7 @@ static void test_valid_sample_models(void **state)
         assert_int_equal(s.orientation, GEO_ORIENT_OUTWARD);
         assert_int_equal(s.selfint.count, 0);
         assert_int_equal(s.degenerate_facets, 0);
+        assert_int_equal(s.inverted_facets, 0);
         assert_true(s.max_nonplanarity <= s.eps);
         assert_true(s.valid);
         geo_stats_clear(&s);
@@ -255,6 +256,19 @@ static void test_degenerate_facet_and_nonplanarity(void **state)
     assert_int_equal(s.selfint.count, 1);
     assert_int_equal(s.selfint.pairs[0][0], 0);
     assert_int_equal(s.selfint.pairs[0][1], 2);
+    assert_false(s.valid);
+    geo_stats_clear(&s);
+    geo_poly_free(p);
+
+    /* a facet whose plane was not negated with it: inverted; its
+     * neighbours now disagree with it too */
+    p = box123();
+    uint32_t *fv = p->fidx + p->fstart[3];
+    uint32_t t0 = fv[0];
+    fv[0] = fv[3], fv[3] = t0, t0 = fv[1], fv[1] = fv[2], fv[2] = t0;
+    s = inspect(p, NULL);
+    assert_int_equal(s.inverted_facets, 1);
+    assert_int_equal(s.inconsistent_facets, 1);
     assert_false(s.valid);
     geo_stats_clear(&s);
     geo_poly_free(p);
