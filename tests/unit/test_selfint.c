@@ -643,12 +643,15 @@ static void test_random_convex_clean_until_vertex_pushed_through(void **state)
 {
     (void)state;
     for (uint64_t seed = 1; seed <= 40; seed++) {
-        geo_poly *p = gc_random_convex(seed, 12 + (uint32_t)(seed % 30));
+        const double cen[3] = {0.1 * (double)seed, -0.2, 0.3};
+        geo_poly *p = gen_convex_polyhedron(seed, 12 + (unsigned)(seed % 30),
+                                            cen, 1.0);
         assert_non_null(p);
         assert_true(geo_poly_max_nonplanarity(p) <= geo_poly_eps(p));
         assert_int_equal(count_all(p), 0);
         /* vertex 0 goes just beyond the facet facing away from it most */
-        const double *v0 = p->verts[0];
+        double v0[3];
+        geo_vsub(p->verts[0], cen, v0);
         uint32_t far = 0;
         double best = INFINITY;
         for (uint32_t f = 0; f < p->nfacets; f++) {
