@@ -5,6 +5,7 @@
  * keys of proto_stats_to_json. */
 #include "testutil.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -337,6 +338,32 @@ static void test_inspection_independent_of_thread_count(void **state)
     geo_poly_free(p);
 }
 
+static int record_progress(void *user, double fraction)
+{
+    double *last = user;
+    assert_true(fraction >= *last); /* monotonic */
+    assert_true(fraction <= 1.0);
+    *last = fraction;
+    return fraction > 0.5; /* then ask to stop */
+}
+
+static void test_progress_is_monotonic_and_cancel_stops(void **state)
+{
+    (void)state;
+    geo_poly *p = gs_sphere(16, 1.0);
+    double last = 0;
+    geo_ctx ctx = {0};
+    ctx.progress = record_progress;
+    ctx.user = &last;
+    geo_stats s;
+    geo_err err = {{0}};
+    assert_int_equal(geo_inspect(p, NULL, &ctx, &s, &err), -ECANCELED);
+    assert_true(last > 0.5);
+    assert_null(s.degree_count);
+    assert_null(s.selfint.pairs);
+    geo_poly_free(p);
+}
+
 static void test_json_has_every_key(void **state)
 {
     (void)state;
@@ -388,6 +415,7 @@ int main(void)
         cmocka_unit_test(test_degenerate_facet_and_nonplanarity),
         cmocka_unit_test(test_near_coplanar_thresholds),
         cmocka_unit_test(test_inspection_independent_of_thread_count),
+        cmocka_unit_test(test_progress_is_monotonic_and_cancel_stops),
         cmocka_unit_test(test_json_has_every_key),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
