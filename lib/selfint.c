@@ -755,14 +755,21 @@ int geo_facets_intersect(const geo_poly *p, uint32_t f, uint32_t g,
     if (f == g || sf->degenerate || sg->degenerate)
         return 0;
     facet_ref F = facet_at(p, f, sf), G = facet_at(p, g, sg);
-    pair_scratch sc = {0};
     uint32_t n = F.n > G.n ? F.n : G.n;
-    if (scratch_reserve(&sc, n) < 0) {
-        scratch_free(&sc);
-        return -ENOMEM;
+    enum { SMALL = 64 };
+    int8_t s1[SMALL], s2[SMALL];
+    int32_t p1[SMALL], p2[SMALL];
+    pair_scratch sc = {SMALL, s1, s2, p1, p2};
+    pair_scratch heap = {0};
+    if (n > SMALL) {
+        if (scratch_reserve(&heap, n) < 0) {
+            scratch_free(&heap);
+            return -ENOMEM;
+        }
+        sc = heap;
     }
     bool hit = pair_test(p, &F, &G, &sc);
-    scratch_free(&sc);
+    scratch_free(&heap);
     return hit;
 }
 

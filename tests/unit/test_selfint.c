@@ -363,6 +363,34 @@ static void test_large_facet_sweep_matches_quadratic(void **state)
     geo_poly_free(p);
 }
 
+static void test_large_facet_pairs(void **state)
+{
+    (void)state;
+    /* a 150-gon star in z = 0 and a triangle piercing its centre, then
+     * one piercing the gap between two of its spikes */
+    enum { N = 150 };
+    for (int k = 0; k < 2; k++) {
+        double v[N + 3][3];
+        uint32_t idx[N + 3], start[3] = {0, N, N + 3};
+        for (uint32_t i = 0; i < N; i++) {
+            double a = 2 * M_PI * i / N, r = (i % 2) ? 1.0 : 0.5;
+            v[i][0] = r * cos(a), v[i][1] = r * sin(a), v[i][2] = 0;
+            idx[i] = i;
+        }
+        /* the gap: just outside the inner radius, between spikes 1 and 3 */
+        double x = k ? 0.52 * cos(2 * M_PI * 2 / N) : 0.0;
+        double y = k ? 0.52 * sin(2 * M_PI * 2 / N) : 0.0;
+        double t[3][3] = {{x - 1e-3, y, -1}, {x + 1e-3, y, -1}, {x, y, 1}};
+        memcpy(v[N], t, sizeof t);
+        idx[N] = N, idx[N + 1] = N + 1, idx[N + 2] = N + 2;
+        geo_poly *p = geo_poly_from_arrays(N + 3, &v[0][0], 2, start, idx,
+                                           NULL, NULL);
+        assert_non_null(p);
+        assert_int_equal(pair(p, 0, 1), k ? 0 : 1);
+        geo_poly_free(p);
+    }
+}
+
 static void test_degenerate_facets_are_flagged_not_paired(void **state)
 {
     (void)state;
@@ -691,6 +719,7 @@ int main(void)
         cmocka_unit_test(test_segment_meets_facet_three_ways),
         cmocka_unit_test(test_own_polygon_self_intersection),
         cmocka_unit_test(test_large_facet_sweep_matches_quadratic),
+        cmocka_unit_test(test_large_facet_pairs),
         cmocka_unit_test(test_degenerate_facets_are_flagged_not_paired),
         cmocka_unit_test(test_nonplanar_neighbours_are_not_false_contacts),
         cmocka_unit_test(test_closed_models_are_clean),
