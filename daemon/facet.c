@@ -17,10 +17,8 @@ static const cli_command commands[] = {
     {"version", "print the version", cmd_version},
     {"inside", "classify points as inside, outside or on a model", cmd_inside},
     {"convert", "convert a model between file formats", cmd_convert},
-    {"convert", "convert a model between file formats", cmd_convert},
     {"inspect", "print a model's statistics and defects as JSON", cmd_inspect},
     {"orient", "make a model's facets consistent and outward", cmd_orient},
-    {"inside", "classify points as inside, outside or on a model", cmd_inside},
 };
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
 
