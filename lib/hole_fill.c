@@ -419,6 +419,12 @@ static int relax_all(refiner *R)
 static int refine_passes(refiner *R, const geo_ctx *ctx)
 {
     double alpha = R->o.density;
+    /* restore first: a minimum-weight patch may be all slivers (every
+     * triangulation of a flat loop has the same area), whose centroids
+     * would never pass the split test */
+    int rc0 = relax_all(R);
+    if (rc0 < 0)
+        return rc0;
     for (int pass = 0; pass < 64; pass++) {
         if (geo_ctx_canceled(ctx))
             return -ECANCELED;

@@ -26,7 +26,8 @@
  *    the caller flags in also_refine (triangles only; the F-rep
  *    triangulator flags triangles that project with zero area). s(v) of a
  *    region-boundary vertex is the mean length of its edges outside the
- *    region. A triangle with centroid c, s(c) = mean s of its corners, is
+ *    region. All interior edges are first restored (see below), then a
+ *    triangle with centroid c, s(c) = mean s of its corners, is
  *    split into three when for all three corners v
  *      density·|c − v| > s(c) and density·|c − v| > s(v)
  *    (density 1 is the paper's rule, √2 Liepa's); after each split the

@@ -10,6 +10,7 @@
 #include <time.h>
 
 #include "frep_grid.h"
+#include "selfint.h"
 #include "topo.h"
 #include "vec.h"
 
@@ -281,6 +282,13 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
 
     if ((rc = geo_frep_mesh_metrics(f, mesh, &rep.quality, err)) < 0)
         goto fail;
+    geo_selfint si;
+    sc = sub_ctx(ctx, &sr, 0.94, 1.0);
+    if ((rc = geo_selfint_find(mesh, NULL, NULL, &sc, &si, err)) < 0)
+        goto fail;
+    rep.self_intersections = (int64_t)si.count;
+    rep.ndegenerate = si.ndegenerate;
+    geo_selfint_clear(&si);
     rep.t_metrics = now() - t;
     rep.t_total = now() - t0;
     if ((rc = geo_ctx_progress(ctx, 1.0)) < 0) {

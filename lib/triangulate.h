@@ -18,7 +18,8 @@
  *  4. sharpen  creases of unions/intersections recovered
  *              (lib/frep_sharpen.h), when the object has any;
  *  5. metrics  vertex and normal deviation, uniformity, topology
- *              (lib/frep_metrics.h).
+ *              (lib/frep_metrics.h), exact self-intersections
+ *              (lib/selfint.h).
  *
  * Complexity: sampling visits O(n_s·(Q_LEV + B_LEV)) boxes for n_s
  * surface columns, each costing the length of the program specialised to
@@ -70,7 +71,9 @@ typedef struct geo_tri_report {
     uint32_t npinched;          /* pinched points removed before filling */
     uint64_t nevals, nboxes;    /* point and interval evaluations */
     double voxel[3];            /* voxel size (x, y, z) */
-    int64_t self_intersections; /* −1 when not measured */
+    int64_t self_intersections; /* pairs of facets meeting other than along
+                                   shared edges/vertices (lib/selfint.h) */
+    uint32_t ndegenerate;       /* facets without a plane (zero area) */
     double t_sample, t_connect, t_fill, t_sharpen, t_metrics, t_total;
 } geo_tri_report;
 

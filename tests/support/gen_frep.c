@@ -300,20 +300,34 @@ static bool near_visit(void *user, uint32_t f)
     return true;
 }
 
-double gf_max_distance_to_mesh(const geo_poly *m, const double *segs,
-                               int nsegs, double step)
+static int cmp_double(const void *a, const void *b)
 {
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+void gf_edge_distances(const geo_poly *m, const double *segs, int nsegs,
+                       double step, double clearance, double ret[5])
+{
+    memset(ret, 0, 5 * sizeof *ret);
     geo_bvh *h = geo_bvh_build_facets(m, NULL);
-    if (!h)
-        return INFINITY;
-    double worst = 0, size = geo_poly_size(m);
+    size_t n = 0, cap = 1024;
+    double *far = malloc(cap * sizeof *far);
+    if (!h || !far) {
+        geo_bvh_free(h);
+        free(far);
+        ret[0] = INFINITY;
+        return;
+    }
+    double size = geo_poly_size(m);
     for (int s = 0; s < nsegs; s++) {
         const double *a = segs + 6 * s, *b = a + 3;
-        int k = (int)ceil(geo_vdist(a, b) / step);
+        double len = geo_vdist(a, b);
+        int k = (int)ceil(len / step);
         for (int i = 0; i <= k; i++) {
-            double p[3], d[3];
+            double p[3], d[3], t = (double)i / (k ? k : 1);
             geo_vsub(b, a, d);
-            geo_vmadd(a, (double)i / (k ? k : 1), d, p);
+            geo_vmadd(a, t, d, p);
             near_q q = {m, p, INFINITY};
             for (double r = step; !isfinite(q.best) || q.best > r; r *= 2) {
                 geo_bbox box;
@@ -325,9 +339,26 @@ double gf_max_distance_to_mesh(const geo_poly *m, const double *segs,
                 if (r > size)
                     break;
             }
-            worst = fmax(worst, q.best);
+            ret[0] = fmax(ret[0], q.best);
+            if (fmin(t, 1 - t) * len <= clearance)
+                continue;
+            if (n == cap) {
+                double *nf = realloc(far, 2 * cap * sizeof *nf);
+                if (!nf)
+                    continue;
+                far = nf;
+                cap *= 2;
+            }
+            far[n++] = q.best;
         }
     }
+    if (n) {
+        qsort(far, n, sizeof *far, cmp_double);
+        ret[1] = far[n / 2];
+        ret[2] = far[n * 9 / 10];
+        ret[3] = far[n * 99 / 100];
+        ret[4] = far[n - 1];
+    }
+    free(far);
     geo_bvh_free(h);
-    return worst;
 }

@@ -36,9 +36,12 @@ int gf_polytope_edges(const double (*planes)[4], int n, double **ret);
  * (malloc'd 4·n doubles into *ret); returns n or −1. */
 int gf_halfspaces(const json_t *frep, double **ret);
 
-/* The largest distance from points sampled on the segments (every
- * `step` along each) to the triangle mesh m. */
-double gf_max_distance_to_mesh(const geo_poly *m, const double *segs,
-                               int nsegs, double step);
+/* Distances from points sampled on the segments (every `step` along
+ * each) to the triangle mesh m: ret[0] the largest over all samples, then
+ * over the samples farther than `clearance` from both ends of their
+ * segment (away from the polytope's corners) ret[1] the median, ret[2]
+ * the 90th and ret[3] the 99th percentile, ret[4] the largest. */
+void gf_edge_distances(const geo_poly *m, const double *segs, int nsegs,
+                       double step, double clearance, double ret[5]);
 
 #endif
