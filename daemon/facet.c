@@ -19,6 +19,8 @@ static const cli_command commands[] = {
     {"convert", "convert a model between file formats", cmd_convert},
     {"inspect", "print a model's statistics and defects as JSON", cmd_inspect},
     {"orient", "make a model's facets consistent and outward", cmd_orient},
+    {"triangulate", "triangulate a functionally defined object",
+     cmd_triangulate},
 };
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
 
