@@ -338,6 +338,29 @@ static void test_inspection_independent_of_thread_count(void **state)
     geo_poly_free(p);
 }
 
+static void test_empty_and_vertex_only_models(void **state)
+{
+    (void)state;
+    geo_poly *p = geo_poly_new();
+    geo_stats s = inspect(p, NULL);
+    assert_int_equal(s.facets, 0);
+    assert_int_equal(s.selfint.count, 0);
+    assert_int_equal(s.orientation, GEO_ORIENT_OUTWARD);
+    assert_true(s.valid); /* the empty polyhedron: nothing is wrong */
+    json_t *j = proto_stats_to_json(&s);
+    assert_non_null(j);
+    json_decref(j);
+    geo_stats_clear(&s);
+    const double x[3] = {1, 2, 3};
+    geo_poly_add_vertex(p, x);
+    s = inspect(p, NULL);
+    assert_int_equal(s.low_degree_vertices, 1);
+    assert_int_equal(s.degree_count[0], 1);
+    assert_false(s.valid);
+    geo_stats_clear(&s);
+    geo_poly_free(p);
+}
+
 static int record_progress(void *user, double fraction)
 {
     double *last = user;
@@ -415,6 +438,7 @@ int main(void)
         cmocka_unit_test(test_degenerate_facet_and_nonplanarity),
         cmocka_unit_test(test_near_coplanar_thresholds),
         cmocka_unit_test(test_inspection_independent_of_thread_count),
+        cmocka_unit_test(test_empty_and_vertex_only_models),
         cmocka_unit_test(test_progress_is_monotonic_and_cancel_stops),
         cmocka_unit_test(test_json_has_every_key),
     };
