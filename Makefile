@@ -139,3 +139,6 @@ clean:
 	rm -rf build
 
 -include $(shell find build -name '*.d' 2>/dev/null)
+
+# The OpenAPI document is embedded with .incbin (no -MMD entry for it).
+$(B)/obj/daemon/http_openapi.o: daemon/openapi.json

@@ -59,10 +59,10 @@ static void set_reason(slot *sl, int why)
     atomic_store_explicit(&sl->cancel, 1, memory_order_release);
 }
 
-static void notify(job_pool *p, const char *id)
+static void notify(job_pool *p, const char *id, bool progress_only)
 {
     if (p->c.notify)
-        p->c.notify(p->c.cb_user, id);
+        p->c.notify(p->c.cb_user, id, progress_only);
 }
 
 static int on_progress(void *user, double fraction)
@@ -78,7 +78,7 @@ static int on_progress(void *user, double fraction)
         if (r == 0) {
             if (cancel)
                 set_reason(sl, R_CANCELED);
-            notify(p, sl->id);
+            notify(p, sl->id, true);
         } else {
             log_msg(LOG_WARNING, sl->id, "progress not recorded: %s", err.msg);
         }
@@ -112,7 +112,7 @@ static void run_job(slot *sl, job_rec *job)
     sl->last_report = t0;
     log_msg(LOG_INFO, job->id, "started (attempt %d, source %s)",
             job->attempts, job->source);
-    notify(p, job->id);
+    notify(p, job->id, false);
 
     job_outcome out;
     memset(&out, 0, sizeof out);
@@ -188,7 +188,7 @@ static void run_job(slot *sl, job_rec *job)
     p->busy--;
     pthread_cond_broadcast(&p->idle);
     pthread_mutex_unlock(&p->lock);
-    notify(p, job->id);
+    notify(p, job->id, false);
 }
 
 static void timed_wait(pthread_cond_t *cv, pthread_mutex_t *m, int64_t ms)

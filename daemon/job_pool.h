@@ -23,6 +23,7 @@
 #ifndef FACETD_JOB_POOL_H
 #define FACETD_JOB_POOL_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -51,9 +52,10 @@ typedef int (*job_exec_fn)(void *user, const job_rec *job, const void *input,
                            job_outcome *ret);
 
 /* Told after every change the pool makes to a job in the store (claimed,
- * progress, finished, requeued); used to wake waiting clients. Called on
- * a worker or monitor thread; must be quick and thread-safe. */
-typedef void (*job_notify_fn)(void *user, const char *id);
+ * progress, finished, requeued); used to wake waiting clients.
+ * progress_only is true when only the progress moved. Called on a worker
+ * thread; must be quick and thread-safe. */
+typedef void (*job_notify_fn)(void *user, const char *id, bool progress_only);
 
 /* Told when a job ends: its final state and run time in seconds. */
 typedef void (*job_done_fn)(void *user, const job_rec *job, job_state state,
