@@ -45,9 +45,10 @@ static int exec(void *user, const job_rec *job, const void *input,
     }
 }
 
-static void on_notify(void *user, const char *id)
+static void on_notify(void *user, const char *id, bool progress_only)
 {
     (void)id;
+    (void)progress_only;
     atomic_fetch_add(&((fixture *)user)->notified, 1);
 }
 
