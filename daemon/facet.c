@@ -16,6 +16,7 @@ static int cmd_version(int argc, char **argv)
 static const cli_command commands[] = {
     {"version", "print the version", cmd_version},
     {"convert", "convert a model between file formats", cmd_convert},
+    {"run", "run a job pipeline on a model offline", cmd_run},
 };
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
 
