@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "cli.h"
 #include "model_io.h"
@@ -88,7 +89,8 @@ int cmd_run(int argc, char **argv)
     }
     par_pool *pool = par_pool_new(0);
     int last = -10;
-    geo_ctx ctx = {.progress = progress, .user = &last, .seed = 1,
+    geo_ctx ctx = {.progress = isatty(STDERR_FILENO) ? progress : NULL,
+                   .user = &last, .seed = 1,
                    .parallel_for = par_for, .pf_user = pool};
     json_t *stats = NULL, *summary = NULL;
     r = runner_run(&pl, &p, &ctx, NULL, NULL, &stats, &summary, &err);

@@ -107,7 +107,10 @@ static ssize_t sse_read(void *cls, uint64_t pos, char *buf, size_t max)
             return MHD_CONTENT_READER_END_WITH_ERROR;
         return drain(s, buf, max);
     }
+    bool ended = job_state_terminal(j.state);
     job_rec_clear(&j);
+    if (ended) /* the client saw the final event on an earlier stream */
+        return MHD_CONTENT_READER_END_OF_STREAM;
     int64_t now = job_mono_ms();
     if (now >= s->next_keepalive) {
         s->next_keepalive = now + (int64_t)atomic_load(&s->env->keepalive_ms);

@@ -9,6 +9,9 @@
 #include <string.h>
 #include <time.h>
 
+#include "stats.h"
+#include "stats_json.h"
+
 /* Runs one operation on *model (may replace it, freeing the old one).
  * Adds its report to *ret_report (a new object it creates) and summary
  * fields to summary. 0 or a negative errno with err set. */
@@ -20,8 +23,35 @@ typedef struct op_entry {
     bool changes_model; /* false for read-only ops such as inspect */
 } op_entry;
 
+/* inspect (lib/stats.h): every statistic of the model, unchanged. */
+static int run_inspect(const proto_op *op, geo_poly **model,
+                       const geo_ctx *ctx, json_t **ret_report,
+                       json_t *summary, geo_err *err)
+{
+    (void)op;
+    geo_stats st;
+    int r = geo_inspect(*model, NULL, ctx, &st, err);
+    if (r < 0)
+        return r;
+    json_t *rep = proto_stats_to_json(&st);
+    int e = !rep;
+    e |= json_object_set_new(summary, "valid", json_boolean(st.valid));
+    e |= json_object_set_new(summary, "closed", json_boolean(st.closed));
+    e |= json_object_set_new(summary, "orientation",
+                             json_string(geo_orientation_name(st.orientation)));
+    e |= json_object_set_new(summary, "self_intersections",
+                             json_integer((json_int_t)st.selfint.count));
+    geo_stats_clear(&st);
+    if (e) {
+        json_decref(rep);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    *ret_report = rep;
+    return 0;
+}
+
 static const op_entry ops[PROTO_OP_COUNT] = {
-    [PROTO_OP_INSPECT] = {NULL, false},
+    [PROTO_OP_INSPECT] = {run_inspect, false},
 };
 
 bool runner_op_available(proto_op_kind op)

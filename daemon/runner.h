@@ -18,7 +18,8 @@
  *             before it, else null}
  * Summary (embedded in the job): {"vertices_before", "facets_before",
  * "vertices_after", "facets_after", "ms"} plus what the operations add
- * (inspect adds "valid", "closed", "outward", "self_intersections").
+ * (inspect adds "valid", "closed", "orientation", "self_intersections"
+ * of the model it saw; a later inspect overwrites an earlier one's).
  *
  * Thread safety: reentrant; concurrent runs on different models are fine. */
 #ifndef FACETD_RUNNER_H
