@@ -74,6 +74,8 @@ static const key keys[] = {
     {"Jobs", "ShutdownTimeout", "shutdown-timeout", K_DURATION,
      F(shutdown_timeout_ms), 0, 3600 * SEC, true, "30s",
      "time running jobs get to finish on SIGTERM"},
+    {"Jobs", "Paused", "paused", K_BOOL, F(paused), 0, 1, true, "no",
+     "accept and keep jobs but start none (maintenance)"},
     {"Store", "StateDirectory", "state-dir", K_STR, F(state_dir), 0, 0, false,
      "/var/lib/facetd", "directory of the job store"},
     {"Store", "RetentionAge", "retention-age", K_DURATION,

@@ -51,6 +51,7 @@ typedef struct cfg {
     uint64_t job_timeout_ms;      /* wall time limit of one job */
     uint64_t shutdown_timeout_ms; /* SIGTERM: how long running jobs may
                                      finish before they are requeued */
+    bool paused;                  /* accept and keep jobs, start none */
     /* [Store] */
     char state_dir[512];          /* directory of the job store */
     uint64_t retention_age_ms;    /* finished jobs older than this go */

@@ -113,6 +113,7 @@ static void reload(cfg *cur, int argc, char **argv, http_env *env,
         log_set_level(cur->log_level);
         apply_http_settings(env, cur);
         job_pool_set_timeout(pool, cur->job_timeout_ms);
+        job_pool_set_paused(pool, cur->paused);
         log_msg(LOG_NOTICE, NULL, "configuration reloaded");
     }
     sd_notify(0, "READY=1");
@@ -198,9 +199,22 @@ int main(int argc, char **argv)
                     "listening stream socket");
             goto out;
         }
-    } else if (http_listen_open(c.listen, 1024, &lfd, &err) < 0) {
-        log_msg(LOG_ERR, NULL, "%s", err.msg);
-        goto out;
+    } else {
+        /* Refuse an unauthenticated public address before binding it. */
+        bool lo;
+        if (http_listen_check(c.listen, &lo, &err) < 0) {
+            log_msg(LOG_ERR, NULL, "%s", err.msg);
+            rc = 2;
+            goto out;
+        }
+        if (check_auth(&c, lo, c.listen) < 0) {
+            rc = 2;
+            goto out;
+        }
+        if (http_listen_open(c.listen, 1024, &lfd, &err) < 0) {
+            log_msg(LOG_ERR, NULL, "%s", err.msg);
+            goto out;
+        }
     }
     char where[128];
     bool loopback;
@@ -240,6 +254,7 @@ int main(int argc, char **argv)
         .progress_every_ms = 100,
         .parallel_for = par_for,
         .pf_user = par,
+        .paused = c.paused,
         .exec = job_exec,
         .exec_user = m,
         .notify = on_job_changed,
@@ -272,8 +287,8 @@ int main(int argc, char **argv)
     atomic_store(&a.hs, hs);
     atomic_store(&env.ready, 1);
     log_msg(LOG_NOTICE, NULL, "facetd %s listening on http://%s (store %s, "
-            "%u workers, %u HTTP threads%s)", FACET_VERSION, where,
-            c.state_dir, workers, threads,
+            "%u workers%s, %u HTTP threads%s)", FACET_VERSION, where,
+            c.state_dir, workers, c.paused ? " paused" : "", threads,
             env.token[0] ? ", API token required" : "");
     sd_notifyf(0, "READY=1\nSTATUS=listening on %s", where);
 

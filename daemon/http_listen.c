@@ -75,14 +75,43 @@ static int parse_addr(const char *addr, struct sockaddr_storage *ss,
     return 0;
 }
 
+static int bad_addr(const char *addr, geo_err *err)
+{
+    return geo_err_set(err, -EINVAL, "Listen: '%s' is not HOST:PORT, "
+                       "[IPV6]:PORT or :PORT with a numeric address", addr);
+}
+
+static bool is_loopback(const struct sockaddr_storage *ss)
+{
+    if (ss->ss_family == AF_INET) {
+        const struct sockaddr_in *a4 = (const struct sockaddr_in *)ss;
+        return (ntohl(a4->sin_addr.s_addr) >> 24) == 127;
+    }
+    if (ss->ss_family == AF_INET6) {
+        const struct sockaddr_in6 *a6 = (const struct sockaddr_in6 *)ss;
+        return IN6_IS_ADDR_LOOPBACK(&a6->sin6_addr) ||
+               (IN6_IS_ADDR_V4MAPPED(&a6->sin6_addr) &&
+                a6->sin6_addr.s6_addr[12] == 127);
+    }
+    return ss->ss_family == AF_UNIX;
+}
+
+int http_listen_check(const char *addr, bool *ret_loopback, geo_err *err)
+{
+    struct sockaddr_storage ss;
+    socklen_t len;
+    if (parse_addr(addr, &ss, &len) < 0)
+        return bad_addr(addr, err);
+    *ret_loopback = is_loopback(&ss);
+    return 0;
+}
+
 int http_listen_open(const char *addr, int backlog, int *ret_fd, geo_err *err)
 {
     struct sockaddr_storage ss;
     socklen_t len;
     if (parse_addr(addr, &ss, &len) < 0)
-        return geo_err_set(err, -EINVAL,
-                           "Listen: '%s' is not HOST:PORT, [IPV6]:PORT or "
-                           ":PORT with a numeric address", addr);
+        return bad_addr(addr, err);
     int fd = socket(ss.ss_family, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK,
                     0);
     if (fd < 0)
@@ -108,26 +137,20 @@ int http_listen_describe(int fd, char *buf, size_t size, bool *ret_loopback,
     if (getsockname(fd, (struct sockaddr *)&ss, &len) < 0)
         return geo_err_set(err, -errno, "getsockname: %s", strerror(errno));
     char host[INET6_ADDRSTRLEN];
-    bool loop = false;
     if (ss.ss_family == AF_INET) {
         struct sockaddr_in *a4 = (struct sockaddr_in *)&ss;
         inet_ntop(AF_INET, &a4->sin_addr, host, sizeof host);
-        loop = (ntohl(a4->sin_addr.s_addr) >> 24) == 127;
         snprintf(buf, size, "%s:%u", host, ntohs(a4->sin_port));
     } else if (ss.ss_family == AF_INET6) {
         struct sockaddr_in6 *a6 = (struct sockaddr_in6 *)&ss;
         inet_ntop(AF_INET6, &a6->sin6_addr, host, sizeof host);
-        loop = IN6_IS_ADDR_LOOPBACK(&a6->sin6_addr) ||
-               (IN6_IS_ADDR_V4MAPPED(&a6->sin6_addr) &&
-                a6->sin6_addr.s6_addr[12] == 127);
         snprintf(buf, size, "[%s]:%u", host, ntohs(a6->sin6_port));
     } else if (ss.ss_family == AF_UNIX) {
         snprintf(buf, size, "unix socket");
-        loop = true;
     } else {
         return geo_err_set(err, -EAFNOSUPPORT, "listening socket of address "
                            "family %d", ss.ss_family);
     }
-    *ret_loopback = loop;
+    *ret_loopback = is_loopback(&ss);
     return 0;
 }

@@ -16,6 +16,11 @@
 
 #include "ctx.h"
 
+/* Parses addr without opening anything; *ret_loopback tells whether it
+ * only accepts loopback connections (as http_listen_describe would). 0 or
+ * -EINVAL with err. */
+int http_listen_check(const char *addr, bool *ret_loopback, geo_err *err);
+
 /* Opens a TCP socket bound to addr and listening (backlog), close-on-exec
  * and non-blocking, with SO_REUSEADDR. *ret_fd belongs to the caller. */
 int http_listen_open(const char *addr, int backlog, int *ret_fd, geo_err *err);

@@ -59,6 +59,7 @@ enum MHD_Result http_metrics(http_req *r)
     g.store_ok = store_count(env->s, &g.counts, NULL) == 0;
     g.workers = env->workers;
     g.busy = env->pool ? job_pool_busy(env->pool) : 0;
+    g.paused = env->pool ? job_pool_paused(env->pool) : 0;
     g.waiters = http_hub_count(r->srv->hub);
     g.queue_size = atomic_load(&env->queue_size);
     g.ready = atomic_load(&env->ready);

@@ -43,6 +43,7 @@ struct job_pool {
     pthread_cond_t idle;   /* a worker finished a job */
     pthread_cond_t tick;   /* the monitor's sleep */
     bool stopping;
+    bool paused;
     unsigned pending;      /* wake-ups not yet consumed */
     unsigned busy;
     atomic_uint_fast64_t timeout_ms;
@@ -210,6 +211,8 @@ static void *worker(void *arg)
     job_pool *p = sl->pool;
     for (;;) {
         pthread_mutex_lock(&p->lock);
+        while (p->paused && !p->stopping)
+            pthread_cond_wait(&p->wake, &p->lock);
         bool stop = p->stopping;
         pthread_mutex_unlock(&p->lock);
         if (stop)
@@ -295,6 +298,7 @@ job_pool *job_pool_start(store *s, const job_pool_config *c, geo_err *err)
     }
     p->s = s;
     p->c = *c;
+    p->paused = c->paused;
     p->slots = slots;
     p->nslots = c->workers;
     atomic_init(&p->timeout_ms, c->job_timeout_ms);
@@ -349,6 +353,22 @@ int job_pool_cancel(job_pool *p, const char *id)
     }
     pthread_mutex_unlock(&p->lock);
     return found;
+}
+
+void job_pool_set_paused(job_pool *p, bool paused)
+{
+    pthread_mutex_lock(&p->lock);
+    p->paused = paused;
+    pthread_cond_broadcast(&p->wake);
+    pthread_mutex_unlock(&p->lock);
+}
+
+bool job_pool_paused(job_pool *p)
+{
+    pthread_mutex_lock(&p->lock);
+    bool v = p->paused;
+    pthread_mutex_unlock(&p->lock);
+    return v;
 }
 
 void job_pool_set_timeout(job_pool *p, uint64_t job_timeout_ms)

@@ -69,6 +69,7 @@ typedef struct job_pool_config {
     void *pf_user;
     job_exec_fn exec;
     void *exec_user;
+    bool paused;                /* start paused (job_pool_set_paused) */
     job_notify_fn notify;       /* may be NULL */
     job_done_fn done;           /* may be NULL */
     void *cb_user;              /* for notify and done */
@@ -85,6 +86,13 @@ void job_pool_wake(job_pool *p);
 /* Sets the cancel flag of job id if it runs on this pool. Returns 1 if it
  * did, 0 if the job does not run here. */
 int job_pool_cancel(job_pool *p, const char *id);
+
+/* Paused workers take no new job (running ones finish); submissions
+ * still queue. Unpausing wakes them. */
+void job_pool_set_paused(job_pool *p, bool paused);
+
+/* True while paused. */
+bool job_pool_paused(job_pool *p);
 
 /* Changes the time limit for jobs claimed from now on (reload). */
 void job_pool_set_timeout(job_pool *p, uint64_t job_timeout_ms);

@@ -205,6 +205,9 @@ int metrics_render(metrics *m, const metrics_gauges *g, char **ret,
         g->queue_size);
     put(&o, "# HELP facetd_workers Worker threads.\n# TYPE facetd_workers "
             "gauge\nfacetd_workers %u\n", g->workers);
+    put(&o, "# HELP facetd_workers_paused 1 while workers take no new job "
+            "(Paused=yes).\n# TYPE facetd_workers_paused gauge\n"
+            "facetd_workers_paused %d\n", g->paused ? 1 : 0);
     put(&o, "# HELP facetd_workers_busy Workers running a job.\n"
             "# TYPE facetd_workers_busy gauge\nfacetd_workers_busy %u\n",
         g->busy);

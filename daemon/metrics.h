@@ -49,6 +49,7 @@ typedef struct metrics_gauges {
     int store_ok;            /* counts valid */
     store_counts counts;
     unsigned workers, busy;  /* worker pool */
+    int paused;              /* workers take no new job */
     unsigned waiters;        /* suspended ?wait= / event-stream clients */
     unsigned queue_size;     /* configured bound */
     int ready;
