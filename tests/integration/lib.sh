@@ -8,6 +8,10 @@
 #   start_facetd --workers 1             # sets URL, PID, STATE, LOG
 #   check "description" test-command ...
 #   finish
+if [ "${BASH_SOURCE[0]}" = "$0" ]; then
+    echo "1..0 # SKIP lib.sh is the helper the other scripts source"
+    exit 0
+fi
 set -u
 BUILD=${1:-build}
 FACETD="$BUILD/facetd"
