@@ -13,7 +13,11 @@ mkdir "$T/r"
 printf '%s\n' $(seq 120) | xargs -P 8 -I{} sh -c \
     "curl -s -o '$T/r/{}' -w '%{http_code}' -H 'Content-Type: application/json' --data-binary '@$f' '$URL/v1/jobs' >'$T/r/{}.code' 2>/dev/null" &
 load=$!
-sleep "0.$((4 * SLOW))"
+# Kill once a few jobs were accepted, while the burst goes on.
+for i in $(seq $((100 * SLOW))); do
+    [ "$(grep -l 202 "$T"/r/*.code 2>/dev/null | wc -l)" -ge 5 ] && break
+    sleep 0.05
+done
 kill -KILL "$PID"
 wait "$PID" 2>/dev/null
 wait $load
