@@ -85,8 +85,10 @@ static int check_auth(const cfg *c, bool loopback, const char *where)
     return -EACCES;
 }
 
+static void retention(store *s, const cfg *c);
+
 static void reload(cfg *cur, int argc, char **argv, http_env *env,
-                   job_pool *pool, bool loopback, const char *where)
+                   store *s, job_pool *pool, bool loopback, const char *where)
 {
     sd_notify(0, "RELOADING=1\nSTATUS=reloading the configuration");
     cfg next;
@@ -115,6 +117,7 @@ static void reload(cfg *cur, int argc, char **argv, http_env *env,
         job_pool_set_timeout(pool, cur->job_timeout_ms);
         job_pool_set_paused(pool, cur->paused);
         log_msg(LOG_NOTICE, NULL, "configuration reloaded");
+        retention(s, cur);
     }
     sd_notify(0, "READY=1");
 }
@@ -308,7 +311,7 @@ int main(int argc, char **argv)
             struct signalfd_siginfo si;
             if (read(sfd, &si, sizeof si) == (ssize_t)sizeof si) {
                 if (si.ssi_signo == SIGHUP) {
-                    reload(&c, argc - 1, argv + 1, &env, pool, loopback,
+                    reload(&c, argc - 1, argv + 1, &env, s, pool, loopback,
                            where);
                     continue;
                 }

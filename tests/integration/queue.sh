@@ -6,9 +6,17 @@
 . "$(dirname "$0")/lib.sh" "$@"
 
 conf="$T/facetd.conf"
-printf '[Jobs]\nPaused=yes\nWorkers=1\nQueueSize=500\n' >"$conf"
+printf '[Jobs]\nPaused=yes\nWorkers=1\nQueueSize=500\n[Server]\nKeepAlive=300ms\n' >"$conf"
 start_facetd -c "$conf" || { not_ok "facetd starts"; finish; exit 1; }
 expect_eq "workers start paused" 1 "$(metric facetd_workers_paused)"
+
+# An event stream of a queued job stays open with keep-alive comments.
+submit notch-cube.json
+timeout $((2 * SLOW)) curl -s -N "$URL/v1/jobs/$ID/events" >"$T/ka"
+check "an idle event stream sends keep-alive comments" grep -q '^: keep-alive' "$T/ka"
+check "and the job's current state first" grep -q '"state":"queued"' "$T/ka"
+req DELETE "/v1/jobs/$ID"
+req DELETE "/v1/jobs/$ID"
 
 # Idempotency.
 f=$(body notch-cube.json '["inspect"]' '"label":"idem"')
@@ -90,4 +98,12 @@ done
 check "the queue drains" test "$q" = 0 -a "$r" = 0
 check "all of them succeeded" test "$(metric 'facetd_jobs{state="succeeded"}')" -ge 203
 expect_eq "none failed" 0 "$(metric 'facetd_jobs{state="failed"}')"
+
+# Retention: finished jobs older than RetentionAge go (applied on reload).
+sleep 1.1
+printf '[Jobs]\nWorkers=1\nQueueSize=500\n[Store]\nRetentionAge=1s\n' >"$conf"
+kill -HUP "$PID"
+for i in $(seq 50); do grep -q 'retention deleted' "$LOG" && break; sleep 0.1; done
+check "retention deletes finished jobs past RetentionAge" grep -q 'retention deleted' "$LOG"
+expect_eq "no finished job is left" 0 "$(metric 'facetd_jobs{state="succeeded"}')"
 finish
