@@ -17,6 +17,7 @@ static const cli_command commands[] = {
     {"version", "print the version", cmd_version},
     {"convert", "convert a model between file formats", cmd_convert},
     {"run", "run a job pipeline on a model offline", cmd_run},
+    {"inside", "classify points as inside, outside or on a model", cmd_inside},
 };
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
 

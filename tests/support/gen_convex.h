@@ -1,7 +1,13 @@
-/* gen_convex.h — random convex polyhedra for tests: the intersection of
- * random half-spaces tangent to the unit sphere, clipped out of a cube.
- * Vertices are computed by interpolation along clipped edges, so facets
- * are planar to rounding (≈1e-16), like a scanner's models. */
+/* gen_convex.h — random convex polyhedra for tests.
+ * gc_random_convex: random half-spaces tangent to the unit sphere, clipped
+ * out of a cube; vertices are computed by interpolation along clipped
+ * edges, so facets are planar to rounding (≈1e-16), like a scanner's
+ * models.
+ * gen_convex_polyhedron: random half-spaces, like a shadow-profile
+ * scanner's model (each facet a convex polygon whose vertices are rounded
+ * three-plane intersections, so facets are planar within rounding, not
+ * exactly).
+ * Self-contained (lib/ only); deterministic for a seed. */
 #ifndef FACET_GEN_CONVEX_H
 #define FACET_GEN_CONVEX_H
 
@@ -19,5 +25,17 @@ geo_poly *gc_random_convex(uint64_t seed, uint32_t nplanes);
  * unit normal), closing the cut with one new facet whose plane is `plane`.
  * p must be convex and closed. 0, or -ENOMEM. */
 int gc_clip(geo_poly *p, const double plane[4]);
+
+/* A convex polyhedron around center: the six faces of the cube of
+ * half-side 1.5·radius and nplanes half-spaces with uniformly random unit
+ * normals at distances radius·[0.8, 1.2) from center. Samples where four
+ * planes meet at a point or two vertices nearly coincide are redrawn, so
+ * the result is simple: every vertex in exactly three facets. Facets are
+ * listed counter-clockwise seen from outside; planes are the generating
+ * ones (unit outward normal). Returns NULL on out-of-memory, or when no
+ * clean sample was found in 100 draws (never seen). Free with
+ * geo_poly_free. */
+geo_poly *gen_convex_polyhedron(uint64_t seed, unsigned nplanes,
+                                const double center[3], double radius);
 
 #endif
