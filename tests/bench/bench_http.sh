@@ -38,12 +38,19 @@ body notch-cube.json "$T/small.json"
 
 start
 "$B/tools/loadgen" "$PORT" "$T/k400.json" 32 2 >/dev/null # warm-up
+cpu() { awk '{print $14 + $15}' "/proc/$PID/stat"; }
+c0=$(cpu)
 "$B/tools/loadgen" "$PORT" "$T/k400.json" 32 "$SECS" >"$T/flow"
+c1=$(cpu)
+njobs=$(sed -n 's/^jobs: //p' "$T/flow")
 jobs_s=$(sed -n 's/^jobs_per_s: //p' "$T/flow")
 echo "inspect_k400_jobs_per_s (32 clients, submit+wait+stats): $jobs_s jobs/s"
 echo "inspect_k400_job_p50: $(sed -n 's/^job_p50_ms: //p' "$T/flow") ms"
 echo "inspect_k400_job_p99: $(sed -n 's/^job_p99_ms: //p' "$T/flow") ms"
 echo "inspect_k400_errors: $(sed -n 's/^errors: //p' "$T/flow") count"
+# CPU time facetd spent per job, independent of what else the machine runs.
+echo "inspect_k400_facetd_cpu_per_job: $(awk -v c=$((c1 - c0)) -v n="$njobs" -v hz="$(getconf CLK_TCK)" \
+    'BEGIN {printf "%.1f", n ? c * 1000 / hz / n : 0}') ms"
 
 id=$(curl -s "$URL/v1/jobs?limit=1" | grep -o '"id":"[0-9A-Z]*"' | head -n 1 | cut -d'"' -f4)
 if command -v wrk >/dev/null; then
