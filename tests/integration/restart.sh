@@ -55,8 +55,17 @@ stop_facetd
 STATE_KEEP=1 start_facetd --paused || { not_ok "facetd starts paused"; finish; exit 1; }
 for i in 1 2 3; do submit notch-cube.json; done
 last=$ID
+curl -s -o "$T/w" -w '%{http_code}' "$URL/v1/jobs/$last?wait=60" >"$T/wcode" &
+w=$!
+curl -s -N "$URL/v1/jobs/$last/events" >"$T/ev" &
+e=$!
+for i in $(seq 50); do [ "$(metric facetd_http_waiting_clients)" = 2 ] && break; sleep 0.1; done
+expect_eq "two clients wait on the queued job" 2 "$(metric facetd_http_waiting_clients)"
 stop_facetd
-expect_eq "SIGTERM with queued jobs exits 0" 0 "$STATUS"
+expect_eq "SIGTERM with queued jobs and waiting clients exits 0" 0 "$STATUS"
+wait $w $e
+expect_eq "the long-poll is answered at shutdown with the job" "200 queued" "$(cat "$T/wcode") $(jstr state "$T/w")"
+check "the event stream ends at shutdown after the queued state" grep -q '"state":"queued"' "$T/ev"
 STATE_KEEP=1 start_facetd --workers 1 || { not_ok "facetd starts again"; finish; exit 1; }
 wait_job "$last"
 expect_eq "jobs queued at a graceful stop run after the next start" succeeded "$STATE_OF"
