@@ -83,6 +83,7 @@ struct http_server {
     http_env *env;
     http_hub *hub;
     bool quiesced;
+    atomic_int active;       /* requests begun and not completed */
 };
 
 /* ---- replies (http_reply.c); each returns MHD's result ----

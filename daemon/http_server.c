@@ -248,6 +248,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
         if (!r)
             return MHD_NO;
         *con_cls = r;
+        atomic_fetch_add(&srv->active, 1);
         r->srv = srv;
         r->env = srv->env;
         r->conn = conn;
@@ -312,6 +313,7 @@ static void on_completed(void *cls, struct MHD_Connection *conn,
     free(r->body);
     free(r);
     *con_cls = NULL;
+    atomic_fetch_sub(&srv->active, 1);
 }
 
 static void mhd_log(void *cls, const char *fmt, va_list ap)
@@ -397,6 +399,13 @@ http_server *http_server_stop(http_server *h)
     if (!h)
         return NULL;
     http_server_quiesce(h);
+    /* Requests woken by the quiesce still have to send their answers:
+     * MHD_stop_daemon would cut them off. */
+    int64_t end = job_mono_ms() + 5000;
+    while (atomic_load(&h->active) > 0 && job_mono_ms() < end) {
+        struct timespec ts = {0, 10 * 1000 * 1000};
+        nanosleep(&ts, NULL);
+    }
     MHD_stop_daemon(h->d);
     http_hub_free(h->hub);
     free(h);

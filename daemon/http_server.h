@@ -84,8 +84,8 @@ unsigned http_server_waiters(http_server *h);
  * Requests on open connections are still served. */
 void http_server_quiesce(http_server *h);
 
-/* Stops the server (quiescing first if needed). Accepts NULL; returns
- * NULL. */
+/* Stops the server (quiescing first if needed), after the requests in
+ * progress have answered (at most 5 s). Accepts NULL; returns NULL. */
 http_server *http_server_stop(http_server *h);
 
 #endif
