@@ -1,7 +1,6 @@
 /* job.c — job states, ids, times and the JSON view of a job (job.h). */
 #include "job.h"
 
-#include <errno.h>
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
@@ -96,7 +95,7 @@ bool job_id_valid(const char *s)
     if (!s || strlen(s) != JOB_ID_LEN)
         return false;
     for (const char *p = s; *p; p++)
-        if (!strchr(b32, *p) || !*p)
+        if (!strchr(b32, *p))
             return false;
     return s[0] <= '7';
 }
