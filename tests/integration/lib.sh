@@ -138,4 +138,13 @@ finish() {
     rm -rf "$T"
     [ "$FAILED" -eq 0 ]
 }
-trap 'for p in "${PIDS[@]}"; do kill -KILL "$p" 2>/dev/null; done; rm -rf "$T"' INT TERM
+# Whatever ends the script (a failed start, a signal, a reader that went
+# away), no facetd outlives it.
+cleanup() {
+    local p
+    for p in "${PIDS[@]}"; do kill -KILL "$p" 2>/dev/null; done
+    rm -rf "$T"
+}
+trap cleanup EXIT
+trap 'exit 130' INT TERM
+trap '' PIPE
