@@ -18,6 +18,7 @@
 
 #include "bvh.h"
 #include "plane.h"
+#include "selfint.h"
 #include "vec.h"
 
 struct geo_replanar_prep {
@@ -27,6 +28,7 @@ struct geo_replanar_prep {
     double *resid;     /* per facet: max |plane(v)| at the start */
     double eps;        /* geo_poly_eps of the start */
     double volume;     /* signed volume of the start */
+    geo_bvh *fbvh;     /* facet boxes of the start */
 };
 
 const char *geo_replanar_schedule_name(enum geo_replanar_schedule s)
@@ -108,6 +110,7 @@ geo_replanar_prep *geo_replanar_prep_free(geo_replanar_prep *prep)
         free(prep->vstart);
         free(prep->vfacets);
         free(prep->resid);
+        geo_bvh_free(prep->fbvh);
         free(prep);
     }
     return NULL;
@@ -168,6 +171,9 @@ geo_replanar_prep *geo_replanar_prepare(const geo_poly *p, geo_err *err)
         prep->resid[f] = facet_residual(q, f, q->planes[f]);
     prep->eps = geo_poly_eps(q);
     prep->volume = geo_poly_volume(q);
+    prep->fbvh = geo_bvh_build_facets(q, err);
+    if (!prep->fbvh)
+        return geo_replanar_prep_free(prep);
     return prep;
 }
 
@@ -579,6 +585,110 @@ static int run_init(run *r, const geo_replanar_prep *prep, uint32_t nfixed,
     return 0;
 }
 
+/* ---- self-intersections of the active region ---- */
+
+typedef struct si_count {
+    const run *r;
+    const geo_poly *view;  /* the facets with the current positions */
+    geo_facet_shape *shape; /* by active-list slot */
+    uint32_t f;            /* slot of the facet being queried */
+    int64_t count;
+    int rc;
+} si_count;
+
+static bool si_test(si_count *c, uint32_t f, uint32_t g,
+                    const geo_facet_shape *sf, const geo_facet_shape *sg)
+{
+    int hit = geo_facets_intersect(c->view, f, g, sf, sg);
+    if (hit < 0) {
+        c->rc = hit;
+        return false;
+    }
+    c->count += hit;
+    return true;
+}
+
+/* An active facet against a facet outside the region (start box, and
+ * positions that differ from the start by at most wake_abs). */
+static bool si_visit_outer(void *user, uint32_t g)
+{
+    si_count *c = user;
+    if (c->r->fact[g])
+        return true;
+    geo_facet_shape sg;
+    geo_facet_shape_of(c->view, g, &sg);
+    return si_test(c, c->r->af[c->f], g, &c->shape[c->f], &sg);
+}
+
+static bool si_visit_pair(void *user, uint32_t a, uint32_t b)
+{
+    si_count *c = user;
+    return si_test(c, c->r->af[a], c->r->af[b], &c->shape[a], &c->shape[b]);
+}
+
+static void facet_box(const geo_poly *p, uint32_t f, double (*x)[3],
+                      double margin, geo_bbox *ret)
+{
+    const uint32_t *v = geo_poly_facet(p, f);
+    geo_bbox_empty(ret);
+    for (uint32_t i = 0, n = geo_poly_facet_size(p, f); i < n; i++)
+        geo_bbox_add(ret, x[v[i]]);
+    for (int k = 0; k < 3; k++) {
+        ret->lo[k] -= margin;
+        ret->hi[k] += margin;
+    }
+}
+
+/* Self-intersections with at least one facet in the active region (all
+ * others are as at the start): active facets whose own polygon
+ * intersects itself, active pairs (a BVH of their current boxes) and
+ * active–inactive pairs (the start's facet BVH, queried with current boxes
+ * grown by wake_abs). Exact tests of lib/selfint.h. Count in *ret; 0 or
+ * -ENOMEM. */
+static int count_selfint(const run *r, int64_t *ret)
+{
+    const geo_poly *p0 = r->p0;
+    geo_poly view = *p0;
+    view.verts = r->x;
+    view.planes = r->pl;
+    si_count c = {.r = r, .view = &view};
+    c.shape = malloc(((size_t)r->naf + 1) * sizeof *c.shape);
+    geo_bbox *boxes = malloc(((size_t)r->naf + 1) * sizeof *boxes);
+    geo_bvh *h = NULL;
+    int rc = 0;
+    if (!c.shape || !boxes) {
+        rc = -ENOMEM;
+        goto out;
+    }
+    for (uint32_t i = 0; i < r->naf; i++) {
+        uint32_t f = r->af[i];
+        geo_facet_shape_of(&view, f, &c.shape[i]);
+        c.count += geo_facet_self_intersects(&view, f, &c.shape[i]);
+        facet_box(p0, f, r->x, 0.0, &boxes[i]);
+    }
+    for (uint32_t i = 0; i < r->naf && c.rc == 0; i++) {
+        geo_bbox q;
+        facet_box(p0, r->af[i], r->x, r->wake_abs, &q);
+        c.f = i;
+        geo_bvh_query_box(r->prep->fbvh, &q, si_visit_outer, &c);
+    }
+    if (c.rc == 0 && r->naf > 1) {
+        h = geo_bvh_build(boxes, r->naf, NULL);
+        if (!h)
+            rc = -ENOMEM;
+        else
+            geo_bvh_pairs(h, 0, 0, si_visit_pair, &c);
+    }
+    if (c.rc < 0)
+        rc = c.rc;
+out:
+    geo_bvh_free(h);
+    free(boxes);
+    free(c.shape);
+    *ret = c.count;
+    return rc;
+}
+
 /* Signed volume of facet f's fan about o (×6), from positions x. */
 static double facet_volume6(const geo_poly *p, uint32_t f, double (*x)[3],
                             const double o[3])
@@ -676,6 +786,7 @@ int geo_replanar_solve(const geo_replanar_prep *prep, uint32_t nfixed,
     bool local = schedule != GEO_REPLANAR_GLOBAL_EXP;
     uint32_t stepno = 0, outer = 0, inner = 0;
     bool converged = false;
+    int64_t nsi = -1;
     for (;;) {
         if (stepno >= o.max_steps)
             break;
@@ -686,10 +797,19 @@ int geo_replanar_solve(const geo_replanar_prep *prep, uint32_t nfixed,
         }
         step(&r, k, local);
         bool below = r.s2 < eps;
+        if (o.count_selfint) {
+            rc = count_selfint(&r, &nsi);
+            if (rc < 0) {
+                geo_err_set(err, rc, "out of memory");
+                break;
+            }
+            if (nsi > 0 && ret->first_selfint_step < 0)
+                ret->first_selfint_step = stepno;
+        }
         rc = log_row(log, &r, stepno, schedule == GEO_REPLANAR_LOCAL_EXP
                                           ? outer : stepno,
                      schedule == GEO_REPLANAR_LOCAL_EXP ? inner : stepno, eps,
-                     k, -1);
+                     k, nsi);
         if (rc < 0) {
             geo_err_set(err, rc, "out of memory for the log");
             break;
@@ -732,9 +852,15 @@ int geo_replanar_solve(const geo_replanar_prep *prep, uint32_t nfixed,
         ret->k = k;
         ret->active_vertices = r.nav;
         ret->active_facets = r.naf;
-        if (o.check)
+        if (o.check) {
             inspect_orientation(&r, ret);
-        if (ret_poly) {
+            if (nsi < 0)
+                rc = count_selfint(&r, &nsi);
+            if (rc < 0)
+                geo_err_set(err, rc, "out of memory");
+            ret->nselfint = nsi;
+        }
+        if (ret_poly && rc == 0) {
             memcpy(ret_poly->verts, r.x,
                    (size_t)prep->poly->nverts * sizeof *r.x);
             memcpy(ret_poly->planes, r.pl,
