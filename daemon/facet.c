@@ -15,6 +15,9 @@ static int cmd_version(int argc, char **argv)
 
 static const cli_command commands[] = {
     {"version", "print the version", cmd_version},
+    {"move", "move a vertex and re-planarise the facets", cmd_move},
+    {"inversion-stats", "how often vertex moves break the model",
+     cmd_inversion_stats},
 };
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
 
