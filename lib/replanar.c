@@ -90,6 +90,9 @@ bool geo_replanar_result_valid(const geo_replanar_result *r)
 
 /* ---- preparation ---- */
 
+static void fit_plane(const geo_poly *p, double (*x)[3], const uint8_t *vflag,
+                      uint32_t f, double prev[4]);
+
 static double facet_residual(const geo_poly *p, uint32_t f,
                              const double plane[4])
 {
@@ -166,9 +169,17 @@ geo_replanar_prep *geo_replanar_prepare(const geo_poly *p, geo_err *err)
         for (uint32_t c = q->fstart[f]; c < q->fstart[f + 1]; c++)
             prep->vfacets[fill[q->fidx[c]]++] = f;
     free(fill);
-    geo_poly_compute_planes(q, GEO_PLANE_UNWEIGHTED);
-    for (uint32_t f = 0; f < q->nfacets; f++)
-        prep->resid[f] = facet_residual(q, f, q->planes[f]);
+    /* least-squares planes, oriented like the Newell vector; a degenerate
+     * facet keeps its Newell direction through its centroid */
+    for (uint32_t f = 0; f < q->nfacets; f++) {
+        double *pl = q->planes[f];
+        geo_poly_facet_area_vector(q, f, pl);
+        if (!(geo_vnormalize(pl) > 0))
+            geo_poly_facet_fit_plane(q, f, GEO_PLANE_UNWEIGHTED, pl);
+        else
+            fit_plane(q, q->verts, NULL, f, pl);
+        prep->resid[f] = facet_residual(q, f, pl);
+    }
     prep->eps = geo_poly_eps(q);
     prep->volume = geo_poly_volume(q);
     prep->fbvh = geo_bvh_build_facets(q, err);
@@ -301,13 +312,13 @@ static bool smallest_eigvec(double m[3][3], const double guess[3],
  * two, or of the fixed vertices alone (three or more). The normal keeps
  * the side of the previous one; a degenerate facet (all points on a line)
  * keeps its previous normal. */
-static void fit_plane(run *r, uint32_t f)
+static void fit_plane(const geo_poly *p, double (*x)[3], const uint8_t *vflag,
+                      uint32_t f, double prev[4])
 {
-    const geo_poly *p = r->p0;
     const uint32_t *v = geo_poly_facet(p, f);
     uint32_t n = geo_poly_facet_size(p, f), nfix = 0, fix[2] = {0, 0};
     for (uint32_t i = 0; i < n; i++)
-        if (r->vflag[v[i]] & V_FIXED) {
+        if (vflag && (vflag[v[i]] & V_FIXED)) {
             if (nfix < 2)
                 fix[nfix] = v[i];
             nfix++;
@@ -317,28 +328,28 @@ static void fit_plane(run *r, uint32_t f)
     if (nfix == 0 || only_fixed) {
         uint32_t cnt = 0;
         for (uint32_t i = 0; i < n; i++)
-            if (!only_fixed || (r->vflag[v[i]] & V_FIXED)) {
-                geo_vadd(c, r->x[v[i]], c);
+            if (!only_fixed || (vflag && (vflag[v[i]] & V_FIXED))) {
+                geo_vadd(c, x[v[i]], c);
                 cnt++;
             }
         geo_vscale(c, 1.0 / cnt, c);
     } else {
-        memcpy(c, r->x[fix[0]], sizeof c);
+        memcpy(c, x[fix[0]], sizeof c);
     }
     double m[3][3] = {{0}};
     for (uint32_t i = 0; i < n; i++) {
-        if (only_fixed && !(r->vflag[v[i]] & V_FIXED))
+        if (only_fixed && !(vflag && (vflag[v[i]] & V_FIXED)))
             continue;
         double d[3];
-        geo_vsub(r->x[v[i]], c, d);
+        geo_vsub(x[v[i]], c, d);
         for (int a = 0; a < 3; a++)
             for (int b = a; b < 3; b++)
                 m[a][b] += d[a] * d[b];
     }
-    double *prev = r->pl[f], nrm[3];
+    double nrm[3];
     double line[3];
     if (nfix == 2) {
-        geo_vsub(r->x[fix[1]], r->x[fix[0]], line);
+        geo_vsub(x[fix[1]], x[fix[0]], line);
     }
     if (nfix == 2 && geo_vnormalize(line) > 0) {
         double e1[3], e2[3], me1[3], me2[3];
@@ -424,7 +435,7 @@ static void solve_vertex(const run *r, uint32_t v, const double x0[3],
 static void step(run *r, double k, bool local)
 {
     for (uint32_t i = 0; i < r->naf; i++)
-        fit_plane(r, r->af[i]);
+        fit_plane(r->p0, r->x, r->vflag, r->af[i], r->pl[r->af[i]]);
     for (uint32_t i = 0; i < r->nav; i++) {
         uint32_t v = r->av[i];
         if (r->vflag[v] & V_FIXED)
@@ -574,7 +585,7 @@ static int run_init(run *r, const geo_replanar_prep *prep, uint32_t nfixed,
             nfix += (r->vflag[v[j]] & V_FIXED) != 0;
         if (nfix < 3)
             continue;
-        fit_plane(r, f);
+        fit_plane(p, r->x, r->vflag, f, r->pl[f]);
         for (uint32_t j = 0; j < n; j++)
             if ((r->vflag[v[j]] & V_FIXED) &&
                 !(fabs(geo_plane_eval(r->pl[f], r->x[v[j]])) <= prep->eps))
