@@ -15,6 +15,10 @@ static int cmd_version(int argc, char **argv)
 
 static const cli_command commands[] = {
     {"version", "print the version", cmd_version},
+    {"convert", "convert a model between file formats", cmd_convert},
+    {"inspect", "print a model's statistics and defects as JSON", cmd_inspect},
+    {"orient", "make a model's facets consistent and outward", cmd_orient},
+    {"inside", "classify points as inside, outside or on a model", cmd_inside},
     {"move", "move a vertex and re-planarise the facets", cmd_move},
     {"inversion-stats", "how often vertex moves break the model",
      cmd_inversion_stats},

@@ -247,6 +247,12 @@ void geo_facet_shape_of(const geo_poly *p, uint32_t f, geo_facet_shape *ret)
     ret->axis = (int8_t)axis;
 
     ret->turn = (int8_t)turn_in_axis(p, f, axis);
+    ret->simple = !geo_facet_self_intersects(p, f, ret);
+    ret->convex = ret->simple;
+    for (uint32_t i = 0; i < n && ret->convex; i++)
+        ret->convex = geo_orient2d_proj(V(p, fv[(i + n - 1) % n]), V(p, fv[i]),
+                                        V(p, fv[(i + 1) % n]), axis) *
+                          ret->turn >= 0;
 }
 
 /* ------------------------------------------------ own-polygon tests */
@@ -257,13 +263,28 @@ static bool edges_meet(const geo_poly *p, const uint32_t *fv, uint32_t n,
                        int axis, uint32_t i, uint32_t j)
 {
     uint32_t i1 = (i + 1) % n, j1 = (j + 1) % n;
-    bool excl_a = fv[i] == fv[j] || fv[i] == fv[j1];
-    bool excl_b = fv[i1] == fv[j] || fv[i1] == fv[j1];
     double a[2], b[2], c[2], d[2];
     proj(V(p, fv[i]), axis, a);
     proj(V(p, fv[i1]), axis, b);
     proj(V(p, fv[j]), axis, c);
     proj(V(p, fv[j1]), axis, d);
+    if (i1 == j || j1 == i) {
+        /* consecutive edges x→y→z: beyond y they meet only when z turns
+         * straight back along x→y (a spike); one orient2d, never on a
+         * repeated point */
+        const double *x = i1 == j ? a : c, *y = i1 == j ? b : a,
+                     *z = i1 == j ? d : b;
+        if (geo_orient2d(x, y, z) != 0)
+            return false;
+        /* collinear: overlap when z lies on y's side towards x; two
+         * coincident vertices touch as well */
+        int k = x[0] != y[0] ? 0 : 1;
+        if (x[k] == y[k] || (y[0] == z[0] && y[1] == z[1]))
+            return true;
+        return cmp(z[k], y[k]) == cmp(x[k], y[k]);
+    }
+    bool excl_a = fv[i] == fv[j] || fv[i] == fv[j1];
+    bool excl_b = fv[i1] == fv[j] || fv[i1] == fv[j1];
     return seg_contact(a, b, excl_a, excl_b, c, d);
 }
 
@@ -311,6 +332,9 @@ bool geo_facet_self_intersects(const geo_poly *p, uint32_t f,
         return false;
     uint32_t n = geo_poly_facet_size(p, f);
     const uint32_t *fv = geo_poly_facet(p, f);
+    if (n == 3)
+        return false; /* a triangle of three distinct, non-collinear
+                         points never touches itself */
     int axis = s->axis;
     enum { SMALL = 24 };
     /* large facets: sweep along the first projected coordinate so only
@@ -343,22 +367,6 @@ bool geo_facet_self_intersects(const geo_poly *p, uint32_t f,
     free(spans);
     free(ids);
     return hit;
-}
-
-bool geo_facet_is_convex(const geo_poly *p, uint32_t f,
-                         const geo_facet_shape *s)
-{
-    if (s->degenerate)
-        return false;
-    uint32_t n = geo_poly_facet_size(p, f);
-    const uint32_t *fv = geo_poly_facet(p, f);
-    for (uint32_t i = 0; i < n; i++) {
-        int o = geo_orient2d_proj(V(p, fv[(i + n - 1) % n]), V(p, fv[i]),
-                                  V(p, fv[(i + 1) % n]), s->axis);
-        if (o * s->turn < 0)
-            return false;
-    }
-    return !geo_facet_self_intersects(p, f, s);
 }
 
 /* -------------------------------------------------------- pair test */
@@ -465,12 +473,13 @@ static bool point_hits_facet(const geo_poly *p, const facet_ref *F,
     return point_in_facet2(p, F->id, F->s->axis, q) >= 0;
 }
 
-/* Segment pq crosses π_F strictly (p and q on opposite sides). Does the
- * crossing point lie in closed F? Winding number of the line pq with
- * respect to F's polygon seen along pq: h, h2 are sides against two
- * planes through pq (their intersection), t the turn of each edge around
- * pq. The winding's sign convention does not matter: only ≠ 0 is used. */
-static bool segment_pierces_facet(const geo_poly *p, const facet_ref *F,
+/* Segment pq crosses π_F strictly (p and q on opposite sides). Where is
+ * the crossing point with respect to closed F: +1 inside, 0 on its
+ * boundary, −1 outside? Winding number of the line pq with respect to F's
+ * polygon seen along pq: h, h2 are sides against two planes through pq
+ * (their intersection), t the turn of each edge around pq. The winding's
+ * sign convention does not matter: only ≠ 0 is used. */
+static int segment_pierces_facet(const geo_poly *p, const facet_ref *F,
                                   const double P[3], const double Q[3])
 {
     double d[3];
@@ -496,13 +505,13 @@ static bool segment_pierces_facet(const geo_poly *p, const facet_ref *F,
             /* the edge's line meets line pq (or is parallel): on it? */
             if (ha != 0 || hb != 0) {
                 if (ha * hb <= 0)
-                    return true;
+                    return 0;
             } else {
                 if (h2a == 2)
                     h2a = geo_orient3d(P, Q, s2, a);
                 h2b = geo_orient3d(P, Q, s2, b);
                 if (h2a * h2b <= 0)
-                    return true;
+                    return 0;
             }
         }
         if (ha <= 0) {
@@ -513,7 +522,7 @@ static bool segment_pierces_facet(const geo_poly *p, const facet_ref *F,
         }
         a = b, ha = hb, h2a = h2b;
     }
-    return wn != 0;
+    return wn ? 1 : -1;
 }
 
 /* Facets F, G (both) lie in one plane (all of one's vertices on the
@@ -628,7 +637,7 @@ static bool edges_hit(const geo_poly *p, const facet_ref *F,
         if (sg[j] == 0 && gpos[j] < 0 && point_hits_facet(p, F, a))
             return true;
         if (sg[j] * sg[j1] < 0) {
-            if (segment_pierces_facet(p, F, a, b))
+            if (segment_pierces_facet(p, F, a, b) >= 0)
                 return true;
         } else if (sg[j] == 0 && sg[j1] == 0 &&
                    !is_edge(F, gpos[j], gpos[j1])) {
@@ -638,6 +647,33 @@ static bool edges_hit(const geo_poly *p, const facet_ref *F,
         }
     }
     return false;
+}
+
+/* Convex F and G share exactly the edge uw (positions iu, iw in F, ju in
+ * G). In F's projection, if every other vertex of G lies strictly on the
+ * other side of the line uw than F, the projections meet only on that
+ * line, and each facet's points projecting there form just the edge uw:
+ * the pair is legal. A sufficient test, not a necessary one: false means
+ * "decide by the general path". Well conditioned where the side tests of
+ * the general path are not (nearly coplanar neighbours, like a scan's
+ * slivers). */
+static bool separated_by_shared_edge(const geo_poly *p, const facet_ref *F,
+                                     const facet_ref *G, const int32_t *gpos,
+                                     uint32_t iu, uint32_t iw)
+{
+    int axis = F->s->axis;
+    const double *u = V(p, F->v[iu]), *w = V(p, F->v[iw]);
+    int side_f = 0;
+    for (uint32_t i = 0; i < F->n && !side_f; i++)
+        if (i != iu && i != iw)
+            side_f = geo_orient2d_proj(u, w, V(p, F->v[i]), axis);
+    if (!side_f)
+        return false;
+    for (uint32_t j = 0; j < G->n; j++)
+        if (gpos[j] < 0 &&
+            geo_orient2d_proj(u, w, V(p, G->v[j]), axis) != -side_f)
+            return false;
+    return true;
 }
 
 static bool pair_test(const geo_poly *p, const facet_ref *F,
@@ -657,6 +693,16 @@ static bool pair_test(const geo_poly *p, const facet_ref *F,
                 nshared++;
                 break;
             }
+    }
+    if (nshared == 2 && F->s->convex && G->s->convex) {
+        int32_t iu = -1, iw = -1;
+        for (uint32_t i = 0; i < F->n; i++)
+            if (fpos[i] >= 0)
+                iu < 0 ? (iu = (int32_t)i) : (iw = (int32_t)i);
+        if (is_edge(F, iu, iw) && is_edge(G, fpos[iu], fpos[iw]) &&
+            separated_by_shared_edge(p, F, G, gpos, (uint32_t)iu,
+                                     (uint32_t)iw))
+            return false;
     }
     bool pos = false, neg = false;
     for (uint32_t j = 0; j < G->n; j++) {
@@ -709,15 +755,40 @@ int geo_facets_intersect(const geo_poly *p, uint32_t f, uint32_t g,
     if (f == g || sf->degenerate || sg->degenerate)
         return 0;
     facet_ref F = facet_at(p, f, sf), G = facet_at(p, g, sg);
-    pair_scratch sc = {0};
     uint32_t n = F.n > G.n ? F.n : G.n;
-    if (scratch_reserve(&sc, n) < 0) {
-        scratch_free(&sc);
-        return -ENOMEM;
+    enum { SMALL = 64 };
+    int8_t s1[SMALL], s2[SMALL];
+    int32_t p1[SMALL], p2[SMALL];
+    pair_scratch sc = {SMALL, s1, s2, p1, p2};
+    pair_scratch heap = {0};
+    if (n > SMALL) {
+        if (scratch_reserve(&heap, n) < 0) {
+            scratch_free(&heap);
+            return -ENOMEM;
+        }
+        sc = heap;
     }
     bool hit = pair_test(p, &F, &G, &sc);
-    scratch_free(&sc);
+    scratch_free(&heap);
     return hit;
+}
+
+int geo_segment_meets_facet(const geo_poly *p, uint32_t f,
+                            const geo_facet_shape *s, const double a[3],
+                            const double b[3])
+{
+    if (s->degenerate)
+        return -1;
+    facet_ref F = facet_at(p, f, s);
+    int sa = side_of(p, &F, a), sb = side_of(p, &F, b);
+    if (sa * sb > 0)
+        return -1;
+    if (sa == 0 && sb == 0)
+        return segment_hits_facet(p, &F, a, b, -1, -1, s->axis, s->turn) ? 0
+                                                                        : -1;
+    if (sa == 0 || sb == 0)
+        return point_hits_facet(p, &F, sa == 0 ? a : b) ? 0 : -1;
+    return segment_pierces_facet(p, &F, a, b);
 }
 
 /* ------------------------------------------------------- the search */
@@ -867,8 +938,10 @@ static void run_shapes(void *arg, size_t i)
         unsigned char fl = 0;
         if (s->degenerate)
             fl = GEO_SI_DEGENERATE;
-        else if (geo_facet_self_intersects(j->p, f, s))
-            fl = GEO_SI_SELF;
+        else if (!s->simple)
+            fl = GEO_SI_SELF | GEO_SI_NONCONVEX;
+        else if (!s->convex)
+            fl = GEO_SI_NONCONVEX;
         atomic_init(&j->flags[f], fl);
     }
 }

@@ -59,20 +59,20 @@ typedef struct geo_facet_shape {
                          turn in that projection (axes in cyclic order, as
                          geo_orient2d_proj) */
     bool degenerate;  /* fewer than 3 distinct points or all collinear */
+    bool simple;      /* the polygon does not touch or cross itself
+                         (geo_facet_self_intersects is false) */
+    bool convex;      /* simple and no reflex corner (flat ones allowed) */
 } geo_facet_shape;
 
 /* Fills *ret for facet f (f < p->nfacets, valid indices). The reference
  * triple is chosen in floating point and checked exactly; turn is decided
  * exactly at the facet's lexicographically lowest projected vertex (a
  * convex corner of a simple polygon), falling back to the Newell normal's
- * sign when that corner is flat. Thread-safe, no allocation. */
+ * sign when that corner is flat; simple and convex are exact in the
+ * projection (both false for a degenerate facet). Thread-safe; allocates
+ * only for facets of more than 24 vertices (see
+ * geo_facet_self_intersects). */
 void geo_facet_shape_of(const geo_poly *p, uint32_t f, geo_facet_shape *ret);
-
-/* True when facet f's projected polygon has no reflex corner (flat
- * corners are allowed) and does not intersect itself; false for a
- * degenerate facet. */
-bool geo_facet_is_convex(const geo_poly *p, uint32_t f,
-                         const geo_facet_shape *s);
 
 /* True when facet f's own polygon touches or crosses itself: a vertex
  * index listed twice, two non-adjacent edges meeting, or adjacent edges
@@ -90,11 +90,24 @@ bool geo_facet_self_intersects(const geo_poly *p, uint32_t f,
 int geo_facets_intersect(const geo_poly *p, uint32_t f, uint32_t g,
                          const geo_facet_shape *sf, const geo_facet_shape *sg);
 
+/* Where segment ab meets facet f (shape s), exactly under the model
+ * above, a and b being any points (not taken as the facet's vertices):
+ * +1 when a and b lie strictly on opposite sides of the facet's plane and
+ * the crossing point is strictly inside the polygon; 0 when the segment
+ * touches the closed facet in any other way (an endpoint on it, a pass
+ * through its boundary, a run along its plane over it); −1 when it misses
+ * it, and for a degenerate facet. Used for ray parity (point in
+ * polyhedron): 0 means "degenerate ray, shoot another". */
+int geo_segment_meets_facet(const geo_poly *p, uint32_t f,
+                            const geo_facet_shape *s, const double a[3],
+                            const double b[3]);
+
 /* Per-facet flags of geo_selfint.facet_flags. */
 enum {
     GEO_SI_PAIR = 1,       /* the facet is in an intersecting pair */
     GEO_SI_SELF = 2,       /* its own polygon intersects itself */
     GEO_SI_DEGENERATE = 4, /* degenerate: no plane, not tested */
+    GEO_SI_NONCONVEX = 8,  /* not degenerate and not convex (shape) */
 };
 
 typedef struct geo_selfint_opts {

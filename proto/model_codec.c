@@ -159,6 +159,145 @@ float proto_ld_f32le(const unsigned char *p)
     return f;
 }
 
+void proto_scan_init(proto_scan *s, const void *data, size_t len,
+                     bool hash_comments)
+{
+    s->p = data;
+    s->end = s->p + len;
+    s->line = 1;
+    s->tok_line = 1;
+    s->hash_comments = hash_comments;
+}
+
+static bool is_space(char c)
+{
+    return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' ||
+           c == '\f';
+}
+
+bool proto_scan_token(proto_scan *s, const char **ret, size_t *ret_len)
+{
+    for (;;) {
+        while (s->p < s->end && is_space(*s->p)) {
+            if (*s->p == '\n')
+                s->line++;
+            s->p++;
+        }
+        if (s->p < s->end && s->hash_comments && *s->p == '#') {
+            while (s->p < s->end && *s->p != '\n')
+                s->p++;
+            continue;
+        }
+        break;
+    }
+    if (s->p == s->end)
+        return false;
+    const char *t = s->p;
+    while (s->p < s->end && !is_space(*s->p) &&
+           !(s->hash_comments && *s->p == '#'))
+        s->p++;
+    *ret = t;
+    *ret_len = (size_t)(s->p - t);
+    s->tok_line = s->line;
+    return true;
+}
+
+bool proto_scan_line(proto_scan *s, const char **ret, size_t *ret_len)
+{
+    if (s->p == s->end)
+        return false;
+    const char *a = s->p;
+    const char *nl = memchr(a, '\n', (size_t)(s->end - a));
+    const char *b = nl ? nl : s->end;
+    s->p = nl ? nl + 1 : s->end;
+    s->tok_line = s->line;
+    if (nl)
+        s->line++;
+    while (a < b && is_space(*a))
+        a++;
+    while (b > a && is_space(b[-1]))
+        b--;
+    *ret = a;
+    *ret_len = (size_t)(b - a);
+    return true;
+}
+
+int proto_parse_double(const char *tok, size_t len, double *ret)
+{
+    /* strtod needs a terminated string; longer tokens are no numbers a
+     * writer would produce (the longest %.17g form has 24 bytes) */
+    char buf[64];
+    if (len == 0 || len >= sizeof buf)
+        return -EINVAL;
+    memcpy(buf, tok, len);
+    buf[len] = '\0';
+    char c = buf[0] == '-' || buf[0] == '+' ? buf[1] : buf[0];
+    /* only decimal digits or '.': no "nan", "inf", hex floats */
+    if (!((c >= '0' && c <= '9') || c == '.'))
+        return -EINVAL;
+    for (size_t i = 0; i < len; i++)
+        if (buf[i] == 'x' || buf[i] == 'X')
+            return -EINVAL;
+    char *endp;
+    errno = 0;
+    double d = strtod(buf, &endp);
+    if (endp != buf + len)
+        return -EINVAL;
+    if (!isfinite(d))
+        return -ERANGE;
+    *ret = d;
+    return 0;
+}
+
+int proto_parse_u32(const char *tok, size_t len, uint32_t *ret)
+{
+    if (len == 0)
+        return -EINVAL;
+    uint64_t v = 0;
+    for (size_t i = 0; i < len; i++) {
+        if (tok[i] < '0' || tok[i] > '9')
+            return -EINVAL;
+        v = v * 10 + (uint64_t)(tok[i] - '0');
+        if (v > UINT32_MAX)
+            return -ERANGE;
+    }
+    *ret = (uint32_t)v;
+    return 0;
+}
+
+int proto_parse_i64(const char *tok, size_t len, int64_t *ret)
+{
+    bool neg = len > 0 && tok[0] == '-';
+    size_t i = neg || (len > 0 && tok[0] == '+') ? 1 : 0;
+    if (i == len)
+        return -EINVAL;
+    int64_t v = 0;
+    for (; i < len; i++) {
+        if (tok[i] < '0' || tok[i] > '9')
+            return -EINVAL;
+        v = v * 10 + (tok[i] - '0');
+        if (v > ((int64_t)1 << 62))
+            return -ERANGE;
+    }
+    *ret = neg ? -v : v;
+    return 0;
+}
+
+const char *proto_tok_show(const char *tok, size_t len, char *out)
+{
+    size_t n = len > 24 ? 24 : len;
+    for (size_t i = 0; i < n; i++) {
+        unsigned char c = (unsigned char)tok[i];
+        out[i] = c >= 0x20 && c < 0x7f ? (char)c : '?';
+    }
+    if (len > n) {
+        memcpy(out + n, "...", 3);
+        n += 3;
+    }
+    out[n] = '\0';
+    return out;
+}
+
 int proto_check_limits(const proto_limits *lim, uint64_t nverts,
                        uint64_t nfacets, uint64_t ncorners, geo_err *err)
 {
@@ -223,6 +362,15 @@ static bool normalise_plane(double plane[4])
     return true;
 }
 
+/* A least-squares plane for facet f; a zero component is stored as +0
+ * so that files written later do not show "-0.0" for computed planes. */
+static void fit_plane(geo_poly *p, uint32_t f)
+{
+    geo_poly_facet_fit_plane(p, f, GEO_PLANE_UNWEIGHTED, p->planes[f]);
+    for (int k = 0; k < 4; k++)
+        p->planes[f][k] += 0.0;
+}
+
 void proto_finish_planes(geo_poly *p, const bool *given,
                          proto_read_report *rep)
 {
@@ -231,14 +379,14 @@ void proto_finish_planes(geo_poly *p, const bool *given,
     for (uint32_t f = 0; f < p->nfacets; f++) {
         double *pl = p->planes[f];
         if (!given || !given[f]) {
-            geo_poly_facet_fit_plane(p, f, GEO_PLANE_UNWEIGHTED, pl);
+            fit_plane(p, f);
             continue;
         }
         rep->planes_given++;
         if (!normalise_plane(pl)) {
             note_mismatch(rep, "facets[%u].plane: zero normal; recomputed "
                                "by least squares", f);
-            geo_poly_facet_fit_plane(p, f, GEO_PLANE_UNWEIGHTED, pl);
+            fit_plane(p, f);
             continue;
         }
         uint32_t n = geo_poly_facet_size(p, f);

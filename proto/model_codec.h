@@ -53,6 +53,38 @@ uint32_t proto_ld_u32le(const unsigned char *p);
 double proto_ld_f64le(const unsigned char *p);
 float proto_ld_f32le(const unsigned char *p);
 
+/* A whitespace tokenizer over text that is not NUL-terminated; counts
+ * lines (from 1) for error messages. With hash_comments, '#' starts a
+ * comment that runs to the end of the line. */
+typedef struct proto_scan {
+    const char *p, *end;
+    uint32_t line;      /* line of the position p */
+    uint32_t tok_line;  /* line of the last token returned */
+    bool hash_comments;
+} proto_scan;
+
+void proto_scan_init(proto_scan *s, const void *data, size_t len,
+                     bool hash_comments);
+/* The next token (*ret, *ret_len), or false at the end of the text. */
+bool proto_scan_token(proto_scan *s, const char **ret, size_t *ret_len);
+/* The rest of the current line (without its newline) as one span,
+ * advancing past the newline; false at the end of the text. Leading and
+ * trailing blanks are trimmed. */
+bool proto_scan_line(proto_scan *s, const char **ret, size_t *ret_len);
+
+/* A finite double from a whole token (C locale syntax, strtod). 0,
+ * -EINVAL when the token is not a number or not finite, -ERANGE when it
+ * overflows a double. */
+int proto_parse_double(const char *tok, size_t len, double *ret);
+/* An unsigned 32-bit integer written in decimal digits only. 0, -EINVAL,
+ * or -ERANGE above UINT32_MAX. */
+int proto_parse_u32(const char *tok, size_t len, uint32_t *ret);
+/* A signed decimal integer within ±2^62. 0, -EINVAL or -ERANGE. */
+int proto_parse_i64(const char *tok, size_t len, int64_t *ret);
+/* Formats a token for an error message: at most 24 bytes, non-printable
+ * bytes as '?', into out (32 bytes). */
+const char *proto_tok_show(const char *tok, size_t len, char *out);
+
 /* Fails with -ERANGE and a message when a count exceeds lim ("vertices:
  * 3000000 exceed the limit of 2000000"). Counts are 64-bit so that a
  * claimed count is checked before any arithmetic on it. */

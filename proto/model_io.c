@@ -106,9 +106,29 @@ geo_poly *proto_model_read_mem_ex(const void *data, size_t len,
     case PROTO_FMT_JSON:
         p = proto_json_read(data, len, lim, &rep, err);
         break;
+    case PROTO_FMT_POLY:
+        p = proto_polytxt_read(data, len, lim, &rep, err);
+        break;
+    case PROTO_FMT_OBJ:
+        p = proto_obj_read(data, len, lim, &rep, err);
+        break;
+    case PROTO_FMT_STL:
+    case PROTO_FMT_STL_ASCII:
+        p = proto_stl_read(data, len, lim, &rep, err);
+        break;
+    case PROTO_FMT_PLY:
+    case PROTO_FMT_PLY_ASCII:
+        p = proto_ply_read(data, len, lim, &rep, err);
+        break;
+    case PROTO_FMT_FMB1:
+        p = proto_fmb1_read(data, len, lim, &rep, err);
+        break;
+    case PROTO_FMT_ASE:
+        geo_err_set(err, -EINVAL, "ASE files can be written, not read");
+        break;
+    case PROTO_FMT_UNKNOWN:
     default:
-        geo_err_set(err, -EINVAL, "reading %s is not supported",
-                    proto_format_name(fmt));
+        geo_err_set(err, -EINVAL, "unknown model format");
         break;
     }
     if (p && ret_report)
@@ -257,9 +277,29 @@ int proto_model_write_mem(const geo_poly *p, proto_format fmt, char **ret_buf,
     case PROTO_FMT_JSON:
         r = proto_json_write(p, &b, err);
         break;
+    case PROTO_FMT_POLY:
+        r = proto_polytxt_write(p, &b, err);
+        break;
+    case PROTO_FMT_OBJ:
+        r = proto_obj_write(p, &b, err);
+        break;
+    case PROTO_FMT_STL:
+    case PROTO_FMT_STL_ASCII:
+        r = proto_stl_write(p, fmt == PROTO_FMT_STL_ASCII, &b, err);
+        break;
+    case PROTO_FMT_PLY:
+    case PROTO_FMT_PLY_ASCII:
+        r = proto_ply_write(p, fmt == PROTO_FMT_PLY_ASCII, &b, err);
+        break;
+    case PROTO_FMT_ASE:
+        r = proto_ase_write(p, &b, err);
+        break;
+    case PROTO_FMT_FMB1:
+        r = proto_fmb1_write(p, &b, err);
+        break;
+    case PROTO_FMT_UNKNOWN:
     default:
-        r = geo_err_set(err, -EINVAL, "writing %s is not supported",
-                        proto_format_name(fmt));
+        r = geo_err_set(err, -EINVAL, "unknown model format");
         break;
     }
     if (r == 0 && b.failed)

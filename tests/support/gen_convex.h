@@ -1,7 +1,9 @@
 /* gen_convex.h — random convex polyhedra for tests: the intersection of
- * random half-spaces tangent to the unit sphere, clipped out of a cube.
- * Vertices are computed by interpolation along clipped edges, so facets
- * are planar to rounding (≈1e-16), like a scanner's models. */
+ * random half-spaces, like a shadow-profile scanner's model (each facet a
+ * convex polygon whose vertices are rounded three-plane intersections, so
+ * facets are planar within rounding, not exactly).
+ *
+ * Self-contained (lib/ only); deterministic for a seed. */
 #ifndef FACET_GEN_CONVEX_H
 #define FACET_GEN_CONVEX_H
 
@@ -9,15 +11,16 @@
 
 #include "poly.h"
 
-/* The cube [-2, 2]³ cut by nplanes planes n·x = 1 with random unit
- * normals n (seeded), keeping n·x ≤ 1. Facets are counter-clockwise from
- * outside, planes are the exact cutting planes. Returns NULL on
- * out-of-memory. */
-geo_poly *gc_random_convex(uint64_t seed, uint32_t nplanes);
-
-/* Clips p in place by the half-space plane(x) ≤ 0 (plane a,b,c,d with a
- * unit normal), closing the cut with one new facet whose plane is `plane`.
- * p must be convex and closed. 0, or -ENOMEM. */
-int gc_clip(geo_poly *p, const double plane[4]);
+/* A convex polyhedron around center: the six faces of the cube of
+ * half-side 1.5·radius and nplanes half-spaces with uniformly random unit
+ * normals at distances radius·[0.8, 1.2) from center. Samples where four
+ * planes meet at a point or two vertices nearly coincide are redrawn, so
+ * the result is simple: every vertex in exactly three facets. Facets are
+ * listed counter-clockwise seen from outside; planes are the generating
+ * ones (unit outward normal). Returns NULL on out-of-memory, or when no
+ * clean sample was found in 100 draws (never seen). Free with
+ * geo_poly_free. */
+geo_poly *gen_convex_polyhedron(uint64_t seed, unsigned nplanes,
+                                const double center[3], double radius);
 
 #endif
