@@ -68,7 +68,7 @@ void geo_replanar_opts_default(geo_replanar_opts *o,
     o->eps_factor = 0.5;
     o->outer_rounds = 10;
     o->eps_final = 1e-10;
-    o->max_steps = 400;
+    o->max_steps = 2000;
     o->wake_tol = 1e-2;
     o->count_selfint = false;
     o->check = true;

@@ -80,7 +80,7 @@ typedef struct geo_replanar_opts {
     uint32_t outer_rounds; /* local-exp: rounds [10] */
     double eps_final;    /* scaled, global-exp: stop when S2 < this, mm
                             [1e-10] */
-    uint32_t max_steps;  /* step budget; beyond it "did not converge" [400] */
+    uint32_t max_steps;  /* step budget; beyond it "did not converge" [2000] */
     double wake_tol;     /* a vertex moving more than wake_tol · geo_poly_eps
                             from its start activates its facets [1e-2] */
     bool count_selfint;  /* count self-intersections after every step (log
