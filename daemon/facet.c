@@ -20,6 +20,9 @@ static const cli_command commands[] = {
     {"orient", "make a model's facets consistent and outward", cmd_orient},
     {"run", "run a job pipeline on a model offline", cmd_run},
     {"inside", "classify points as inside, outside or on a model", cmd_inside},
+    {"move", "move a vertex and re-planarise the facets", cmd_move},
+    {"inversion-stats", "how often vertex moves break the model",
+     cmd_inversion_stats},
 };
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
 
