@@ -275,9 +275,9 @@ int proto_parse_i64(const char *tok, size_t len, int64_t *ret)
     for (; i < len; i++) {
         if (tok[i] < '0' || tok[i] > '9')
             return -EINVAL;
-        v = v * 10 + (tok[i] - '0');
-        if (v > ((int64_t)1 << 62))
+        if (v > ((int64_t)1 << 62) / 10)
             return -ERANGE;
+        v = v * 10 + (tok[i] - '0');
     }
     *ret = neg ? -v : v;
     return 0;
@@ -363,30 +363,44 @@ static bool normalise_plane(double plane[4])
 }
 
 /* A least-squares plane for facet f; a zero component is stored as +0
- * so that files written later do not show "-0.0" for computed planes. */
-static void fit_plane(geo_poly *p, uint32_t f)
+ * so that files written later do not show "-0.0" for computed planes.
+ * False when the fit overflows. */
+static bool fit_plane(geo_poly *p, uint32_t f)
 {
     geo_poly_facet_fit_plane(p, f, GEO_PLANE_UNWEIGHTED, p->planes[f]);
-    for (int k = 0; k < 4; k++)
+    bool finite = true;
+    for (int k = 0; k < 4; k++) {
         p->planes[f][k] += 0.0;
+        finite = finite && isfinite(p->planes[f][k]);
+    }
+    return finite;
 }
 
-void proto_finish_planes(geo_poly *p, const bool *given,
-                         proto_read_report *rep)
+static int fit_failed(uint32_t f, geo_err *err)
+{
+    return geo_err_set(err, -ERANGE,
+                       "facets[%u].plane: no finite plane fits the "
+                       "vertices (coordinates too large)", f);
+}
+
+int proto_finish_planes(geo_poly *p, const bool *given,
+                        proto_read_report *rep, geo_err *err)
 {
     rep->worst_facet = UINT32_MAX;
     double eps = geo_poly_eps(p);
     for (uint32_t f = 0; f < p->nfacets; f++) {
         double *pl = p->planes[f];
         if (!given || !given[f]) {
-            fit_plane(p, f);
+            if (!fit_plane(p, f))
+                return fit_failed(f, err);
             continue;
         }
         rep->planes_given++;
         if (!normalise_plane(pl)) {
             note_mismatch(rep, "facets[%u].plane: zero normal; recomputed "
                                "by least squares", f);
-            fit_plane(p, f);
+            if (!fit_plane(p, f))
+                return fit_failed(f, err);
             continue;
         }
         uint32_t n = geo_poly_facet_size(p, f);
@@ -395,7 +409,7 @@ void proto_finish_planes(geo_poly *p, const bool *given,
         uint32_t worst_i = 0;
         for (uint32_t i = 0; i < n; i++) {
             double d = fabs(geo_plane_eval(pl, p->verts[v[i]]));
-            if (d > worst) {
+            if (!(d <= worst)) {
                 worst = d;
                 worst_i = i;
             }
@@ -406,7 +420,7 @@ void proto_finish_planes(geo_poly *p, const bool *given,
         }
         double area[3];
         geo_poly_facet_area_vector(p, f, area);
-        if (worst > eps)
+        if (!(worst <= eps))
             note_mismatch(rep, "facets[%u].plane: vertex %u (facets[%u]."
                                "vertices[%u]) lies %.3g mm off the plane "
                                "(tolerance %.3g mm)",
@@ -415,4 +429,5 @@ void proto_finish_planes(geo_poly *p, const bool *given,
             note_mismatch(rep, "facets[%u].plane: the normal points against "
                                "the vertex order (inward)", f);
     }
+    return 0;
 }

@@ -94,9 +94,11 @@ int proto_check_limits(const proto_limits *lim, uint64_t nverts,
 /* Completes the planes of a freshly read model: facets with given[f]
  * false (or given NULL: all) get a least-squares plane; given planes are
  * normalised and checked against their vertices, filling rep (see
- * proto_read_report). Always succeeds. */
-void proto_finish_planes(geo_poly *p, const bool *given,
-                         proto_read_report *rep);
+ * proto_read_report). 0, or -ERANGE when a plane cannot be computed in
+ * doubles (coordinates so large that the fit overflows), err naming the
+ * facet. */
+int proto_finish_planes(geo_poly *p, const bool *given,
+                        proto_read_report *rep, geo_err *err);
 
 /* The codecs. */
 geo_poly *proto_json_read(const void *data, size_t len,

@@ -135,7 +135,8 @@ geo_poly *proto_fmb1_read(const void *data, size_t len,
         given[f] = true;
         o += FACET_HEAD + 4 * (size_t)n;
     }
-    proto_finish_planes(p, given, rep);
+    if (proto_finish_planes(p, given, rep, err) < 0)
+        goto fail;
     free(given);
     return p;
 fail:

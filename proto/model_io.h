@@ -1,13 +1,21 @@
 /* model_io.h — reading and writing polyhedra in every supported format:
  * facet-model/1 JSON, the paper's text format (seed 000 §1.3, ".poly"),
- * OBJ, STL (ASCII and binary), PLY (ASCII and binary little-endian), ASE
- * (write only) and FMB1 (the scanner's binary model).
+ * OBJ, STL (ASCII and binary), PLY (ASCII and binary little- and
+ * big-endian on reading, binary little-endian and ASCII on writing), ASE
+ * (write only) and FMB1 (the scanner's binary model). Coordinates are
+ * millimetres; facets are listed counter-clockwise seen from outside.
  *
  * Every reader validates strictly and reports the first error with its
  * place ("facets[12].vertices[3]: index 9001 out of range (8000
- * vertices)", "line 17: expected 3 numbers"); limits (proto_limits) reject
- * oversized models before allocating for them. Readers never crash or
- * hang on any input bytes.
+ * vertices)", "line 17: ...", "byte 1234: ..."); limits (proto_limits)
+ * and the counts a header declares are checked against the input before
+ * anything is allocated for them. Readers never crash or hang on any
+ * input bytes. A returned model has valid indices, finite coordinates and
+ * finite planes (unit, or zero for a degenerate facet).
+ *
+ * Writers print doubles as the shortest decimal that reads back to the
+ * same double, so JSON, .poly, PLY (double), FMB1 and ASCII STL round
+ * trips keep every coordinate bit for bit; binary STL holds float32.
  *
  * Ownership: a returned geo_poly belongs to the caller (geo_poly_free);
  * *ret_buf from the writers is malloc'd for the caller to free.
@@ -65,7 +73,9 @@ const char *proto_format_mime(proto_format fmt);
 typedef struct proto_read_report {
     uint32_t planes_given;     /* facets whose plane came from the input */
     uint32_t plane_mismatches; /* of those, how many mismatch */
-    uint32_t worst_facet;      /* facet of worst_deviation, UINT32_MAX if none */
+    uint32_t worst_facet;      /* facet of worst_deviation; UINT32_MAX
+                                  when every vertex lies exactly on its
+                                  given plane (or none was given) */
     double worst_deviation;    /* mm, largest vertex distance from a given
                                   plane over the whole model */
     char first[256];           /* the first mismatch, naming its place

@@ -124,8 +124,8 @@ static int read_facet(const json_t *fo, uint32_t f, geo_poly *p, bool *given,
         json_int_t v = json_integer_value(x);
         if (v < 0 || v >= (json_int_t)p->nverts)
             return geo_err_set(err, -EINVAL,
-                               "facets[%u].vertices[%u]: index %" JSON_INTEGER_FORMAT
-                               " out of range (%u vertices)", f, i, v,
+                               "facets[%u].vertices[%u]: index %lld out of "
+                               "range (%u vertices)", f, i, (long long)v,
                                p->nverts);
         dst[i] = (uint32_t)v;
     }
@@ -204,7 +204,8 @@ geo_poly *proto_json_from_value(const json_t *root, const proto_limits *lim,
             goto fail;
         p->nfacets = f + 1;
     }
-    proto_finish_planes(p, given, rep);
+    if (proto_finish_planes(p, given, rep, err) < 0)
+        goto fail;
     free(given);
     return p;
 fail:

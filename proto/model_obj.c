@@ -152,7 +152,8 @@ geo_poly *proto_obj_read(const void *data, size_t len,
         if (e < 0)
             return geo_poly_free(p);
     }
-    proto_finish_planes(p, NULL, rep);
+    if (proto_finish_planes(p, NULL, rep, err) < 0)
+        return geo_poly_free(p);
     return p;
 }
 

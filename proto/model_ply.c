@@ -567,7 +567,8 @@ geo_poly *proto_ply_read(const void *data, size_t len,
                                       "element", b.pos, len - b.pos);
         goto fail;
     }
-    proto_finish_planes(p, given, rep);
+    if (proto_finish_planes(p, given, rep, err) < 0)
+        goto fail;
     free(given);
     free(h);
     return p;

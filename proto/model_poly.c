@@ -176,7 +176,8 @@ geo_poly *proto_polytxt_read(const void *data, size_t len,
                     proto_tok_show(t, tl, shown), nf);
         goto fail;
     }
-    proto_finish_planes(p, given, rep);
+    if (proto_finish_planes(p, given, rep, err) < 0)
+        goto fail;
     free(given);
     return p;
 fail:

@@ -190,7 +190,9 @@ static geo_poly *read_binary(const unsigned char *d, size_t len,
             goto fail;
     }
     free(m.slots);
-    proto_finish_planes(p, NULL, rep);
+    m.slots = NULL;
+    if (proto_finish_planes(p, NULL, rep, err) < 0)
+        goto fail;
     return p;
 fail:
     free(m.slots);
@@ -352,7 +354,9 @@ static geo_poly *read_ascii(const void *data, size_t len,
         goto fail;
     }
     free(m.slots);
-    proto_finish_planes(p, NULL, rep);
+    m.slots = NULL;
+    if (proto_finish_planes(p, NULL, rep, err) < 0)
+        goto fail;
     return p;
 fail:
     free(m.slots);

@@ -427,6 +427,14 @@ static void test_obj_errors_name_line_and_place(void **state)
     assert_string_equal(text_err(text, PROTO_FMT_OBJ),
                         "line 5: facets[0].vertices[1]: expected a vertex "
                         "index, found \"x\"");
+    snprintf(text, sizeof text, "%sf 1 99999999999999999999 3\n", v4);
+    assert_string_equal(text_err(text, PROTO_FMT_OBJ),
+                        "line 5: facets[0].vertices[1]: expected a vertex "
+                        "index, found \"99999999999999999999\"");
+    assert_string_equal(text_err("v 0 0 0\nv 1e300 0 0\nv 0 1e300 0\n"
+                                 "f 1 2 3\n", PROTO_FMT_OBJ),
+                        "facets[0].plane: no finite plane fits the vertices "
+                        "(coordinates too large)");
     assert_string_equal(text_err("v 1 2\n", PROTO_FMT_OBJ),
                         "line 1: vertices[0]: expected 3 numbers");
     assert_string_equal(text_err("\n\nv 1 2 inf\n", PROTO_FMT_OBJ),

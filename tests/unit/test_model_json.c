@@ -362,7 +362,8 @@ static void test_awkward_doubles_round_trip_exactly(void **state)
 {
     (void)state;
     double v[9] = {0.1, -0.0, 1e-300, 5e-324, 1.7976931348623157e308,
-                   -123456789012345678.0, 1.0 / 3, 2.5e-17, 12345678901234568.0};
+                   -123456789012345678.0, 1.0 / 3, 2.5e-17,
+                   12345678901234568.0};
     uint32_t start[] = {0, 3}, idx[] = {0, 1, 2};
     double planes[4] = {0, 0, 1, 0};
     geo_poly *a = geo_poly_from_arrays(3, v, 1, start, idx, planes, NULL);

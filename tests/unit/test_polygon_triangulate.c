@@ -50,7 +50,8 @@ static void newell(const polygon *pg, double ret[3])
 {
     ret[0] = ret[1] = ret[2] = 0;
     for (uint32_t i = 0; i < pg->n; i++) {
-        const double *a = pg->v[pg->idx[i]], *b = pg->v[pg->idx[(i + 1) % pg->n]];
+        const double *a = pg->v[pg->idx[i]];
+        const double *b = pg->v[pg->idx[(i + 1) % pg->n]];
         ret[0] += (a[1] - b[1]) * (a[2] + b[2]);
         ret[1] += (a[2] - b[2]) * (a[0] + b[0]);
         ret[2] += (a[0] - b[0]) * (a[1] + b[1]);
@@ -141,7 +142,8 @@ static void test_triangle_is_itself(void **state)
     assert_int_equal(t[0][0], 0);
     assert_int_equal(t[0][1], 1);
     assert_int_equal(t[0][2], 2);
-    assert_int_equal(geo_polygon_triangulate(&pg.v[0][0], pg.idx, 2, t), -EINVAL);
+    assert_int_equal(geo_polygon_triangulate(&pg.v[0][0], pg.idx, 2, t),
+                     -EINVAL);
 }
 
 static void star(polygon *pg, int points, double r_in, double r_out)
