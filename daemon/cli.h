@@ -37,5 +37,8 @@ int cmd_convert(int argc, char **argv);
 int cmd_inspect(int argc, char **argv);
 int cmd_orient(int argc, char **argv);
 int cmd_triangulate(int argc, char **argv);
+int cmd_run(int argc, char **argv);
+int cmd_move(int argc, char **argv);
+int cmd_inversion_stats(int argc, char **argv);
 
 #endif

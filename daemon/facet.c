@@ -21,6 +21,10 @@ static const cli_command commands[] = {
     {"orient", "make a model's facets consistent and outward", cmd_orient},
     {"triangulate", "triangulate a functionally defined object",
      cmd_triangulate},
+    {"run", "run a job pipeline on a model offline", cmd_run},
+    {"move", "move a vertex and re-planarise the facets", cmd_move},
+    {"inversion-stats", "how often vertex moves break the model",
+     cmd_inversion_stats},
 };
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
 

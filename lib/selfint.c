@@ -962,6 +962,10 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     if (rc < 0)
         return rc;
     uint32_t nf = p->nfacets;
+    if (bvh && bvh->nitems != nf)
+        return geo_err_set(err, -EINVAL,
+                           "self-intersection: the BVH has %u items for %u "
+                           "facets", bvh->nitems, nf);
     search s = {0};
     geo_bvh *own = NULL;
     geo_facet_shape *shapes = malloc(((size_t)nf + 1) * sizeof *shapes);

@@ -138,7 +138,8 @@ typedef struct geo_selfint {
  * from the calling thread only; cancellation is honoured within
  * milliseconds. On success *ret owns malloc'd arrays (release with
  * geo_selfint_clear) and 0 is returned; on error (-ENOMEM, -ECANCELED,
- * -EINVAL for invalid indices) *ret is zeroed and err set. */
+ * -EINVAL for invalid indices or a BVH whose item count is not p's facet
+ * count) *ret is zeroed and err set. */
 int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
                      const geo_selfint_opts *opts, const geo_ctx *ctx,
                      geo_selfint *ret, geo_err *err);

@@ -659,6 +659,14 @@ static void test_cancel_stops_with_ecanceled(void **state)
     assert_true(calls > 1);
     assert_null(r.pairs);
     assert_non_null(strstr(err.msg, "canceled"));
+    /* a hierarchy of another model is refused, not followed */
+    const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    geo_poly *box = tu_box(lo, hi);
+    geo_bvh *other = geo_bvh_build_facets(box, NULL);
+    assert_int_equal(geo_selfint_find(p, other, NULL, NULL, &r, &err),
+                     -EINVAL);
+    geo_bvh_free(other);
+    geo_poly_free(box);
     atomic_int flag = 1;
     geo_ctx c2 = {0};
     c2.cancel = &flag;

@@ -1,0 +1,417 @@
+/* test_replanar.c — vertex move and re-planarisation (seed 000 §4): the
+ * invariants of every converged result (each vertex within the final bound
+ * of each of its facets' planes, the fixed vertex exactly where it was
+ * put, the planes through it passing through it), the schedules' K and ε
+ * sequences, the local (active-region) run agreeing with the global one,
+ * failures reported as such, and bad input rejected with its place. */
+#include "testutil.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "replanar.h"
+#include "tu_load.h"
+#include "vec.h"
+
+/* The bound S2 must meet at the end of schedule s (default options). */
+static double final_bound(enum geo_replanar_schedule s)
+{
+    geo_replanar_opts o;
+    geo_replanar_opts_default(&o, s);
+    if (s != GEO_REPLANAR_LOCAL_EXP)
+        return o.eps_final;
+    return o.eps0 * pow(o.eps_factor, o.outer_rounds - 1);
+}
+
+static void assert_invariants(const geo_poly *p, uint32_t v,
+                              const double target[3], double bound)
+{
+    assert_memory_equal(p->verts[v], target, 3 * sizeof(double));
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        const double *pl = p->planes[f];
+        assert_true(fabs(geo_vlen(pl) - 1) < 1e-12);
+        const uint32_t *idx = geo_poly_facet(p, f);
+        for (uint32_t i = 0; i < geo_poly_facet_size(p, f); i++) {
+            double e = fabs(geo_plane_eval(pl, p->verts[idx[i]]));
+            if (idx[i] == v)
+                assert_true(e <= 1e-14 * (1 + geo_vlen(target)));
+            else
+                assert_true(e < bound);
+        }
+    }
+}
+
+/* The nearest other vertex's distance, by brute force (tests only). */
+static double nearest(const geo_poly *p, uint32_t v)
+{
+    double best = INFINITY;
+    for (uint32_t i = 0; i < p->nverts; i++)
+        if (i != v && geo_vdist(p->verts[i], p->verts[v]) < best)
+            best = geo_vdist(p->verts[i], p->verts[v]);
+    return best;
+}
+
+static void move_target(const geo_poly *p, uint32_t v, double m,
+                        double ret[3])
+{
+    double dir[3] = {0.36, -0.48, 0.8};
+    geo_vmadd(p->verts[v], m * nearest(p, v), dir, ret);
+}
+
+static void test_box_corner_move_converges_with_invariants(void **state)
+{
+    (void)state;
+    static const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    for (int s = 0; s < 3; s++) {
+        geo_poly *p = tu_box(lo, hi);
+        double t[3] = {1.01, 0.995, 1.002};
+        geo_replanar_result res;
+        geo_err err = {{0}};
+        assert_int_equal(geo_move_vertex(p, 7, t, (enum geo_replanar_schedule)s,
+                                         NULL, NULL, NULL, &res, &err),
+                         0);
+        assert_true(res.converged);
+        assert_true(geo_replanar_result_valid(&res));
+        assert_int_equal(res.nselfint, 0);
+        assert_int_equal(res.ninverted, 0);
+        assert_true(fabs(res.volume - geo_poly_volume(p)) < 1e-12);
+        assert_invariants(p, 7, t, final_bound((enum geo_replanar_schedule)s));
+        geo_poly_free(p);
+    }
+}
+
+static void test_scan_move_converges_with_invariants_all_schedules(
+    void **state)
+{
+    (void)state;
+    geo_poly *orig = tu_load_model("brilliant.scan-k100.json");
+    assert_non_null(orig);
+    static const uint32_t verts[] = {5, 700, 1500};
+    for (int s = 0; s < 3; s++) {
+        for (size_t i = 0; i < sizeof verts / sizeof verts[0]; i++) {
+            geo_poly *p = geo_poly_copy(orig);
+            double t[3];
+            move_target(p, verts[i], 0.001, t);
+            geo_replanar_result res;
+            geo_err err = {{0}};
+            geo_replanar_opts o;
+            geo_replanar_opts_default(&o, (enum geo_replanar_schedule)s);
+            o.max_steps = 3000;
+            assert_int_equal(geo_move_vertex(p, verts[i], t,
+                                             (enum geo_replanar_schedule)s,
+                                             &o, NULL, NULL, &res, &err),
+                             0);
+            assert_true(res.converged);
+            assert_true(res.s2 < final_bound((enum geo_replanar_schedule)s));
+            assert_true(geo_replanar_result_valid(&res));
+            assert_invariants(p, verts[i], t,
+                              final_bound((enum geo_replanar_schedule)s));
+            /* the move reaches only part of the stone */
+            assert_true(res.active_vertices < orig->nverts);
+            geo_poly_free(p);
+        }
+    }
+    geo_poly_free(orig);
+}
+
+static void test_local_exp_log_doubles_k_and_halves_eps_per_round(
+    void **state)
+{
+    (void)state;
+    geo_poly *p = tu_load_model("brilliant.truth.json");
+    assert_non_null(p);
+    double t[3];
+    move_target(p, 100, 0.01, t);
+    geo_replanar_log log = {0};
+    geo_replanar_result res;
+    assert_int_equal(geo_move_vertex(p, 100, t, GEO_REPLANAR_LOCAL_EXP, NULL,
+                                     NULL, &log, &res, NULL),
+                     0);
+    assert_true(res.converged);
+    assert_int_equal(log.n, res.steps);
+    uint32_t rounds[10] = {0};
+    for (size_t i = 0; i < log.n; i++) {
+        const geo_replanar_step *r = &log.rows[i];
+        assert_int_equal(r->step, i);
+        assert_true(r->outer < 10);
+        rounds[r->outer]++;
+        assert_true(r->k == 100.0 * ldexp(1.0, (int)r->outer));
+        assert_true(r->eps0 == 1e-7 * ldexp(1.0, -(int)r->outer));
+        assert_int_equal(r->nselfint, -1);
+        /* a round ends exactly when S2 drops below its bound */
+        bool last = i + 1 == log.n || log.rows[i + 1].outer != r->outer;
+        assert_true(last == (r->s2 < r->eps0));
+    }
+    /* the paper's shape on a clean stone: several steps in the first
+     * round, then one per round */
+    assert_true(rounds[0] > 1);
+    for (int k = 1; k < 10; k++)
+        assert_int_equal(rounds[k], 1);
+    geo_replanar_log_clear(&log);
+    geo_poly_free(p);
+}
+
+static void test_global_exp_multiplies_k_each_step_and_keeps_s1_total(
+    void **state)
+{
+    (void)state;
+    geo_poly *p = tu_load_model("brilliant.truth.json");
+    assert_non_null(p);
+    geo_poly *start = geo_poly_copy(p);
+    double t[3];
+    move_target(p, 100, 0.01, t);
+    geo_replanar_log log = {0};
+    geo_replanar_result res;
+    geo_replanar_opts o;
+    geo_replanar_opts_default(&o, GEO_REPLANAR_GLOBAL_EXP);
+    o.k_factor = 1.5;
+    assert_int_equal(geo_move_vertex(p, 100, t, GEO_REPLANAR_GLOBAL_EXP, &o,
+                                     NULL, &log, &res, NULL),
+                     0);
+    assert_true(res.converged);
+    for (size_t i = 0; i < log.n; i++)
+        assert_true(fabs(log.rows[i].k - 100.0 * pow(1.5, (double)i)) <
+                    1e-9 * log.rows[i].k);
+    /* S1 of the last row is the total displacement of the free vertices */
+    double s1 = 0;
+    for (uint32_t v = 0; v < p->nverts; v++)
+        if (v != 100) {
+            double d = geo_vdist(p->verts[v], start->verts[v]);
+            s1 += d * d;
+        }
+    assert_true(fabs(s1 - log.rows[log.n - 1].s1) <= 1e-9 * s1);
+    geo_replanar_log_clear(&log);
+    geo_poly_free(start);
+    geo_poly_free(p);
+}
+
+static void test_active_region_run_matches_global_run(void **state)
+{
+    (void)state;
+    geo_poly *a = tu_load_model("brilliant.scan-k100.json");
+    assert_non_null(a);
+    geo_poly *b = geo_poly_copy(a);
+    double t[3];
+    move_target(a, 900, 0.01, t);
+    double move = geo_vdist(t, a->verts[900]);
+    geo_replanar_opts o;
+    geo_replanar_opts_default(&o, GEO_REPLANAR_GLOBAL_EXP);
+    geo_replanar_result ra, rb;
+    assert_int_equal(geo_move_vertex(a, 900, t, GEO_REPLANAR_GLOBAL_EXP, &o,
+                                     NULL, NULL, &ra, NULL),
+                     0);
+    o.wake_tol = 0; /* every rounding-level change wakes: all facets */
+    assert_int_equal(geo_move_vertex(b, 900, t, GEO_REPLANAR_GLOBAL_EXP, &o,
+                                     NULL, NULL, &rb, NULL),
+                     0);
+    assert_true(ra.converged && rb.converged);
+    assert_true(ra.active_vertices < rb.active_vertices / 2);
+    assert_int_equal(rb.active_vertices, a->nverts);
+    assert_int_equal(ra.steps, rb.steps);
+    /* the same solution up to the resolution of sliver vertices (a plane
+     * residual r moves a vertex between planes at angle θ by r/θ) */
+    double worst = 0;
+    for (uint32_t v = 0; v < a->nverts; v++)
+        worst = fmax(worst, geo_vdist(a->verts[v], b->verts[v]));
+    assert_true(worst < 1e-3 * move);
+    assert_invariants(a, 900, t, final_bound(GEO_REPLANAR_GLOBAL_EXP));
+    assert_invariants(b, 900, t, final_bound(GEO_REPLANAR_GLOBAL_EXP));
+    geo_poly_free(a);
+    geo_poly_free(b);
+}
+
+static void test_two_fixed_vertices_of_one_facet_stay_on_its_plane(
+    void **state)
+{
+    (void)state;
+    static const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    geo_poly *p = tu_box(lo, hi);
+    /* vertices 6 and 7 share the facets z = hi and y = hi */
+    p->verts[6][2] += 0.01;
+    p->verts[7][0] += 0.005;
+    double v6[3], v7[3];
+    memcpy(v6, p->verts[6], sizeof v6);
+    memcpy(v7, p->verts[7], sizeof v7);
+    uint32_t fixed[2] = {6, 7};
+    geo_replanar_result res;
+    assert_int_equal(geo_replanarize(p, fixed, 2, GEO_REPLANAR_GLOBAL_EXP,
+                                     NULL, NULL, NULL, &res, NULL),
+                     0);
+    assert_true(res.converged);
+    assert_memory_equal(p->verts[6], v6, sizeof v6);
+    assert_memory_equal(p->verts[7], v7, sizeof v7);
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        const uint32_t *idx = geo_poly_facet(p, f);
+        for (uint32_t i = 0; i < 4; i++) {
+            double e = fabs(geo_plane_eval(p->planes[f], p->verts[idx[i]]));
+            assert_true(e < (idx[i] == 6 || idx[i] == 7 ? 1e-14 : 1e-10));
+        }
+    }
+    geo_poly_free(p);
+}
+
+static void test_three_noncoplanar_fixed_vertices_in_a_facet_rejected(
+    void **state)
+{
+    (void)state;
+    static const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    geo_poly *p = tu_box(lo, hi);
+    p->verts[0][2] += 0.1; /* facet z = lo: 0 2 3 1 */
+    uint32_t fixed[4] = {0, 1, 2, 3};
+    geo_replanar_result res;
+    geo_err err = {{0}};
+    assert_int_equal(geo_replanarize(p, fixed, 4, GEO_REPLANAR_LOCAL_EXP,
+                                     NULL, NULL, NULL, &res, &err),
+                     -EINVAL);
+    assert_non_null(strstr(err.msg, "facets[0]"));
+    assert_true(p->verts[0][2] == 0.1); /* unchanged on error */
+    geo_poly_free(p);
+}
+
+static void test_bad_input_rejected_naming_the_place(void **state)
+{
+    (void)state;
+    static const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    geo_poly *p = tu_box(lo, hi);
+    geo_replanar_result res;
+    geo_err err = {{0}};
+    double t[3] = {0, 0, 0};
+    assert_int_equal(geo_move_vertex(p, 8, t, GEO_REPLANAR_LOCAL_EXP, NULL,
+                                     NULL, NULL, &res, &err),
+                     -EINVAL);
+    assert_non_null(strstr(err.msg, "vertex 8"));
+    t[1] = NAN;
+    assert_int_equal(geo_move_vertex(p, 1, t, GEO_REPLANAR_LOCAL_EXP, NULL,
+                                     NULL, NULL, &res, &err),
+                     -EINVAL);
+    assert_non_null(strstr(err.msg, "targets[0]"));
+    uint32_t twice[2] = {3, 3};
+    assert_int_equal(geo_replanarize(p, twice, 2, GEO_REPLANAR_LOCAL_EXP,
+                                     NULL, NULL, NULL, &res, &err),
+                     -EINVAL);
+    assert_non_null(strstr(err.msg, "fixed[1]"));
+    geo_replanar_opts o;
+    geo_replanar_opts_default(&o, GEO_REPLANAR_LOCAL_EXP);
+    o.k0 = -1;
+    assert_int_equal(geo_replanarize(p, twice, 1, GEO_REPLANAR_LOCAL_EXP, &o,
+                                     NULL, NULL, &res, &err),
+                     -EINVAL);
+    enum geo_replanar_schedule s;
+    assert_int_equal(geo_replanar_schedule_parse("fast", &s), -EINVAL);
+    for (int k = 0; k < 3; k++) {
+        assert_int_equal(geo_replanar_schedule_parse(
+                             geo_replanar_schedule_name(
+                                 (enum geo_replanar_schedule)k),
+                             &s),
+                         0);
+        assert_int_equal(s, k);
+    }
+    geo_poly_free(p);
+}
+
+static void test_budget_exhausted_reports_not_converged(void **state)
+{
+    (void)state;
+    geo_poly *p = tu_load_model("brilliant.scan-k100.json");
+    assert_non_null(p);
+    double t[3];
+    move_target(p, 700, 0.1, t);
+    geo_replanar_opts o;
+    geo_replanar_opts_default(&o, GEO_REPLANAR_LOCAL_EXP);
+    o.max_steps = 3;
+    geo_replanar_log log = {0};
+    geo_replanar_result res;
+    assert_int_equal(geo_move_vertex(p, 700, t, GEO_REPLANAR_LOCAL_EXP, &o,
+                                     NULL, &log, &res, NULL),
+                     0);
+    assert_false(res.converged);
+    assert_false(geo_replanar_result_valid(&res));
+    assert_int_equal(res.steps, 3);
+    assert_int_equal(log.n, 3);
+    geo_replanar_log_clear(&log);
+    geo_poly_free(p);
+}
+
+static void test_vertex_pushed_through_the_stone_is_invalid(void **state)
+{
+    (void)state;
+    geo_poly *p = tu_load_model("brilliant.truth.json");
+    assert_non_null(p);
+    /* the lowest vertex (the culet) pushed up through the table */
+    uint32_t low = 0;
+    for (uint32_t v = 1; v < p->nverts; v++)
+        if (p->verts[v][2] < p->verts[low][2])
+            low = v;
+    double lo[3], hi[3], t[3];
+    geo_poly_bbox(p, lo, hi);
+    memcpy(t, p->verts[low], sizeof t);
+    t[2] = hi[2] + 0.5 * (hi[2] - lo[2]);
+    geo_replanar_opts o;
+    geo_replanar_opts_default(&o, GEO_REPLANAR_SCALED);
+    o.count_selfint = true;
+    geo_replanar_log log = {0};
+    geo_replanar_result res;
+    assert_int_equal(geo_move_vertex(p, low, t, GEO_REPLANAR_SCALED, &o,
+                                     NULL, &log, &res, NULL),
+                     0);
+    assert_false(geo_replanar_result_valid(&res));
+    assert_true(res.nselfint > 0);
+    assert_true(res.first_selfint_step >= 0);
+    /* the log counts self-intersections from that step on */
+    assert_true(log.rows[res.first_selfint_step].nselfint > 0);
+    for (int64_t i = 0; i < res.first_selfint_step; i++)
+        assert_int_equal(log.rows[i].nselfint, 0);
+    geo_replanar_log_clear(&log);
+    geo_poly_free(p);
+}
+
+static int cancel_now(void *user, double fraction)
+{
+    (void)user;
+    return fraction >= 0; /* always */
+}
+
+static void test_cancel_stops_with_ecanceled(void **state)
+{
+    (void)state;
+    geo_poly *p = tu_load_model("brilliant.truth.json");
+    assert_non_null(p);
+    geo_poly *copy = geo_poly_copy(p);
+    double t[3];
+    move_target(p, 10, 0.1, t);
+    geo_ctx ctx = {.progress = cancel_now};
+    geo_replanar_result res;
+    geo_err err = {{0}};
+    assert_int_equal(geo_move_vertex(p, 10, t, GEO_REPLANAR_LOCAL_EXP, NULL,
+                                     &ctx, NULL, &res, &err),
+                     -ECANCELED);
+    assert_memory_equal(p->verts, copy->verts,
+                        p->nverts * sizeof p->verts[0]);
+    geo_poly_free(copy);
+    geo_poly_free(p);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_box_corner_move_converges_with_invariants),
+        cmocka_unit_test(
+            test_scan_move_converges_with_invariants_all_schedules),
+        cmocka_unit_test(
+            test_local_exp_log_doubles_k_and_halves_eps_per_round),
+        cmocka_unit_test(
+            test_global_exp_multiplies_k_each_step_and_keeps_s1_total),
+        cmocka_unit_test(test_active_region_run_matches_global_run),
+        cmocka_unit_test(
+            test_two_fixed_vertices_of_one_facet_stay_on_its_plane),
+        cmocka_unit_test(
+            test_three_noncoplanar_fixed_vertices_in_a_facet_rejected),
+        cmocka_unit_test(test_bad_input_rejected_naming_the_place),
+        cmocka_unit_test(test_budget_exhausted_reports_not_converged),
+        cmocka_unit_test(test_vertex_pushed_through_the_stone_is_invalid),
+        cmocka_unit_test(test_cancel_stops_with_ecanceled),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
