@@ -122,6 +122,27 @@ all-tests: all $(UNIT_BINS) $(TOOL_BINS)
 bench: all $(BENCH_BINS) $(TOOL_BINS)
 	@sh tests/bench/run.sh $(B)
 
+# libFuzzer targets (tests/fuzz/fuzz_*.c), built with clang apart from the
+# unit tests: make fuzz [FUZZ_SECONDS=60] runs each for FUZZ_SECONDS.
+FUZZ_SECONDS ?= 60
+FUZZ_CC      ?= clang
+FUZZ_DIR     := build/fuzz
+FUZZ_CFLAGS   = -std=c11 -D_GNU_SOURCE -g -O1 -fno-omit-frame-pointer \
+    -fsanitize=fuzzer-no-link,address,undefined \
+    -fno-sanitize-recover=undefined -Ilib -Iproto $(call pkg_cflags,$(PKG_PROTO))
+FUZZ_SRCS    := $(sort $(wildcard tests/fuzz/fuzz_*.c))
+FUZZ_BINS    := $(patsubst tests/fuzz/%.c,$(FUZZ_DIR)/%,$(FUZZ_SRCS))
+FUZZ_OBJS    := $(patsubst %.c,$(FUZZ_DIR)/obj/%.o,$(LIB_SRCS) $(PROTO_SRCS))
+$(FUZZ_DIR)/obj/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -MMD -MP -c $< -o $@
+$(FUZZ_DIR)/fuzz_%: tests/fuzz/fuzz_%.c $(FUZZ_OBJS)
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -fsanitize=fuzzer -o $@ $^ \
+	    $(call pkg_libs,$(PKG_PROTO)) -lm -lpthread
+fuzz: deps
+	@$(MAKE) --no-print-directory $(FUZZ_BINS)
+	@sh tests/fuzz/run.sh $(FUZZ_DIR) $(FUZZ_SECONDS)
+
 run: deps
 	@$(MAKE) --no-print-directory all
 	@mkdir -p var
