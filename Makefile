@@ -122,6 +122,18 @@ all-tests: all $(UNIT_BINS) $(TOOL_BINS)
 bench: all $(BENCH_BINS) $(TOOL_BINS)
 	@sh tests/bench/run.sh $(B)
 
+# fsp-mock, the mocked USB scanner harness of the tests (scanner/mock_*.c,
+# kept out of libfacetscan): a umockdev testbed playing FSP/1 devices.
+MOCK_SRCS := $(sort $(wildcard scanner/mock_*.c))
+FSP_MOCK  := $(B)/fsp-mock
+$(B)/obj/scanner/mock_%.o: scanner/mock_%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) $(call pkg_cflags,$(PKG_PROTO) $(PKG_MOCK)) -c $< -o $@
+$(FSP_MOCK): $(call obj,$(MOCK_SRCS)) $(LIBPROTO) $(LIBFACET)
+	$(CC) $(LDFLAGS) -o $@ $^ $(call pkg_libs,$(PKG_MOCK) $(PKG_PROTO)) \
+	    $(LDLIBS_BASE)
+all-tests: $(FSP_MOCK)
+
 # libFuzzer targets (tests/fuzz/fuzz_*.c), built with clang apart from the
 # unit tests: make fuzz [FUZZ_SECONDS=60] runs each for FUZZ_SECONDS.
 FUZZ_SECONDS ?= 60

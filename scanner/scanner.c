@@ -64,9 +64,15 @@ struct scan_conn {
     char usb_serial[PROTO_FSP_TEXT_MAX + 1];
 };
 
+/* A RESULT owed for a scan. While naming, on_scan_complete is running and
+ * the job id is not known yet; a RESULT that arrives meanwhile for a job
+ * nobody owes is taken to be this one's (a job may end before the
+ * callback that created it returns), and checked once the id is known.
+ * A scanner has at most one entry naming, since its callbacks never run
+ * concurrently. */
 typedef struct pending_result {
     char job[PROTO_FSP_TEXT_MAX + 1];
-    bool ready;
+    bool naming, ready;
     proto_fsp_result r;
 } pending_result;
 
@@ -215,7 +221,8 @@ static scan_known *known_find(scan_intake *in, const char *serial)
  * k is online and greeted. */
 static void deliver_results(scan_intake *in, scan_known *k)
 {
-    while (k->npend > 0 && k->pend[0].ready && k->conn) {
+    while (k->npend > 0 && k->pend[0].ready && !k->pend[0].naming &&
+           k->conn) {
         scan_conn *c = k->conn;
         int r = -ENODEV;
         pthread_mutex_lock(&c->smu);
@@ -341,25 +348,43 @@ static void deliver(scan_conn *c, conn_event *e)
         char job[PROTO_FSP_TEXT_MAX + 1] = "";
         proto_format fmt = e->format == PROTO_FSP_MODEL_FMB1 ? PROTO_FMT_FMB1
                                                              : PROTO_FMT_JSON;
+        pthread_mutex_lock(&in->mu);
+        if (k->npend == PENDING_MAX) {
+            notice(in, serial, "RESULT of job %s dropped: %d owed",
+                   k->pend[0].job, PENDING_MAX);
+            k->npend--;
+            memmove(k->pend, k->pend + 1, k->npend * sizeof *k->pend);
+        }
+        memset(&k->pend[k->npend], 0, sizeof k->pend[0]);
+        k->pend[k->npend++].naming = true;
+        pthread_mutex_unlock(&in->mu);
         int r = in->cb.on_scan_complete
                     ? in->cb.on_scan_complete(in->cb.user, serial, e->bytes,
                                               e->len, fmt, job, sizeof job)
                     : -ENOTSUP;
         job[sizeof job - 1] = '\0';
-        if (r == 0 && job[0]) {
-            pthread_mutex_lock(&in->mu);
-            snprintf(k->last_job, sizeof k->last_job, "%s", job);
-            if (k->npend == PENDING_MAX) {
-                notice(in, serial, "RESULT of job %s dropped: %d owed",
-                       k->pend[0].job, PENDING_MAX);
+        pthread_mutex_lock(&in->mu);
+        size_t i = 0;
+        while (i < k->npend && !k->pend[i].naming)
+            i++;
+        if (i < k->npend) {
+            pending_result *p = &k->pend[i];
+            if (r == 0 && job[0]) {
+                snprintf(k->last_job, sizeof k->last_job, "%s", job);
+                snprintf(p->job, sizeof p->job, "%s", job);
+                p->naming = false;
+                if (p->ready && strcmp(p->r.job, job) != 0) {
+                    notice(in, serial, "RESULT of unknown job %s dropped",
+                           p->r.job);
+                    p->ready = false;
+                }
+            } else {
                 k->npend--;
-                memmove(k->pend, k->pend + 1, k->npend * sizeof *k->pend);
+                memmove(p, p + 1, (k->npend - i) * sizeof *p);
             }
-            pending_result *p = &k->pend[k->npend++];
-            memset(p, 0, sizeof *p);
-            snprintf(p->job, sizeof p->job, "%s", job);
-            pthread_mutex_unlock(&in->mu);
+            deliver_results(in, k);
         }
+        pthread_mutex_unlock(&in->mu);
         break;
     }
     case EV_DROPPED:
@@ -769,12 +794,19 @@ int scan_send_result(scan_intake *in, const char *serial,
     pthread_mutex_lock(&in->mu);
     scan_known *k = known_find(in, serial);
     int rc = -ENOENT;
-    for (size_t i = 0; k && i < k->npend; i++) {
-        if (!k->pend[i].ready && strcmp(k->pend[i].job, r->job) == 0) {
+    for (size_t i = 0; k && i < k->npend && rc < 0; i++) {
+        if (!k->pend[i].naming && !k->pend[i].ready &&
+            strcmp(k->pend[i].job, r->job) == 0) {
             k->pend[i].r = *r;
             k->pend[i].ready = true;
             rc = 0;
-            break;
+        }
+    }
+    for (size_t i = 0; k && i < k->npend && rc < 0; i++) {
+        if (k->pend[i].naming && !k->pend[i].ready) {
+            k->pend[i].r = *r;
+            k->pend[i].ready = true;
+            rc = 0;
         }
     }
     if (rc == 0)
