@@ -32,7 +32,11 @@ ok() {
 cleanup() {
     exec 7>&- 2>/dev/null
     mock_stop
-    rm -rf "$MOCK_DIR"
+    if [ "$failed" -ne 0 ] && [ -n "${FACET_KEEP_LOGS:-}" ]; then
+        echo "# logs kept in $MOCK_DIR"
+    else
+        rm -rf "$MOCK_DIR"
+    fi
 }
 trap cleanup EXIT
 
@@ -49,6 +53,9 @@ watch_start() {
 }
 watch_cmd() { echo "$*" >&7; }
 same_as() { cmp -s "$MOCK_DIR/$1.model" "$2"; }
+# acked SERIAL N: the device has seen its Nth SCAN_DONE acknowledged (the
+# host reports a scan before its ACK reaches the device)
+acked() { wait_count "$MOCK_DIR/mock.log" "^event $1 done-acked" "$2" 20; }
 job_of() { # the job of the Nth scan line of SERIAL
     grep -E "^scan $1 " "$WATCH" | sed -n "${2}p" | sed 's/.*job=\([^ ]*\).*/\1/'
 }
@@ -64,8 +71,8 @@ mock_cmd plug bulk SN-B1 >/dev/null
 wait_line "$WATCH" '^device SN-B1 kind=bulk path=usb:001/' 10
 ok $? "a bulk scanner that appears is opened, greeted and registered"
 
-mock_cmd model SN-B1 "$MODEL" >/dev/null && mock_cmd scan SN-B1 >/dev/null
-wait_line "$WATCH" '^scan SN-B1 ' 10 &&
+mock_cmd model SN-B1 "$MODEL" >/dev/null && mock_cmd scan SN-B1 >/dev/null &&
+    wait_line "$WATCH" '^scan SN-B1 ' 10 && acked SN-B1 1 &&
     wait_line "$MOCK_DIR/mock.log" '^event SN-B1 result \{"job":"job-1"' 10 &&
     same_as job-1 "$MODEL"
 ok $? "a 400-contour scan over bulk arrives byte for byte, RESULT goes back"
@@ -73,14 +80,14 @@ ok $? "a 400-contour scan over bulk arrives byte for byte, RESULT goes back"
 mock_cmd plug hid SN-H1 >/dev/null
 wait_line "$WATCH" '^device SN-H1 kind=hid path=/dev/hidraw' 10 &&
     mock_cmd model SN-H1 "$MODEL" >/dev/null && mock_cmd scan SN-H1 >/dev/null &&
-    wait_line "$WATCH" '^scan SN-H1 ' 20
+    wait_line "$WATCH" '^scan SN-H1 ' 20 && acked SN-H1 1
 job=$(job_of SN-H1 1)
 same_as "$job" "$MODEL" &&
     wait_line "$MOCK_DIR/mock.log" "^event SN-H1 result \\{\"job\":\"$job\"" 10
 ok $? "the same scan over hidraw (64-byte reports) arrives byte for byte"
 
 mock_cmd corrupt SN-B1 model 3 >/dev/null && mock_cmd scan SN-B1 >/dev/null
-wait_count "$WATCH" '^scan SN-B1 ' 2 10
+wait_count "$WATCH" '^scan SN-B1 ' 2 10 && acked SN-B1 2
 job=$(job_of SN-B1 2)
 grep -qE '^event SN-B1 nak [0-9]+' "$MOCK_DIR/mock.log" && same_as "$job" "$MODEL"
 ok $? "a MODEL frame with a bad CRC is NAKed, sent again, the scan is whole"
@@ -101,14 +108,14 @@ ok $? "a scanner unplugged mid-scan loses only that partial scan"
 mock_cmd plug bulk SN-B1 >/dev/null
 wait_count "$WATCH" '^device SN-B1 ' 2 10 &&
     mock_cmd model SN-B1 "$SMALL" >/dev/null && mock_cmd scan SN-B1 >/dev/null &&
-    wait_count "$WATCH" '^scan SN-B1 ' 3 10
-same_as "$(job_of SN-B1 3)" "$SMALL"
+    wait_count "$WATCH" '^scan SN-B1 ' 3 10 && acked SN-B1 3 &&
+    same_as "$(job_of SN-B1 3)" "$SMALL"
 ok $? "a re-plugged scanner is greeted again and scans again"
 
-mock_cmd model SN-B1 "$MODEL" >/dev/null
-mock_cmd scan SN-B1 >/dev/null && mock_cmd scan SN-H1 >/dev/null
-wait_count "$WATCH" '^scan SN-B1 ' 4 20 && wait_count "$WATCH" '^scan SN-H1 ' 2 20 &&
-    same_as "$(job_of SN-B1 4)" "$MODEL" && same_as "$(job_of SN-H1 2)" "$MODEL"
+mock_cmd model SN-B1 "$MODEL" >/dev/null &&
+    mock_cmd scan SN-B1 >/dev/null && mock_cmd scan SN-H1 >/dev/null &&
+    wait_count "$WATCH" '^scan SN-B1 ' 4 20 && wait_count "$WATCH" '^scan SN-H1 ' 2 20 &&
+    acked SN-B1 4 && acked SN-H1 2 && same_as "$(job_of SN-B1 4)" "$MODEL" && same_as "$(job_of SN-H1 2)" "$MODEL"
 ok $? "two scanners (bulk and HID) scan at the same time"
 
 mock_cmd stall SN-B1 after 3 >/dev/null && mock_cmd scan SN-B1 >/dev/null
@@ -120,7 +127,7 @@ ok $? "a scanner silent mid-scan is given up after the timeout and sent ABORT"
 
 watch_cmd start SN-B1 1
 wait_line "$WATCH" '^ok start SN-B1' 10 && wait_count "$WATCH" '^scan SN-B1 ' 5 10 &&
-    same_as "$(job_of SN-B1 5)" "$MODEL"
+    acked SN-B1 5 && same_as "$(job_of SN-B1 5)" "$MODEL"
 ok $? "START_SCAN from the host starts a scan on the device"
 
 watch_cmd metrics
@@ -152,8 +159,8 @@ rm -f "$WATCH"
 watch_start manual
 mock_cmd plug bulk SN-R1 >/dev/null && mock_cmd model SN-R1 "$SMALL" >/dev/null
 wait_line "$WATCH" '^device SN-R1 ' 10 && mock_cmd scan SN-R1 >/dev/null &&
-    wait_count "$WATCH" '^scan SN-R1 ' 1 10 && mock_cmd scan SN-R1 >/dev/null &&
-    wait_count "$WATCH" '^scan SN-R1 ' 2 10
+    wait_count "$WATCH" '^scan SN-R1 ' 1 10 && acked SN-R1 1 &&
+    mock_cmd scan SN-R1 >/dev/null && wait_count "$WATCH" '^scan SN-R1 ' 2 10
 j1=$(job_of SN-R1 1)
 j2=$(job_of SN-R1 2)
 watch_cmd result SN-R1 "$j2"
