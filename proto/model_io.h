@@ -1,13 +1,21 @@
 /* model_io.h — reading and writing polyhedra in every supported format:
  * facet-model/1 JSON, the paper's text format (seed 000 §1.3, ".poly"),
- * OBJ, STL (ASCII and binary), PLY (ASCII and binary little-endian), ASE
- * (write only) and FMB1 (the scanner's binary model).
+ * OBJ, STL (ASCII and binary), PLY (ASCII and binary little- and
+ * big-endian on reading, binary little-endian and ASCII on writing), ASE
+ * (write only) and FMB1 (the scanner's binary model). Coordinates are
+ * millimetres; facets are listed counter-clockwise seen from outside.
  *
  * Every reader validates strictly and reports the first error with its
  * place ("facets[12].vertices[3]: index 9001 out of range (8000
- * vertices)", "line 17: expected 3 numbers"); limits (proto_limits) reject
- * oversized models before allocating for them. Readers never crash or
- * hang on any input bytes.
+ * vertices)", "line 17: ...", "byte 1234: ..."); limits (proto_limits)
+ * and the counts a header declares are checked against the input before
+ * anything is allocated for them. Readers never crash or hang on any
+ * input bytes. A returned model has valid indices, finite coordinates and
+ * finite planes (unit, or zero for a degenerate facet).
+ *
+ * Writers print doubles as the shortest decimal that reads back to the
+ * same double, so JSON, .poly, PLY (double), FMB1 and ASCII STL round
+ * trips keep every coordinate bit for bit; binary STL holds float32.
  *
  * Ownership: a returned geo_poly belongs to the caller (geo_poly_free);
  * *ret_buf from the writers is malloc'd for the caller to free.
@@ -55,15 +63,46 @@ proto_format proto_format_from_name(const char *name);
 const char *proto_format_name(proto_format fmt);
 const char *proto_format_mime(proto_format fmt);
 
+/* What a reader noticed without failing. Formats that carry planes
+ * (facet-model/1, .poly, FMB1) have each given plane normalised and kept;
+ * a given plane "mismatches" its facet when a vertex lies farther from it
+ * than geo_poly_eps (poly.h), when its normal points against the vertex
+ * order (Newell vector), or when its normal is zero (the plane is then
+ * recomputed by least squares). Other formats give no planes: every plane
+ * is computed and nothing is counted. */
+typedef struct proto_read_report {
+    uint32_t planes_given;     /* facets whose plane came from the input */
+    uint32_t plane_mismatches; /* of those, how many mismatch */
+    uint32_t worst_facet;      /* facet of worst_deviation; UINT32_MAX
+                                  when every vertex lies exactly on its
+                                  given plane (or none was given) */
+    double worst_deviation;    /* mm, largest vertex distance from a given
+                                  plane over the whole model */
+    char first[256];           /* the first mismatch, naming its place
+                                  ("facets[3].plane: ..."), "" if none */
+} proto_read_report;
+
 /* Parses a model of format fmt from len bytes. lim NULL means defaults.
  * Returns NULL with err set on any error (or out-of-memory). */
 geo_poly *proto_model_read_mem(const void *data, size_t len, proto_format fmt,
                                const proto_limits *lim, geo_err *err);
 
+/* As proto_model_read_mem, and fills *ret_report (may be NULL) when a
+ * model is returned; on error *ret_report is left untouched. */
+geo_poly *proto_model_read_mem_ex(const void *data, size_t len,
+                                  proto_format fmt, const proto_limits *lim,
+                                  proto_read_report *ret_report, geo_err *err);
+
 /* Reads a file; fmt PROTO_FMT_UNKNOWN picks the format by extension.
  * Errors are prefixed with the path. */
 geo_poly *proto_model_read_file(const char *path, proto_format fmt,
                                 const proto_limits *lim, geo_err *err);
+
+/* As proto_model_read_file, with a report as in proto_model_read_mem_ex. */
+geo_poly *proto_model_read_file_ex(const char *path, proto_format fmt,
+                                   const proto_limits *lim,
+                                   proto_read_report *ret_report,
+                                   geo_err *err);
 
 /* Serialises p in format fmt into a malloc'd buffer. 0, or a negative
  * errno with err set (-EINVAL for a format that cannot be written). */
@@ -77,9 +116,16 @@ int proto_model_write_file(const geo_poly *p, const char *path,
 
 /* facet-model/1 from an already parsed JSON value (the daemon embeds a
  * model in a job body). path_prefix names the place in error messages
- * (e.g. "model"), may be NULL. Returns NULL with err set. */
+ * (e.g. "model" gives "model.facets[3].vertices[1]: ..."), may be NULL.
+ * Returns NULL with err set. root is only read (no reference taken). */
 geo_poly *proto_model_from_json(const json_t *root, const proto_limits *lim,
                                 const char *path_prefix, geo_err *err);
+
+/* As proto_model_from_json, with a report as in proto_model_read_mem_ex. */
+geo_poly *proto_model_from_json_ex(const json_t *root, const proto_limits *lim,
+                                   const char *path_prefix,
+                                   proto_read_report *ret_report,
+                                   geo_err *err);
 
 /* facet-model/1 as a new JSON value (planes always written), or NULL on
  * out-of-memory. */
