@@ -64,7 +64,7 @@ if [ ! -x "$B/fsp-mock" ] || [ ! -x "$B/tools/scan_watch" ]; then
     echo "1..0 # SKIP $B/fsp-mock or $B/tools/scan_watch not built"
     exit 0
 fi
-echo "1..14"
+echo "1..15"
 watch_start auto
 
 mock_cmd plug bulk SN-B1 >/dev/null
@@ -130,12 +130,24 @@ wait_line "$WATCH" '^ok start SN-B1' 10 && wait_count "$WATCH" '^scan SN-B1 ' 5 
     acked SN-B1 5 && same_as "$(job_of SN-B1 5)" "$MODEL"
 ok $? "START_SCAN from the host starts a scan on the device"
 
+FMB=$MOCK_DIR/k400.fmb
+"$B/facet" convert "$MODEL" "$FMB" 2>/dev/null &&
+    mock_cmd model SN-B1 "$FMB" fmb1 >/dev/null && mock_cmd scan SN-B1 >/dev/null &&
+    wait_count "$WATCH" '^scan SN-B1 ' 6 10 && acked SN-B1 6 &&
+    same_as "$(job_of SN-B1 6)" "$FMB"
+r=$?
+json_model=$(grep -E '^scan SN-B1 ' "$WATCH" | sed -n 1p | sed 's/.*model=//')
+fmb_model=$(grep -E '^scan SN-B1 ' "$WATCH" | sed -n 6p | sed 's/.*model=//')
+[ $r -eq 0 ] && grep -E '^scan SN-B1 ' "$WATCH" | sed -n 6p | grep -q 'format=fmb1' &&
+    [ "$fmb_model" = "$json_model" ] && [ "$fmb_model" != invalid ]
+ok $? "an FMB1 scan arrives and parses to the same polyhedron ($fmb_model)"
+
 watch_cmd metrics
 wait_line "$WATCH" '^metrics ' 10
 m=$(grep '^metrics ' "$WATCH" | tail -n 1)
 get() { echo "$m" | sed "s/.* $1=\([0-9]*\).*/\1/"; }
 [ "$(get crc_errors)" -ge 1 ] && [ "$(get naks_sent)" -ge 4 ] &&
-    [ "$(get devices_connected)" -eq 2 ] && [ "$(get scans_completed)" -eq 7 ] &&
+    [ "$(get devices_connected)" -eq 2 ] && [ "$(get scans_completed)" -eq 8 ] &&
     [ "$(get scans_dropped)" -ge 3 ]
 ok $? "metrics count frames, CRC errors, NAKs, devices and scans ($m)"
 

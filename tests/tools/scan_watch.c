@@ -8,7 +8,8 @@
  *
  * Output: "started", "device SERIAL kind=... path=...", "gone SERIAL",
  * "progress SERIAL D/T", "scan SERIAL job=JOB bytes=N crc=HEX format=F
- * ms=T mbps=R", "notice SERIAL text", and the replies below. With --out
+ * ms=T mbps=R model=V/F" (vertices/facets as parsed, or "invalid"),
+ * "notice SERIAL text", and the replies below. With --out
  * every model is written to DIR/JOB.model. With --result auto (default)
  * a RESULT goes back as soon as the scan is complete.
  * Commands: "start SERIAL [MODE]", "result SERIAL JOB [STATE]", "list",
@@ -126,10 +127,18 @@ static int on_scan(void *u, const char *serial, const uint8_t *bytes,
             fclose(f);
         }
     }
-    say("scan %s job=%s bytes=%zu crc=%08x format=%s ms=%.1f mbps=%.2f",
+    /* what the daemon will do with it: parse it as a model */
+    geo_err perr;
+    geo_poly *p = proto_model_read_mem(bytes, len, fmt, NULL, &perr);
+    char parsed[64] = "invalid";
+    if (p)
+        snprintf(parsed, sizeof parsed, "%u/%u", p->nverts, p->nfacets);
+    geo_poly_free(p);
+    say("scan %s job=%s bytes=%zu crc=%08x format=%s ms=%.1f mbps=%.2f "
+        "model=%s",
         serial, job, len, proto_crc32(bytes, len),
         fmt == PROTO_FMT_FMB1 ? "fmb1" : "json", ms,
-        ms > 0 ? (double)len / 1e6 / (ms / 1e3) : 0.0);
+        ms > 0 ? (double)len / 1e6 / (ms / 1e3) : 0.0, parsed);
     if (auto_result) {
         pthread_mutex_lock(&mu);
         if (nqueue < 256) {
