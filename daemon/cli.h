@@ -33,5 +33,8 @@ bool cli_wants_help(int argc, char **argv);
 
 /* The commands; each lives in daemon/cmd_NAME.c. */
 int cmd_convert(int argc, char **argv);
+int cmd_inspect(int argc, char **argv);
+int cmd_orient(int argc, char **argv);
+int cmd_inside(int argc, char **argv);
 
 #endif

@@ -16,6 +16,9 @@ static int cmd_version(int argc, char **argv)
 static const cli_command commands[] = {
     {"version", "print the version", cmd_version},
     {"convert", "convert a model between file formats", cmd_convert},
+    {"inspect", "print a model's statistics and defects as JSON", cmd_inspect},
+    {"orient", "make a model's facets consistent and outward", cmd_orient},
+    {"inside", "classify points as inside, outside or on a model", cmd_inside},
 };
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
 

@@ -44,4 +44,11 @@ int geo_orient2d_proj(const double a[3], const double b[3], const double c[3],
  * +1 outside (the side the normal points to), −1 inside, 0 exactly on it. */
 int geo_plane_sign(const double plane[4], const double p[3]);
 
+/* Exact sign of n · (p − p0) for the given doubles (seed 003's point +
+ * normal form nfN): the differences p − p0 are formed exactly (two-term
+ * expansions), so no rounding of an offset d = −n·p0 enters the answer.
+ * +1 when p lies on the side n points to, −1 on the other side, 0 exactly
+ * on the plane through p0 perpendicular to n. n = 0 gives 0. */
+int geo_normal_sign(const double p0[3], const double n[3], const double p[3]);
+
 #endif
