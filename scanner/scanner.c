@@ -28,6 +28,7 @@ enum {
     OPEN_TRIES = 5,
     OPEN_RETRY_MS = 300,
     PENDING_MAX = 64,         /* RESULTs owed to one scanner */
+    KNOWN_MAX = 256,          /* scanners remembered (offline ones too) */
 };
 
 typedef enum ev_kind {
@@ -232,10 +233,9 @@ static void deliver_results(scan_intake *in, scan_known *k)
                 scan_session_flush(c->s, c->t, in->opt.io_timeout_ms);
         }
         pthread_mutex_unlock(&c->smu);
-        if (r == -EINVAL)
-            notice(in, k->info.serial, "RESULT of job %s does not serialise",
-                   k->pend[0].job);
-        else if (r < 0)
+        /* -EINVAL cannot be retried (scan_send_result checked it first);
+         * anything else is tried again when the scanner is next ready */
+        if (r < 0 && r != -EINVAL)
             return;
         k->npend--;
         memmove(k->pend, k->pend + 1, k->npend * sizeof *k->pend);
@@ -259,9 +259,26 @@ static void on_info_event(scan_conn *c, const proto_fsp_info *info)
         return;
     }
     if (!k) {
-        k = calloc(1, sizeof *k);
+        /* a device inventing serials must not grow the list without end:
+         * past KNOWN_MAX an offline scanner that is owed nothing goes */
+        size_t n = 0;
+        scan_known **victim = NULL;
+        for (scan_known **pp = &in->known; *pp; pp = &(*pp)->next) {
+            n++;
+            if (!(*pp)->conn && (*pp)->npend == 0)
+                victim = pp;
+        }
+        if (n >= KNOWN_MAX && victim) {
+            scan_known *v = *victim;
+            *victim = v->next;
+            free(v);
+            n--;
+        }
+        k = n < KNOWN_MAX ? calloc(1, sizeof *k) : NULL;
         if (!k) {
             pthread_mutex_unlock(&in->mu);
+            notice(in, info->serial, "%s: too many scanners; ignoring this one",
+                   c->addr.path);
             atomic_store(&c->leave, true);
             return;
         }
@@ -348,10 +365,11 @@ static void deliver(scan_conn *c, conn_event *e)
         char job[PROTO_FSP_TEXT_MAX + 1] = "";
         proto_format fmt = e->format == PROTO_FSP_MODEL_FMB1 ? PROTO_FMT_FMB1
                                                              : PROTO_FMT_JSON;
+        char lost[PROTO_FSP_TEXT_MAX + 1] = "";
+        char unknown[PROTO_FSP_TEXT_MAX + 1] = "";
         pthread_mutex_lock(&in->mu);
         if (k->npend == PENDING_MAX) {
-            notice(in, serial, "RESULT of job %s dropped: %d owed",
-                   k->pend[0].job, PENDING_MAX);
+            snprintf(lost, sizeof lost, "%s", k->pend[0].job);
             k->npend--;
             memmove(k->pend, k->pend + 1, k->npend * sizeof *k->pend);
         }
@@ -374,8 +392,7 @@ static void deliver(scan_conn *c, conn_event *e)
                 snprintf(p->job, sizeof p->job, "%s", job);
                 p->naming = false;
                 if (p->ready && strcmp(p->r.job, job) != 0) {
-                    notice(in, serial, "RESULT of unknown job %s dropped",
-                           p->r.job);
+                    snprintf(unknown, sizeof unknown, "%s", p->r.job);
                     p->ready = false;
                 }
             } else {
@@ -385,6 +402,12 @@ static void deliver(scan_conn *c, conn_event *e)
             deliver_results(in, k);
         }
         pthread_mutex_unlock(&in->mu);
+        /* notices only without in->mu: on_notice may call back in */
+        if (lost[0])
+            notice(in, serial, "RESULT of job %s dropped: %d owed", lost,
+                   PENDING_MAX);
+        if (unknown[0])
+            notice(in, serial, "RESULT of unknown job %s dropped", unknown);
         break;
     }
     case EV_DROPPED:
@@ -524,24 +547,25 @@ static void *conn_main(void *arg)
     c->s = NULL;
     c->t = NULL;
     pthread_mutex_unlock(&c->smu);
+    /* from here on k may be forgotten (KNOWN_MAX) once in->mu is left */
     scan_known *k = c->known;
+    c->known = NULL;
     char serial[PROTO_FSP_TEXT_MAX + 1] = "";
-    if (k) {
+    if (k && k->conn == c) {
         snprintf(serial, sizeof serial, "%s", k->info.serial);
-        if (k->conn == c) {
-            k->conn = NULL;
-            k->state = SCAN_STATE_OFFLINE;
-            k->pdone = k->ptotal = 0;
-        }
+        k->conn = NULL;
+        k->state = SCAN_STATE_OFFLINE;
+        k->pdone = k->ptotal = 0;
         k->dropped += partial;
     }
     pthread_mutex_unlock(&in->mu);
     t->ops->close(t);
     scan_session_free(s);
     deliver_all(c);
-    if (k && !atomic_load(&in->stop)) {
+    if (serial[0] && !atomic_load(&in->stop)) {
         if (partial)
-            notice(in, serial, "unplugged during a scan: partial scan dropped");
+            notice(in, serial,
+                   "unplugged during a scan: partial scan dropped");
         if (in->cb.on_device_gone)
             in->cb.on_device_gone(in->cb.user, serial);
     }
@@ -565,6 +589,10 @@ static bool same_addr(const scan_devaddr *a, const scan_devaddr *b)
 
 void scan_conn_arrive(scan_intake *in, const scan_devaddr *addr)
 {
+    /* hotplug events handled while scan_intake_stop waits for the
+     * connections must not start new ones */
+    if (atomic_load(&in->stop))
+        return;
     pthread_mutex_lock(&in->mu);
     for (scan_conn *c = in->conns; c; c = c->next) {
         if (same_addr(&c->addr, addr) && !atomic_load(&c->leave)) {
@@ -625,8 +653,6 @@ void scan_conn_reap(scan_intake *in)
         scan_conn *c = *pp;
         if (atomic_load(&c->finished)) {
             *pp = c->next;
-            if (c->known && c->known->conn == c)
-                c->known->conn = NULL;
             c->next = done;
             done = c;
         } else {
