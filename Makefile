@@ -160,6 +160,10 @@ run: deps
 	@mkdir -p var
 	@if [ -x $(FACETD) ]; then \
 	  echo "facetd on http://127.0.0.1:8080, store in ./var (Ctrl-C stops)"; \
+	  echo "submit a sample model (in another terminal):"; \
+	  echo "  (printf '{\"pipeline\":[\"inspect\"],\"model\":'; cat tests/data/models/brilliant.scan-k400.json; printf '}') |"; \
+	  echo "    curl -s -H 'Content-Type: application/json' --data-binary @- http://127.0.0.1:8080/v1/jobs"; \
+	  echo "  curl -s 'http://127.0.0.1:8080/v1/jobs/ID?wait=30'   # then /v1/jobs/ID/stats, /v1/jobs/ID/model?format=obj"; \
 	  exec $(FACETD) --listen 127.0.0.1:8080 --state-dir ./var; \
 	else $(FACET) --help; fi
 
@@ -167,8 +171,19 @@ install: all
 	install -d $(DESTDIR)$(PREFIX)/bin
 	install -m 0755 $(FACET) $(DESTDIR)$(PREFIX)/bin/facet
 	if [ -x $(FACETD) ]; then install -m 0755 $(FACETD) $(DESTDIR)$(PREFIX)/bin/facetd; fi
+	install -d $(DESTDIR)$(PREFIX)/lib/systemd/system $(DESTDIR)$(PREFIX)/lib/tmpfiles.d \
+	    $(DESTDIR)$(PREFIX)/lib/sysusers.d $(DESTDIR)$(PREFIX)/share/doc/facetd
+	sed -e 's|@bindir@|$(PREFIX)/bin|' -e 's|@docdir@|$(PREFIX)/share/doc/facetd|' \
+	    systemd/facetd.service.in > $(DESTDIR)$(PREFIX)/lib/systemd/system/facetd.service
+	install -m 0644 systemd/facetd.socket $(DESTDIR)$(PREFIX)/lib/systemd/system/facetd.socket
+	install -m 0644 systemd/facetd.tmpfiles $(DESTDIR)$(PREFIX)/lib/tmpfiles.d/facetd.conf
+	install -m 0644 systemd/facetd.sysusers $(DESTDIR)$(PREFIX)/lib/sysusers.d/facetd.conf
+	install -m 0644 systemd/facetd.conf.example README.md $(DESTDIR)$(PREFIX)/share/doc/facetd/
 
 clean:
 	rm -rf build
 
 -include $(shell find build -name '*.d' 2>/dev/null)
+
+# The OpenAPI document is embedded with .incbin (no -MMD entry for it).
+$(B)/obj/daemon/http_openapi.o: daemon/openapi.json

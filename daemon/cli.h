@@ -35,6 +35,7 @@ bool cli_wants_help(int argc, char **argv);
 int cmd_convert(int argc, char **argv);
 int cmd_inspect(int argc, char **argv);
 int cmd_orient(int argc, char **argv);
+int cmd_run(int argc, char **argv);
 int cmd_inside(int argc, char **argv);
 
 #endif

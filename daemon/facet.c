@@ -18,6 +18,7 @@ static const cli_command commands[] = {
     {"convert", "convert a model between file formats", cmd_convert},
     {"inspect", "print a model's statistics and defects as JSON", cmd_inspect},
     {"orient", "make a model's facets consistent and outward", cmd_orient},
+    {"run", "run a job pipeline on a model offline", cmd_run},
     {"inside", "classify points as inside, outside or on a model", cmd_inside},
 };
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };

@@ -1,0 +1,579 @@
+/* cfg.c — the key table, the INI reader with drop-ins, the flag parser and
+ * the value parsers behind cfg.h. Invariant: every key exists once, in
+ * keys[], with its default as text, so defaults, files, flags and --help
+ * all go through the same parser. */
+#include "cfg.h"
+
+#include <ctype.h>
+#include <dirent.h>
+#include <errno.h>
+#include <limits.h>
+#include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include "log.h"
+
+enum ktype { K_STR, K_BOOL, K_UINT, K_SIZE, K_DURATION, K_LEVEL };
+
+typedef struct key {
+    const char *section, *name, *flag;
+    enum ktype type;
+    size_t off, size;     /* field in cfg; size for strings */
+    uint64_t min, max;    /* numeric range */
+    bool reloadable;      /* SIGHUP can change it */
+    const char *def;      /* default, as text */
+    const char *help;
+} key;
+
+#define F(field) offsetof(cfg, field), sizeof(((cfg *)0)->field)
+#define KiB 1024ull
+#define MiB (1024ull * KiB)
+#define GiB (1024ull * MiB)
+#define SEC 1000ull
+
+static const key keys[] = {
+    {"Server", "Listen", "listen", K_STR, F(listen), 0, 0, false,
+     "127.0.0.1:8080", "HOST:PORT, [IPV6]:PORT or :PORT to listen on"},
+    {"Server", "ApiToken", "api-token", K_STR, F(api_token), 0, 0, true, "",
+     "bearer token every request must carry (Authorization: Bearer)"},
+    {"Server", "ApiTokenFile", "api-token-file", K_STR, F(api_token_file), 0,
+     0, true, "", "file holding the API token"},
+    {"Server", "AllowUnauthenticated", "allow-unauthenticated", K_BOOL,
+     F(allow_unauthenticated), 0, 1, true, "no",
+     "allow a non-loopback listener without an API token"},
+    {"Server", "HttpThreads", "http-threads", K_UINT, F(http_threads), 0, 64,
+     false, "0", "HTTP threads (0: one per CPU)"},
+    {"Server", "MaxConnections", "max-connections", K_UINT,
+     F(max_connections), 4, 1000000, false, "1024",
+     "concurrent HTTP connections"},
+    {"Server", "MaxBody", "max-body", K_SIZE, F(max_body), KiB, 64 * GiB,
+     true, "64M", "largest request body (413 above)"},
+    {"Server", "ConnectionTimeout", "connection-timeout", K_DURATION,
+     F(connection_timeout_ms), SEC, 3600 * SEC, false, "60s",
+     "idle connection timeout"},
+    {"Server", "ConnectionMemory", "connection-memory", K_SIZE,
+     F(connection_memory), 8 * KiB, 16 * MiB, false, "64K",
+     "memory per connection for headers"},
+    {"Server", "MaxWaiters", "max-waiters", K_UINT, F(max_waiters), 1,
+     1000000, true, "4096", "clients waiting on ?wait= or events (429 above)"},
+    {"Server", "MaxWait", "max-wait", K_DURATION, F(max_wait_ms), 0,
+     3600 * SEC, true, "60s", "longest ?wait="},
+    {"Server", "KeepAlive", "keep-alive", K_DURATION, F(keepalive_ms),
+     100, 3600 * SEC, true, "15s", "event stream keep-alive interval"},
+    {"Server", "InspectMaxFacets", "inspect-max-facets", K_UINT,
+     F(inspect_max_facets), 4, 100000000, true, "20000",
+     "largest model POST /v1/inspect takes"},
+    {"Jobs", "Workers", "workers", K_UINT, F(workers), 0, 256, false, "0",
+     "job workers (0: one per CPU)"},
+    {"Jobs", "QueueSize", "queue-size", K_UINT, F(queue_size), 1, 10000000,
+     true, "1000", "queued jobs before submissions get 503"},
+    {"Jobs", "JobTimeout", "job-timeout", K_DURATION, F(job_timeout_ms), SEC,
+     7 * 24 * 3600 * SEC, true, "10min", "wall time limit of one job"},
+    {"Jobs", "ShutdownTimeout", "shutdown-timeout", K_DURATION,
+     F(shutdown_timeout_ms), 0, 3600 * SEC, true, "30s",
+     "time running jobs get to finish on SIGTERM"},
+    {"Jobs", "Paused", "paused", K_BOOL, F(paused), 0, 1, true, "no",
+     "accept and keep jobs but start none (maintenance)"},
+    {"Store", "StateDirectory", "state-dir", K_STR, F(state_dir), 0, 0, false,
+     "/var/lib/facetd", "directory of the job store"},
+    {"Store", "RetentionAge", "retention-age", K_DURATION,
+     F(retention_age_ms), SEC, 100ull * 365 * 24 * 3600 * SEC, true, "7d",
+     "finished jobs older than this are deleted"},
+    {"Store", "RetentionBytes", "retention-bytes", K_SIZE,
+     F(retention_bytes), MiB, 1ull << 50, true, "1G",
+     "finished jobs beyond this total size are deleted, oldest first"},
+    {"Log", "LogLevel", "log-level", K_LEVEL, F(log_level), 0, 0, true,
+     "info", "err, warning, notice, info or debug"},
+};
+enum { NKEYS = sizeof keys / sizeof keys[0] };
+
+static char *trim(char *s)
+{
+    while (isspace((unsigned char)*s))
+        s++;
+    size_t n = strlen(s);
+    while (n && isspace((unsigned char)s[n - 1]))
+        s[--n] = '\0';
+    return s;
+}
+
+static int parse_u64(const char *s, uint64_t *ret, const char **ret_end)
+{
+    if (!isdigit((unsigned char)*s))
+        return -EINVAL;
+    errno = 0;
+    char *end;
+    unsigned long long v = strtoull(s, &end, 10);
+    if (errno == ERANGE)
+        return -ERANGE;
+    *ret = v;
+    *ret_end = end;
+    return 0;
+}
+
+static int mul_ok(uint64_t v, uint64_t m, uint64_t *ret)
+{
+    if (m && v > UINT64_MAX / m)
+        return -ERANGE;
+    *ret = v * m;
+    return 0;
+}
+
+static int parse_size(const char *s, uint64_t *ret)
+{
+    uint64_t v;
+    const char *end;
+    if (parse_u64(s, &v, &end) < 0)
+        return -EINVAL;
+    uint64_t m = 1;
+    if (*end) {
+        switch (toupper((unsigned char)*end)) {
+        case 'K': m = KiB; break;
+        case 'M': m = MiB; break;
+        case 'G': m = GiB; break;
+        case 'T': m = 1024 * GiB; break;
+        default: return -EINVAL;
+        }
+        end++;
+        if (toupper((unsigned char)*end) == 'I')
+            end++;
+        if (toupper((unsigned char)*end) == 'B')
+            end++;
+        if (*end)
+            return -EINVAL;
+    }
+    return mul_ok(v, m, ret);
+}
+
+static int parse_duration(const char *s, uint64_t *ret_ms)
+{
+    uint64_t v;
+    const char *end;
+    if (parse_u64(s, &v, &end) < 0)
+        return -EINVAL;
+    static const struct { const char *unit; uint64_t ms; } units[] = {
+        {"", SEC},   {"ms", 1},  {"s", SEC}, {"sec", SEC},
+        {"min", 60 * SEC}, {"m", 60 * SEC}, {"h", 3600 * SEC},
+        {"d", 86400 * SEC},
+    };
+    for (size_t i = 0; i < sizeof units / sizeof units[0]; i++)
+        if (strcmp(end, units[i].unit) == 0)
+            return mul_ok(v, units[i].ms, ret_ms);
+    return -EINVAL;
+}
+
+static int parse_bool(const char *s, bool *ret)
+{
+    static const char *const yes[] = {"yes", "true", "on", "1"};
+    static const char *const no[] = {"no", "false", "off", "0"};
+    for (int i = 0; i < 4; i++) {
+        if (strcasecmp(s, yes[i]) == 0)
+            return *ret = true, 0;
+        if (strcasecmp(s, no[i]) == 0)
+            return *ret = false, 0;
+    }
+    return -EINVAL;
+}
+
+static int set_value(cfg *c, const key *k, const char *value, geo_err *err)
+{
+    char *field = (char *)c + k->off;
+    uint64_t v = 0;
+    if (!*value)
+        value = k->def;
+    switch (k->type) {
+    case K_STR:
+        if (strlen(value) >= k->size)
+            return geo_err_set(err, -EINVAL, "%s: longer than %zu bytes",
+                               k->name, k->size - 1);
+        memcpy(field, value, strlen(value) + 1);
+        return 0;
+    case K_BOOL: {
+        bool b;
+        if (parse_bool(value, &b) < 0)
+            return geo_err_set(err, -EINVAL,
+                               "%s: expected yes or no, got '%s'", k->name,
+                               value);
+        memcpy(field, &b, sizeof b);
+        return 0;
+    }
+    case K_LEVEL: {
+        int lvl = log_level_from_name(value);
+        if (lvl < 0)
+            return geo_err_set(err, -EINVAL,
+                               "%s: expected err, warning, notice, info or "
+                               "debug, got '%s'", k->name, value);
+        memcpy(field, &lvl, sizeof lvl);
+        return 0;
+    }
+    case K_UINT: {
+        const char *end;
+        if (parse_u64(value, &v, &end) < 0 || *end)
+            return geo_err_set(err, -EINVAL,
+                               "%s: expected a whole number, got '%s'",
+                               k->name, value);
+        break;
+    }
+    case K_SIZE:
+        if (parse_size(value, &v) < 0)
+            return geo_err_set(err, -EINVAL,
+                               "%s: expected a size such as 64M, got '%s'",
+                               k->name, value);
+        break;
+    case K_DURATION:
+        if (parse_duration(value, &v) < 0)
+            return geo_err_set(err, -EINVAL,
+                               "%s: expected a duration such as 30s or 10min, "
+                               "got '%s'", k->name, value);
+        break;
+    }
+    if (v < k->min || v > k->max)
+        return geo_err_set(err, -EINVAL,
+                           "%s: %s out of range [%llu, %llu]%s", k->name,
+                           value, (unsigned long long)k->min,
+                           (unsigned long long)k->max,
+                           k->type == K_DURATION ? " ms" : "");
+    if (k->type == K_UINT) {
+        unsigned u = (unsigned)v;
+        memcpy(field, &u, sizeof u);
+    } else {
+        memcpy(field, &v, sizeof v);
+    }
+    return 0;
+}
+
+void cfg_defaults(cfg *c)
+{
+    memset(c, 0, sizeof *c);
+    for (int i = 0; i < NKEYS; i++) {
+        int r = set_value(c, &keys[i], keys[i].def, NULL);
+        (void)r;
+    }
+}
+
+static const key *find_key(const char *section, const char *name)
+{
+    for (int i = 0; i < NKEYS; i++)
+        if (strcasecmp(keys[i].section, section) == 0 &&
+            strcasecmp(keys[i].name, name) == 0)
+            return &keys[i];
+    return NULL;
+}
+
+static bool known_section(const char *section)
+{
+    for (int i = 0; i < NKEYS; i++)
+        if (strcasecmp(keys[i].section, section) == 0)
+            return true;
+    return false;
+}
+
+int cfg_set(cfg *c, const char *section, const char *name, const char *value,
+            geo_err *err)
+{
+    const key *k = find_key(section, name);
+    if (!k)
+        return geo_err_set(err, -EINVAL, "unknown key %s in [%s]", name,
+                           section);
+    return set_value(c, k, value, err);
+}
+
+/* Reads one INI file into c. A missing file is -ENOENT (err set). */
+static int parse_file(cfg *c, const char *path, geo_err *err)
+{
+    FILE *f = fopen(path, "re");
+    if (!f)
+        return geo_err_set(err, -errno, "%s: %s", path, strerror(errno));
+    char line[4096], section[64] = "";
+    int lineno = 0, r = 0;
+    while (fgets(line, sizeof line, f)) {
+        lineno++;
+        if (!strchr(line, '\n') && !feof(f)) {
+            r = geo_err_set(err, -EINVAL, "%s:%d: line too long", path,
+                            lineno);
+            break;
+        }
+        char *s = trim(line);
+        if (!*s || *s == '#' || *s == ';')
+            continue;
+        if (*s == '[') {
+            char *close = strchr(s, ']');
+            if (!close || close[1] || close - s - 1 >= (long)sizeof section) {
+                r = geo_err_set(err, -EINVAL, "%s:%d: malformed section %s",
+                                path, lineno, s);
+                break;
+            }
+            *close = '\0';
+            snprintf(section, sizeof section, "%s", trim(s + 1));
+            if (!known_section(section)) {
+                r = geo_err_set(err, -EINVAL, "%s:%d: unknown section [%s]",
+                                path, lineno, section);
+                break;
+            }
+            continue;
+        }
+        char *eq = strchr(s, '=');
+        if (!eq) {
+            r = geo_err_set(err, -EINVAL, "%s:%d: expected Key=Value",
+                            path, lineno);
+            break;
+        }
+        *eq = '\0';
+        char *name = trim(s), *value = trim(eq + 1);
+        if (!*section) {
+            r = geo_err_set(err, -EINVAL, "%s:%d: %s outside a [Section]",
+                            path, lineno, name);
+            break;
+        }
+        r = cfg_set(c, section, name, value, err);
+        if (r < 0) {
+            char where[600];
+            snprintf(where, sizeof where, "%s:%d", path, lineno);
+            geo_err_prefix(err, where);
+            break;
+        }
+    }
+    if (!r && ferror(f))
+        r = geo_err_set(err, -EIO, "%s: read error", path);
+    fclose(f);
+    return r;
+}
+
+static int by_name(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+/* Applies PATH.d/ *.conf in lexical order; a missing directory is fine. */
+static int parse_dropins(cfg *c, const char *path, geo_err *err)
+{
+    char dir[PATH_MAX];
+    if ((size_t)snprintf(dir, sizeof dir, "%s.d", path) >= sizeof dir)
+        return geo_err_set(err, -EINVAL, "%s: path too long", path);
+    DIR *d = opendir(dir);
+    if (!d)
+        return errno == ENOENT || errno == ENOTDIR
+                   ? 0
+                   : geo_err_set(err, -errno, "%s: %s", dir, strerror(errno));
+    char **names = NULL;
+    size_t n = 0, cap = 0;
+    int r = 0;
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        size_t l = strlen(e->d_name);
+        if (e->d_name[0] == '.' || l < 6 ||
+            strcmp(e->d_name + l - 5, ".conf") != 0)
+            continue;
+        if (n == cap) {
+            cap = cap ? 2 * cap : 16;
+            char **nn = realloc(names, cap * sizeof *nn);
+            if (!nn) {
+                r = -ENOMEM;
+                break;
+            }
+            names = nn;
+        }
+        if (!(names[n] = strdup(e->d_name))) {
+            r = -ENOMEM;
+            break;
+        }
+        n++;
+    }
+    closedir(d);
+    if (r == 0 && n)
+        qsort(names, n, sizeof *names, by_name);
+    for (size_t i = 0; r == 0 && i < n; i++) {
+        char p[PATH_MAX];
+        if ((size_t)snprintf(p, sizeof p, "%s/%s", dir, names[i]) >= sizeof p)
+            r = geo_err_set(err, -EINVAL, "%s/%s: path too long", dir,
+                            names[i]);
+        else
+            r = parse_file(c, p, err);
+    }
+    for (size_t i = 0; i < n; i++)
+        free(names[i]);
+    free(names);
+    if (r == -ENOMEM)
+        geo_err_set(err, r, "out of memory reading %s", dir);
+    return r;
+}
+
+static const key *find_flag(const char *flag, size_t len)
+{
+    for (int i = 0; i < NKEYS; i++)
+        if (strlen(keys[i].flag) == len && strncmp(keys[i].flag, flag, len) == 0)
+            return &keys[i];
+    return NULL;
+}
+
+bool cfg_wants_help(int argc, char **argv)
+{
+    for (int i = 0; i < argc; i++)
+        if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0)
+            return true;
+    return false;
+}
+
+/* Walks argv; for each option calls back with (flag key or NULL for the
+ * config path, value). Returns 0 or -EINVAL with err. */
+static int walk_args(int argc, char **argv, cfg *c, const char **ret_path,
+                     geo_err *err)
+{
+    for (int i = 0; i < argc; i++) {
+        const char *a = argv[i];
+        if (strcmp(a, "-c") == 0 || strcmp(a, "--config") == 0) {
+            if (i + 1 >= argc)
+                return geo_err_set(err, -EINVAL, "%s needs a path", a);
+            *ret_path = argv[++i];
+            continue;
+        }
+        if (strncmp(a, "--config=", 9) == 0) {
+            *ret_path = a + 9;
+            continue;
+        }
+        if (strncmp(a, "--", 2) != 0)
+            return geo_err_set(err, -EINVAL, "unexpected argument '%s'", a);
+        const char *name = a + 2, *eq = strchr(name, '=');
+        size_t len = eq ? (size_t)(eq - name) : strlen(name);
+        const key *k = find_flag(name, len);
+        if (!k)
+            return geo_err_set(err, -EINVAL, "unknown option --%.*s",
+                               (int)len, name);
+        const char *value;
+        if (eq)
+            value = eq + 1;
+        else if (k->type == K_BOOL)
+            value = "yes";
+        else if (i + 1 < argc)
+            value = argv[++i];
+        else
+            return geo_err_set(err, -EINVAL, "--%s needs a value", k->flag);
+        if (!c)
+            continue;
+        int r = set_value(c, k, value, err);
+        if (r < 0) {
+            char where[80];
+            snprintf(where, sizeof where, "--%s", k->flag);
+            geo_err_prefix(err, where);
+            return r;
+        }
+    }
+    return 0;
+}
+
+int cfg_load(cfg *ret, int argc, char **argv, geo_err *err)
+{
+    cfg c;
+    cfg_defaults(&c);
+    const char *path = NULL;
+    int r = walk_args(argc, argv, NULL, &path, err);
+    if (r < 0)
+        return r;
+    r = parse_file(&c, path ? path : CFG_DEFAULT_PATH, err);
+    if (r == -ENOENT && !path)
+        r = 0;
+    if (r < 0)
+        return r;
+    r = parse_dropins(&c, path ? path : CFG_DEFAULT_PATH, err);
+    if (r < 0)
+        return r;
+    r = walk_args(argc, argv, &c, &path, err);
+    if (r < 0)
+        return r;
+    r = cfg_finish(&c, err);
+    if (r < 0)
+        return r;
+    *ret = c;
+    return 0;
+}
+
+int cfg_finish(cfg *c, geo_err *err)
+{
+    if (!c->state_dir[0])
+        return geo_err_set(err, -EINVAL, "StateDirectory: must not be empty");
+    if (c->api_token_file[0]) {
+        FILE *f = fopen(c->api_token_file, "re");
+        if (!f)
+            return geo_err_set(err, -EINVAL, "ApiTokenFile: %s: %s",
+                               c->api_token_file, strerror(errno));
+        char buf[sizeof c->api_token + 2];
+        size_t n = fread(buf, 1, sizeof buf - 1, f);
+        fclose(f);
+        if (n >= sizeof c->api_token)
+            return geo_err_set(err, -EINVAL, "ApiTokenFile: %s: token longer "
+                               "than %zu bytes", c->api_token_file,
+                               sizeof c->api_token - 1);
+        buf[n] = '\0';
+        char *t = trim(buf);
+        if (!*t)
+            return geo_err_set(err, -EINVAL, "ApiTokenFile: %s: empty",
+                               c->api_token_file);
+        memcpy(c->api_token, t, strlen(t) + 1);
+    }
+    for (const char *p = c->api_token; *p; p++)
+        if (!isgraph((unsigned char)*p))
+            return geo_err_set(err, -EINVAL,
+                               "ApiToken: only visible ASCII characters");
+    return 0;
+}
+
+void cfg_print_help(FILE *out, const char *prog)
+{
+    fprintf(out,
+            "usage: %s [-c PATH] [--KEY=VALUE ...]\n\n"
+            "facetd serves the facet job API over HTTP (see README).\n"
+            "Configuration: built-in defaults, then %s (or -c PATH),\n"
+            "then PATH.d/NAME.conf, then the flags below.\n\n"
+            "  -c, --config PATH         configuration file\n"
+            "  -h, --help                this help\n"
+            "      --version             print the version\n",
+            prog, CFG_DEFAULT_PATH);
+    const char *section = "";
+    for (int i = 0; i < NKEYS; i++) {
+        const key *k = &keys[i];
+        if (strcmp(section, k->section) != 0) {
+            section = k->section;
+            fprintf(out, "\n[%s]\n", section);
+        }
+        char flag[64];
+        snprintf(flag, sizeof flag, "--%s%s", k->flag,
+                 k->type == K_BOOL ? "" : "=V");
+        fprintf(out, "  %-26s %s=  %s (default: %s)%s\n", flag, k->name,
+                k->help, *k->def ? k->def : "none",
+                k->reloadable ? "" : " [restart]");
+    }
+    fprintf(out, "\nSizes take K, M, G, T suffixes; durations ms, s, min, h, "
+                 "d.\nSIGHUP reloads the configuration (keys marked "
+                 "[restart] need a restart).\n");
+}
+
+int cfg_restart_only_changes(const cfg *a, const cfg *b, char *buf,
+                             size_t size)
+{
+    int n = 0;
+    size_t used = 0;
+    if (size)
+        buf[0] = '\0';
+    for (int i = 0; i < NKEYS; i++) {
+        const key *k = &keys[i];
+        if (k->reloadable)
+            continue;
+        size_t len = k->type == K_STR ? strlen((const char *)a + k->off) + 1
+                     : k->type == K_UINT ? sizeof(unsigned)
+                     : k->type == K_BOOL ? sizeof(bool)
+                     : k->type == K_LEVEL ? sizeof(int)
+                                          : sizeof(uint64_t);
+        if (memcmp((const char *)a + k->off, (const char *)b + k->off, len) == 0)
+            continue;
+        n++;
+        if (used < size) {
+            int w = snprintf(buf + used, size - used, "%s%s.%s",
+                             used ? ", " : "", k->section, k->name);
+            if (w > 0)
+                used += (size_t)w;
+        }
+    }
+    return n;
+}

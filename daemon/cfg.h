@@ -1,0 +1,97 @@
+/* cfg.h — facetd's configuration: built-in defaults, then the INI file
+ * (/etc/facetd/facetd.conf or -c PATH), then its drop-ins (PATH.d/NAME.conf in
+ * lexical order), then command-line flags; a later source overrides an
+ * earlier one key by key.
+ *
+ * File syntax (like journald.conf): "[Section]" lines, "Key=Value" lines,
+ * blank lines and lines starting with '#' or ';' ignored, whitespace
+ * around keys and values trimmed. An empty value resets the key to its
+ * default. An unknown section or key, or a malformed value, is an error
+ * naming the file and line ("facetd.conf:12: Workers: expected a whole
+ * number"). Every key is also a flag (--workers=4 or --workers 4); the
+ * table in cfg.c is the one list of keys, and --help is printed from it.
+ *
+ * Value forms: sizes in bytes with an optional K, M, G or T suffix (powers
+ * of 1024); durations in seconds with an optional ms, s, min, h or d
+ * suffix; booleans yes/no, true/false, on/off, 1/0.
+ *
+ * Nothing here is thread-safe: the main thread loads a cfg and hands
+ * workers copies of the values they need. */
+#ifndef FACETD_CFG_H
+#define FACETD_CFG_H
+
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "ctx.h"
+
+#define CFG_DEFAULT_PATH "/etc/facetd/facetd.conf"
+
+typedef struct cfg {
+    /* [Server] */
+    char listen[128];             /* HOST:PORT, [V6]:PORT or :PORT; port 0
+                                     picks a free port (logged) */
+    char api_token[256];          /* bearer token; empty means none */
+    char api_token_file[512];     /* file holding the token (trimmed) */
+    bool allow_unauthenticated;   /* a non-loopback listener needs a token
+                                     unless this is set */
+    unsigned http_threads;        /* 0 = number of CPUs; max 64 */
+    unsigned max_connections;     /* concurrent connections, ≥ 4 */
+    uint64_t max_body;            /* request body bytes, ≥ 1 KiB */
+    uint64_t connection_timeout_ms; /* idle connection timeout, ≥ 1 s */
+    uint64_t connection_memory;   /* per-connection header memory, ≥ 8 KiB */
+    unsigned max_waiters;         /* suspended ?wait= and SSE clients */
+    uint64_t max_wait_ms;         /* cap on ?wait= */
+    uint64_t keepalive_ms;        /* SSE keep-alive comment interval */
+    unsigned inspect_max_facets;  /* POST /v1/inspect model size cap */
+    /* [Jobs] */
+    unsigned workers;             /* 0 = number of CPUs; max 256 */
+    unsigned queue_size;          /* queued jobs before 503, ≥ 1 */
+    uint64_t job_timeout_ms;      /* wall time limit of one job */
+    uint64_t shutdown_timeout_ms; /* SIGTERM: how long running jobs may
+                                     finish before they are requeued */
+    bool paused;                  /* accept and keep jobs, start none */
+    /* [Store] */
+    char state_dir[512];          /* directory of the job store */
+    uint64_t retention_age_ms;    /* finished jobs older than this go */
+    uint64_t retention_bytes;     /* finished jobs' total size cap */
+    /* [Log] */
+    int log_level;                /* syslog level, LOG_INFO by default */
+} cfg;
+
+/* Fills every field with its default. */
+void cfg_defaults(cfg *c);
+
+/* Builds a configuration from defaults, files and flags. argv are the
+ * daemon's arguments after the program name (argc of them); -c PATH /
+ * --config=PATH picks the file (default CFG_DEFAULT_PATH, which may be
+ * absent; an explicit PATH must exist). --help and --version are not
+ * handled here (the caller checks cfg_wants_help first). On success fills
+ * *ret and returns 0; on error returns -EINVAL (or -ENOMEM, -EIO) with err
+ * naming the file and line or the flag, and leaves *ret untouched. */
+int cfg_load(cfg *ret, int argc, char **argv, geo_err *err);
+
+/* Sets one key by its section and name (as in a file) from a string
+ * value; an empty value resets the default. 0 or -EINVAL with err. */
+int cfg_set(cfg *c, const char *section, const char *key, const char *value,
+            geo_err *err);
+
+/* Checks ranges and combinations (a token file that cannot be read, …)
+ * and reads api_token_file into api_token. 0 or -EINVAL with err. */
+int cfg_finish(cfg *c, geo_err *err);
+
+/* True when argv asks for --help / -h. */
+bool cfg_wants_help(int argc, char **argv);
+
+/* Prints the usage with every flag, its section/key, default and meaning. */
+void cfg_print_help(FILE *out, const char *prog);
+
+/* Writes the keys whose values differ between a and b and that a reload
+ * cannot change (listen address, state directory, threads, ...) as a
+ * comma-separated list of "Section.Key" into buf. Returns the number of
+ * such keys. */
+int cfg_restart_only_changes(const cfg *a, const cfg *b, char *buf,
+                             size_t size);
+
+#endif

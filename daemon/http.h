@@ -1,0 +1,135 @@
+/* http.h — what the files of the HTTP server share (not used outside
+ * http_*.c): the per-request state, the waiter hub that suspends and
+ * resumes connections, the reply helpers and the route handlers.
+ *
+ * Request lifetime: http_server.c allocates an http_req at a request's
+ * first callback, feeds it the body, and calls the route's handler once
+ * the body is complete — and again each time a suspended request is
+ * resumed. The handler queues exactly one response (through the helpers
+ * below) or suspends. MHD's completion callback records metrics and frees
+ * the http_req. */
+#ifndef FACETD_HTTP_H
+#define FACETD_HTTP_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include <jansson.h>
+#include <microhttpd.h>
+
+#include "http_server.h"
+#include "job.h"
+
+/* ---- waiter hub (http_wait.c) ----
+ * A waiter is a suspended connection waiting for a job to change, for a
+ * deadline, or for shutdown. Invariant: a waiter is in the hub exactly
+ * while its connection is suspended, and only the hub resumes it (under
+ * its lock, so a resume never precedes the suspend). */
+typedef struct http_waiter {
+    struct MHD_Connection *conn;
+    char id[JOB_ID_LEN + 1];
+    int64_t deadline;        /* monotonic ms */
+    bool progress;           /* progress-only changes wake it too */
+    bool in_hub;             /* under the hub lock */
+    struct http_waiter *next, *prev;
+} http_waiter;
+
+typedef struct http_hub http_hub;
+
+http_hub *http_hub_new(void);
+/* Resumes everyone and stops the timer; accepts NULL; returns NULL. */
+http_hub *http_hub_free(http_hub *h);
+/* Suspends w->conn until w->id changes, w->deadline passes or the hub
+ * closes. Must be called from the connection's access handler or content
+ * reader. 0 when suspended; -EAGAIN when limit waiters are already
+ * suspended; -ESHUTDOWN when the hub is closed (answer now). */
+int http_hub_suspend(http_hub *h, http_waiter *w, unsigned limit);
+void http_hub_notify(http_hub *h, const char *id, bool progress_only);
+/* Resumes everyone; later suspends fail with -ESHUTDOWN. */
+void http_hub_close(http_hub *h);
+unsigned http_hub_count(http_hub *h);
+
+/* ---- request state ---- */
+typedef enum http_method {
+    HTTP_GET = 1, HTTP_HEAD = 2, HTTP_POST = 4, HTTP_DELETE = 8,
+    HTTP_PUT = 16, HTTP_PATCH = 32, HTTP_OPTIONS = 64, HTTP_OTHER = 128,
+} http_method;
+
+typedef struct http_req {
+    struct http_server *srv;
+    http_env *env;
+    struct MHD_Connection *conn;
+    http_method method;
+    int route;               /* index into the route table, -1 unmatched */
+    char id[JOB_ID_LEN + 1]; /* {id} of the path, if any */
+    int64_t t0_us;           /* monotonic start */
+    unsigned status;         /* of the queued response */
+    uint64_t bytes_in, bytes_out;
+    bool has_body;           /* Content-Length > 0 or chunked */
+    bool admitted;           /* routed, authorised, preconditions met */
+    /* body */
+    char *body;
+    size_t len, cap;
+    bool too_large;
+    /* waiting */
+    http_waiter w;
+    bool waiting;            /* a wait was started (the handler resumes) */
+    int64_t seen_version;
+} http_req;
+
+struct http_server {
+    struct MHD_Daemon *d;
+    http_env *env;
+    http_hub *hub;
+    bool quiesced;
+    atomic_int active;       /* requests begun and not completed */
+};
+
+/* ---- replies (http_reply.c); each returns MHD's result ----
+ * headers: NULL or a NULL-terminated list of name, value pairs (copied).
+ * http_reply takes buf (malloc'd, freed by MHD) when take_buf, else buf
+ * must be static storage. */
+enum MHD_Result http_reply(http_req *r, unsigned status, const char *ctype,
+                           char *buf, size_t len, bool take_buf,
+                           const char *const *headers);
+/* body is stolen (decref'd). */
+enum MHD_Result http_reply_json(http_req *r, unsigned status, json_t *body,
+                                const char *const *headers);
+/* An RFC 9457 problem: type "urn:facetd:problem:SLUG", title, detail,
+ * and errors (stolen, may be NULL) as [{"path","message"}, ...]. */
+enum MHD_Result http_problem(http_req *r, unsigned status, const char *slug,
+                             const char *title, json_t *errors,
+                             const char *const *headers, const char *fmt, ...)
+    __attribute__((format(printf, 7, 8)));
+/* One {"path", "message"} entry split from a geo_err message of the form
+ * "a.b[3].c: what" (path "" when the message names no place). */
+json_t *http_error_entry(const char *msg);
+/* 304 when If-None-Match matches etag ("\"...\"" or W/"..."). */
+bool http_not_modified(http_req *r, const char *etag);
+/* Query parameter or header; NULL when absent. */
+const char *http_arg(http_req *r, const char *name);
+const char *http_header(http_req *r, const char *name);
+
+/* ---- handlers (http_jobs.c, http_events.c, http_ops.c) ---- */
+typedef enum MHD_Result (*http_handler)(http_req *r);
+enum MHD_Result http_post_job(http_req *r);
+enum MHD_Result http_get_job(http_req *r);
+enum MHD_Result http_delete_job(http_req *r);
+enum MHD_Result http_list_jobs(http_req *r);
+enum MHD_Result http_get_model(http_req *r);
+enum MHD_Result http_get_stats(http_req *r);
+enum MHD_Result http_job_events(http_req *r);
+enum MHD_Result http_post_inspect(http_req *r);
+enum MHD_Result http_livez(http_req *r);
+enum MHD_Result http_readyz(http_req *r);
+enum MHD_Result http_metrics(http_req *r);
+enum MHD_Result http_version(http_req *r);
+enum MHD_Result http_openapi(http_req *r);
+enum MHD_Result http_scanners(http_req *r);
+
+/* The embedded OpenAPI document (http_openapi.c): NUL-terminated, its
+ * length in *ret_len; static storage. */
+const char *http_openapi_doc(size_t *ret_len);
+
+#endif

@@ -1,0 +1,485 @@
+/* http_jobs.c — the job routes: submit, read (with ?wait= long-polls),
+ * list, cancel/delete, and the results (model in every format, stats).
+ *
+ * Status codes: 202 submitted (Location: /v1/jobs/{id}); 200 read; 304
+ * when If-None-Match matches the ETag; 400 malformed JSON (with line and
+ * column) or a bad query argument; 404 no such job; 409 no result (the
+ * job has not succeeded); 422 a request that parses but is invalid (every
+ * error listed with its place); 429 too many waiting clients; 503 queue
+ * full (Retry-After). */
+#include "http.h"
+
+#include <ctype.h>
+#include <stdarg.h>
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "job_submit.h"
+#include "log.h"
+#include "model_io.h"
+#include "runner.h"
+
+static enum MHD_Result store_failure(http_req *r, int code, const geo_err *e)
+{
+    if (code == -ENOENT)
+        return http_problem(r, 404, "job-not-found", "Not Found", NULL, NULL,
+                            "no job '%s'", r->id);
+    log_msg(LOG_ERR, r->id[0] ? r->id : NULL, "store: %s", e->msg);
+    return http_problem(r, 500, "store-error", "Internal Server Error", NULL,
+                        NULL, "the job store failed: %s", e->msg);
+}
+
+static enum MHD_Result reply_job(http_req *r, unsigned status, job_rec *j,
+                                 const char *const *headers, json_t *extra)
+{
+    json_t *o = job_to_json(j);
+    if (o && extra)
+        json_object_update(o, extra);
+    json_decref(extra);
+    return http_reply_json(r, status, o, headers);
+}
+
+static enum MHD_Result malformed(http_req *r, const json_error_t *je)
+{
+    json_t *errors = json_pack("[{s:s, s:s, s:i, s:i}]", "path", "",
+                               "message", je->text, "line",
+                               (json_int_t)je->line, "column",
+                               (json_int_t)je->column);
+    return http_problem(r, 400, "malformed-json", "Bad Request", errors, NULL,
+                        "line %d, column %d: %s", je->line, je->column,
+                        je->text);
+}
+
+static void add_error(json_t *errors, const char *path, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+static void add_error(json_t *errors, const char *path, const char *fmt, ...)
+{
+    char msg[512];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    json_array_append_new(errors,
+                          json_pack("{s:s, s:s}", "path", path, "message", msg));
+}
+
+/* "path: message" from a geo_err into errors. */
+static void add_geo_error(json_t *errors, const geo_err *e)
+{
+    json_t *entry = http_error_entry(e->msg);
+    if (entry)
+        json_array_append_new(errors, entry);
+}
+
+static bool valid_idem_key(const char *k)
+{
+    size_t n = strlen(k);
+    if (n == 0 || n > 255)
+        return false;
+    for (size_t i = 0; i < n; i++)
+        if (!isgraph((unsigned char)k[i]))
+            return false;
+    return true;
+}
+
+enum MHD_Result http_post_job(http_req *r)
+{
+    http_env *env = r->env;
+    const char *idem = http_header(r, "Idempotency-Key");
+    if (idem && !valid_idem_key(idem))
+        return http_problem(r, 400, "bad-idempotency-key", "Bad Request",
+                            NULL, NULL, "Idempotency-Key must be 1 to 255 "
+                            "visible ASCII characters");
+    json_error_t je;
+    json_t *root = json_loadb(r->body ? r->body : "", r->len,
+                              JSON_REJECT_DUPLICATES, &je);
+    if (!root)
+        return malformed(r, &je);
+    if (!json_is_object(root)) {
+        json_decref(root);
+        return http_problem(r, 422, "invalid-job", "Unprocessable Content",
+                            NULL, NULL, "the body must be a JSON object");
+    }
+    json_t *errors = json_array();
+    static const char *const known[] = {"model", "frep", "meshes", "pipeline",
+                                        "priority", "label"};
+    const char *key;
+    json_t *val;
+    json_object_foreach(root, key, val) {
+        bool ok = false;
+        for (size_t i = 0; i < sizeof known / sizeof known[0]; i++)
+            ok |= strcmp(key, known[i]) == 0;
+        if (!ok)
+            add_error(errors, key, "unknown member (expected model, "
+                      "pipeline, priority, label)");
+    }
+    const json_t *model = json_object_get(root, "model");
+    int inputs = !!model + !!json_object_get(root, "frep") +
+                 !!json_object_get(root, "meshes");
+    if (inputs == 0)
+        add_error(errors, "model", "required: the facet-model/1 to process");
+    else if (inputs > 1)
+        add_error(errors, "", "give exactly one of model, frep, meshes");
+    if (json_object_get(root, "frep"))
+        add_error(errors, "frep", "input 'frep' is not available in this "
+                  "build");
+    if (json_object_get(root, "meshes"))
+        add_error(errors, "meshes", "input 'meshes' is not available in this "
+                  "build");
+    proto_pipeline pl = {0};
+    json_t *pv = json_object_get(root, "pipeline");
+    json_t *pdefault = pv ? NULL : json_string("auto");
+    geo_err err = {{0}};
+    bool have_pipeline = false;
+    if (proto_pipeline_from_json(pv ? pv : pdefault, "pipeline", &pl, &err) < 0)
+        add_geo_error(errors, &err);
+    else if (runner_check(&pl, &err) < 0)
+        add_geo_error(errors, &err);
+    else
+        have_pipeline = true;
+    json_decref(pdefault);
+    job_priority prio = JOB_PRIO_NORMAL;
+    const json_t *pr = json_object_get(root, "priority");
+    if (pr) {
+        const char *s = json_string_value(pr);
+        if (s && strcmp(s, "high") == 0)
+            prio = JOB_PRIO_HIGH;
+        else if (!s || strcmp(s, "normal") != 0)
+            add_error(errors, "priority", "expected \"normal\" or \"high\"");
+    }
+    const char *label = NULL;
+    const json_t *lb = json_object_get(root, "label");
+    if (lb) {
+        label = json_string_value(lb);
+        if (!label)
+            add_error(errors, "label", "expected a string");
+        else if (strlen(label) >= JOB_LABEL_MAX)
+            add_error(errors, "label", "longer than %d bytes",
+                      JOB_LABEL_MAX - 1);
+    }
+    geo_poly *poly = NULL;
+    proto_read_report rep = {0};
+    if (model) {
+        poly = proto_model_from_json_ex(model, NULL, "model", &rep, &err);
+        if (!poly)
+            add_geo_error(errors, &err);
+    }
+    enum MHD_Result res;
+    if (json_array_size(errors) > 0) {
+        const json_t *first = json_array_get(errors, 0);
+        const char *path = json_string_value(json_object_get(first, "path"));
+        const char *msg = json_string_value(json_object_get(first, "message"));
+        size_t n = json_array_size(errors);
+        res = http_problem(r, 422, "invalid-job", "Unprocessable Content",
+                           errors, NULL, "%s%s%s%s", path && *path ? path : "",
+                           path && *path ? ": " : "", msg ? msg : "invalid",
+                           n > 1 ? " (and more, see errors)" : "");
+        errors = NULL;
+        goto out;
+    }
+    job_request rq = {
+        .model = poly, .pipeline = &pl, .priority = prio, .source = "http",
+        .label = label, .idem_key = idem,
+        .idem_hash = job_hash64(r->body ? r->body : "", r->len),
+    };
+    job_rec job;
+    bool replayed = false;
+    int rc = job_submit(env->s, env->pool, atomic_load(&env->queue_size), &rq,
+                        &job, &replayed, &err);
+    if (rc == -EAGAIN) {
+        metrics_queue_full(env->m);
+        const char *h[] = {"Retry-After", "1", NULL};
+        res = http_problem(r, 503, "queue-full", "Service Unavailable", NULL,
+                           h, "%s; retry later", err.msg);
+    } else if (rc == -EEXIST) {
+        res = http_problem(r, 422, "idempotency-key-reused",
+                           "Unprocessable Content", NULL, NULL, "%s", err.msg);
+    } else if (rc < 0) {
+        log_msg(LOG_ERR, NULL, "submit: %s", err.msg);
+        res = http_problem(r, 500, "submit-failed", "Internal Server Error",
+                           NULL, NULL, "%s", err.msg);
+    } else {
+        memcpy(r->id, job.id, sizeof r->id);
+        char loc[64];
+        snprintf(loc, sizeof loc, "/v1/jobs/%s", job.id);
+        const char *h[] = {"Location", loc,
+                           replayed ? "Idempotent-Replayed" : NULL, "true",
+                           NULL};
+        json_t *extra = NULL;
+        if (rep.plane_mismatches)
+            extra = json_pack("{s:[s]}", "warnings", rep.first);
+        if (!replayed)
+            log_msg(LOG_INFO, job.id, "queued (%u vertices, %u facets, "
+                    "%zu ops, priority %s)", poly->nverts, poly->nfacets,
+                    pl.nops, prio == JOB_PRIO_HIGH ? "high" : "normal");
+        res = reply_job(r, 202, &job, h, extra);
+        job_rec_clear(&job);
+    }
+out:
+    json_decref(errors);
+    geo_poly_free(poly);
+    if (have_pipeline || pl.ops)
+        proto_pipeline_free(&pl);
+    json_decref(root);
+    return res;
+}
+
+/* Parses ?wait= (seconds, fractions allowed) into ms; -1 when invalid. */
+static int64_t wait_arg(http_req *r)
+{
+    const char *w = http_arg(r, "wait");
+    if (!w)
+        return 0;
+    char *end;
+    double s = strtod(w, &end);
+    if (end == w || *end || !isfinite(s) || s < 0)
+        return -1;
+    uint64_t cap = atomic_load(&r->env->max_wait_ms);
+    double ms = s * 1000.0;
+    return ms > (double)cap ? (int64_t)cap : (int64_t)ms;
+}
+
+enum MHD_Result http_get_job(http_req *r)
+{
+    if (!r->waiting) {
+        int64_t wait = wait_arg(r);
+        if (wait < 0)
+            return http_problem(r, 400, "bad-argument", "Bad Request", NULL,
+                                NULL, "wait: expected a number of seconds "
+                                "≥ 0");
+        r->w.deadline = job_mono_ms() + wait;
+    }
+    job_rec j;
+    geo_err err;
+    int rc = store_get(r->env->s, r->id, &j, &err);
+    if (rc < 0)
+        return store_failure(r, rc, &err);
+    if (!job_state_terminal(j.state) && job_mono_ms() < r->w.deadline) {
+        r->w.conn = r->conn;
+        memcpy(r->w.id, j.id, sizeof r->w.id);
+        r->w.progress = false;
+        bool first = !r->waiting;
+        r->waiting = true;
+        rc = http_hub_suspend(r->srv->hub, &r->w,
+                              atomic_load(&r->env->max_waiters));
+        if (rc == 0) {
+            job_rec_clear(&j);
+            return MHD_YES;
+        }
+        if (rc == -EAGAIN && first) {
+            job_rec_clear(&j);
+            const char *h[] = {"Retry-After", "1", NULL};
+            return http_problem(r, 429, "too-many-waiters",
+                                "Too Many Requests", NULL, h,
+                                "too many clients are waiting; poll without "
+                                "wait= or retry later");
+        }
+    }
+    char etag[40];
+    snprintf(etag, sizeof etag, "W/\"v%lld\"", (long long)j.version);
+    const char *h[] = {"ETag", etag, "Cache-Control", "no-cache", NULL};
+    enum MHD_Result res;
+    if (http_not_modified(r, etag))
+        res = http_reply(r, 304, NULL, (char *)"", 0, false, h);
+    else
+        res = reply_job(r, 200, &j, h, NULL);
+    job_rec_clear(&j);
+    return res;
+}
+
+enum MHD_Result http_delete_job(http_req *r)
+{
+    http_env *env = r->env;
+    job_rec j;
+    geo_err err;
+    int rc = store_cancel(env->s, r->id, &j, &err);
+    if (rc == -EBUSY) {
+        /* Already finished: DELETE removes the job and its results. */
+        job_rec_clear(&j);
+        rc = store_remove(env->s, r->id, &err);
+        if (rc == -EBUSY) /* it was requeued meanwhile: cancel again */
+            return http_delete_job(r);
+        if (rc < 0)
+            return store_failure(r, rc, &err);
+        log_msg(LOG_INFO, r->id, "deleted");
+        http_server_job_changed(r->srv, r->id, false);
+        return http_reply(r, 204, NULL, (char *)"", 0, false, NULL);
+    }
+    if (rc < 0)
+        return store_failure(r, rc, &err);
+    enum MHD_Result res;
+    if (j.state == JOB_RUNNING) {
+        if (env->pool)
+            job_pool_cancel(env->pool, j.id);
+        log_msg(LOG_INFO, j.id, "cancel requested");
+        res = reply_job(r, 202, &j, NULL, NULL);
+    } else {
+        log_msg(LOG_INFO, j.id, "canceled before it started");
+        res = reply_job(r, 200, &j, NULL, NULL);
+    }
+    http_server_job_changed(r->srv, r->id, false);
+    job_rec_clear(&j);
+    return res;
+}
+
+static bool valid_source(const char *s)
+{
+    size_t n = strlen(s);
+    if (n == 0 || n >= JOB_SOURCE_MAX)
+        return false;
+    for (size_t i = 0; i < n; i++)
+        if (!isalnum((unsigned char)s[i]) && !strchr(":._-", s[i]))
+            return false;
+    return true;
+}
+
+enum MHD_Result http_list_jobs(http_req *r)
+{
+    store_filter f = {.state = -1, .limit = 100};
+    const char *st = http_arg(r, "status"), *src = http_arg(r, "source"),
+               *lim = http_arg(r, "limit"), *after = http_arg(r, "after");
+    if (st && (f.state = job_state_from_name(st)) < 0)
+        return http_problem(r, 400, "bad-argument", "Bad Request", NULL, NULL,
+                            "status: expected queued, running, succeeded, "
+                            "failed or canceled");
+    if (src && !valid_source(src))
+        return http_problem(r, 400, "bad-argument", "Bad Request", NULL, NULL,
+                            "source: expected letters, digits and :._-");
+    f.source = src;
+    if (lim) {
+        char *end;
+        long v = strtol(lim, &end, 10);
+        if (end == lim || *end || v < 1 || v > 1000)
+            return http_problem(r, 400, "bad-argument", "Bad Request", NULL,
+                                NULL, "limit: expected 1 to 1000");
+        f.limit = (unsigned)v;
+    }
+    if (after && !job_id_valid(after))
+        return http_problem(r, 400, "bad-argument", "Bad Request", NULL, NULL,
+                            "after: expected a job id");
+    f.after = after;
+    job_rec *v;
+    size_t n;
+    geo_err err;
+    int rc = store_list(r->env->s, &f, &v, &n, &err);
+    if (rc < 0)
+        return store_failure(r, rc, &err);
+    json_t *arr = json_array();
+    for (size_t i = 0; i < n; i++) {
+        json_array_append_new(arr, job_to_json(&v[i]));
+    }
+    json_t *next = json_null();
+    if (n == f.limit) {
+        char url[256];
+        snprintf(url, sizeof url, "/v1/jobs?limit=%u&after=%s%s%s%s%s",
+                 f.limit, v[n - 1].id, st ? "&status=" : "", st ? st : "",
+                 src ? "&source=" : "", src ? src : "");
+        json_decref(next);
+        next = json_string(url);
+    }
+    for (size_t i = 0; i < n; i++)
+        job_rec_clear(&v[i]);
+    free(v);
+    json_t *o = json_object();
+    json_object_set_new(o, "jobs", arr);
+    json_object_set_new(o, "next", next);
+    return http_reply_json(r, 200, o, NULL);
+}
+
+/* Reads the job and answers 404/409 unless it succeeded; 0 to go on. */
+static int need_result(http_req *r, job_rec *j, enum MHD_Result *res)
+{
+    geo_err err;
+    int rc = store_get(r->env->s, r->id, j, &err);
+    if (rc < 0) {
+        *res = store_failure(r, rc, &err);
+        return -1;
+    }
+    if (j->state != JOB_SUCCEEDED) {
+        *res = http_problem(r, 409, "no-result", "Conflict", NULL, NULL,
+                            "job %s is %s; results exist once it has "
+                            "succeeded", j->id, job_state_name(j->state));
+        job_rec_clear(j);
+        return -1;
+    }
+    return 0;
+}
+
+enum MHD_Result http_get_model(http_req *r)
+{
+    const char *name = http_arg(r, "format");
+    proto_format fmt = name ? proto_format_from_name(name) : PROTO_FMT_JSON;
+    if (fmt == PROTO_FMT_UNKNOWN)
+        return http_problem(r, 400, "bad-argument", "Bad Request", NULL, NULL,
+                            "format: expected json, poly, obj, stl, "
+                            "stl-ascii, ply, ply-ascii, ase or fmb1");
+    job_rec j;
+    enum MHD_Result res;
+    if (need_result(r, &j, &res) < 0)
+        return res;
+    char etag[64], disp[96];
+    snprintf(etag, sizeof etag, "\"%016llx-%s\"",
+             (unsigned long long)j.result_hash, proto_format_name(fmt));
+    const char *ext = fmt == PROTO_FMT_STL_ASCII   ? "stl"
+                      : fmt == PROTO_FMT_PLY_ASCII ? "ply"
+                      : fmt == PROTO_FMT_FMB1      ? "fmb"
+                                                   : proto_format_name(fmt);
+    snprintf(disp, sizeof disp, "inline; filename=\"%s.%s\"", j.id, ext);
+    job_rec_clear(&j);
+    const char *h[] = {"ETag", etag, "Cache-Control", "private, max-age=3600",
+                       "Content-Disposition", disp, NULL};
+    if (http_not_modified(r, etag))
+        return http_reply(r, 304, NULL, (char *)"", 0, false, h);
+    void *blob;
+    size_t len;
+    geo_err err;
+    int rc = store_get_blob(r->env->s, r->id, STORE_BLOB_MODEL, &blob, &len,
+                            &err);
+    if (rc < 0)
+        return store_failure(r, rc, &err);
+    if (fmt == PROTO_FMT_FMB1)
+        return http_reply(r, 200, proto_format_mime(fmt), blob, len, true, h);
+    geo_poly *p = proto_model_read_mem(blob, len, PROTO_FMT_FMB1, NULL, &err);
+    free(blob);
+    if (!p) {
+        log_msg(LOG_ERR, r->id, "stored result unreadable: %s", err.msg);
+        return http_problem(r, 500, "store-error", "Internal Server Error",
+                            NULL, NULL, "stored result: %s", err.msg);
+    }
+    char *out;
+    size_t olen;
+    rc = proto_model_write_mem(p, fmt, &out, &olen, &err);
+    geo_poly_free(p);
+    if (rc < 0)
+        return http_problem(r, 500, "write-failed", "Internal Server Error",
+                            NULL, NULL, "%s", err.msg);
+    return http_reply(r, 200, proto_format_mime(fmt), out, olen, true, h);
+}
+
+enum MHD_Result http_get_stats(http_req *r)
+{
+    job_rec j;
+    enum MHD_Result res;
+    if (need_result(r, &j, &res) < 0)
+        return res;
+    char etag[64];
+    snprintf(etag, sizeof etag, "\"%016llx-stats\"",
+             (unsigned long long)j.result_hash);
+    job_rec_clear(&j);
+    const char *h[] = {"ETag", etag, "Cache-Control", "private, max-age=3600",
+                       NULL};
+    if (http_not_modified(r, etag))
+        return http_reply(r, 304, NULL, (char *)"", 0, false, h);
+    void *blob;
+    size_t len;
+    geo_err err;
+    int rc = store_get_blob(r->env->s, r->id, STORE_BLOB_STATS, &blob, &len,
+                            &err);
+    if (rc < 0)
+        return store_failure(r, rc, &err);
+    return http_reply(r, 200, "application/json", blob, len, true, h);
+}

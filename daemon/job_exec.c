@@ -1,0 +1,67 @@
+/* job_exec.c — one job: stored bytes in, stored bytes out (job_exec.h).
+ * Every failure leaves a message naming its place in ret->error. */
+#include "job_exec.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "model_io.h"
+#include "runner.h"
+
+static void op_timer(void *user, proto_op_kind op, double seconds)
+{
+    if (user)
+        metrics_op(user, op, seconds);
+}
+
+static int fail(job_outcome *ret, int r, const geo_err *err)
+{
+    ret->error = strdup(err->msg[0] ? err->msg : "failed");
+    return r;
+}
+
+int job_exec(void *user, const job_rec *job, const void *input,
+             size_t input_len, const geo_ctx *ctx, job_outcome *ret)
+{
+    geo_err err = {{0}};
+    json_error_t je;
+    json_t *pj = json_loads(job->pipeline ? job->pipeline : "", 0, &je);
+    if (!pj) {
+        geo_err_set(&err, -EINVAL, "stored pipeline: %s", je.text);
+        return fail(ret, -EINVAL, &err);
+    }
+    proto_pipeline pl;
+    int r = proto_pipeline_from_json(pj, "pipeline", &pl, &err);
+    json_decref(pj);
+    if (r < 0)
+        return fail(ret, r, &err);
+    geo_poly *model = proto_model_read_mem(input, input_len, PROTO_FMT_FMB1,
+                                           NULL, &err);
+    if (!model) {
+        geo_err_prefix(&err, "stored input");
+        proto_pipeline_free(&pl);
+        return fail(ret, -EINVAL, &err);
+    }
+    json_t *stats = NULL, *summary = NULL;
+    r = runner_run(&pl, &model, ctx, op_timer, user, &stats, &summary, &err);
+    proto_pipeline_free(&pl);
+    if (r == 0) {
+        char *buf;
+        size_t len;
+        r = proto_model_write_mem(model, PROTO_FMT_FMB1, &buf, &len, &err);
+        if (r == 0) {
+            ret->model = buf;
+            ret->model_len = len;
+            ret->stats = json_dumps(stats, JSON_COMPACT);
+            ret->stats_len = ret->stats ? strlen(ret->stats) : 0;
+            ret->summary = json_dumps(summary, JSON_COMPACT);
+            if (!ret->stats || !ret->summary)
+                r = geo_err_set(&err, -ENOMEM, "out of memory");
+        }
+    }
+    json_decref(stats);
+    json_decref(summary);
+    geo_poly_free(model);
+    return r < 0 ? fail(ret, r, &err) : 0;
+}

@@ -1,0 +1,73 @@
+/* job_submit.c — validated request → stored, queued job (job_submit.h). */
+#include "job_submit.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "model_io.h"
+#include "runner.h"
+
+int job_submit(store *s, job_pool *pool, unsigned queue_size,
+               const job_request *rq, job_rec *ret, bool *ret_replayed,
+               geo_err *err)
+{
+    int r = runner_check(rq->pipeline, err);
+    if (r < 0)
+        return r;
+    json_t *pj = proto_pipeline_to_json(rq->pipeline);
+    char *pipeline = pj ? json_dumps(pj, JSON_COMPACT) : NULL;
+    json_decref(pj);
+    char *input = NULL;
+    size_t input_len = 0;
+    if (!pipeline) {
+        r = geo_err_set(err, -ENOMEM, "out of memory");
+        goto out;
+    }
+    r = proto_model_write_mem(rq->model, PROTO_FMT_FMB1, &input, &input_len,
+                              err);
+    if (r < 0)
+        goto out;
+    char id[JOB_ID_LEN + 1];
+    int64_t now = job_now_ms();
+    job_id_new(id, now);
+    store_new_job j = {
+        .id = id,
+        .priority = rq->priority,
+        .source = rq->source,
+        .label = rq->label,
+        .pipeline = pipeline,
+        .input = input,
+        .input_len = input_len,
+        .idem_key = rq->idem_key,
+        .idem_hash = rq->idem_hash,
+        .created_ms = now,
+    };
+    job_rec old;
+    r = store_put(s, &j, queue_size, &old, err);
+    if (r == -EEXIST) {
+        if (old.idem_hash != rq->idem_hash) {
+            r = geo_err_set(err, -EEXIST, "Idempotency-Key '%s' was used "
+                            "for a different request (job %s)", rq->idem_key,
+                            old.id);
+            job_rec_clear(&old);
+            goto out;
+        }
+        *ret = old;
+        *ret_replayed = true;
+        r = 0;
+        goto out;
+    }
+    if (r < 0)
+        goto out;
+    r = store_get(s, id, ret, err);
+    if (r == 0) {
+        *ret_replayed = false;
+        if (pool)
+            job_pool_wake(pool);
+    }
+out:
+    free(pipeline);
+    free(input);
+    return r;
+}

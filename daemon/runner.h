@@ -1,0 +1,56 @@
+/* runner.h — runs a job pipeline (proto/pipeline.h) on a polyhedron: the
+ * one place that maps operations to kernels, shared by facetd's workers
+ * and `facet run`.
+ *
+ * The op table in runner.c has one entry per operation: its kernel call
+ * and how it reports. An operation whose kernel is not part of this build
+ * has no entry; runner_check rejects a pipeline that uses one (the daemon
+ * answers 422 at submission) and runner_run fails on it, so nothing is
+ * ever faked.
+ *
+ * Progress: operation i of n reports fractions mapped into [i/n, (i+1)/n]
+ * of the caller's geo_ctx progress; cancellation passes through unchanged.
+ *
+ * Statistics (the JSON served as /v1/jobs/{id}/stats):
+ *   {"ops": [{"op": NAME, "ms": T, "report": {...}}, ...],
+ *    "before": the first inspect report or null,
+ *    "after": the last inspect report, if an operation changed the model
+ *             before it, else null}
+ * Summary (embedded in the job): {"vertices_before", "facets_before",
+ * "vertices_after", "facets_after", "ms"} plus what the operations add
+ * (inspect adds "valid", "closed", "orientation", "self_intersections"
+ * of the model it saw; a later inspect overwrites an earlier one's).
+ *
+ * Thread safety: reentrant; concurrent runs on different models are fine. */
+#ifndef FACETD_RUNNER_H
+#define FACETD_RUNNER_H
+
+#include <stdbool.h>
+
+#include <jansson.h>
+
+#include "ctx.h"
+#include "pipeline.h"
+#include "poly.h"
+
+/* True when this build has a kernel for op. */
+bool runner_op_available(proto_op_kind op);
+
+/* 0 when every operation of p is available; else -ENOTSUP with err
+ * "pipeline[1]: op 'cut' is not available in this build". */
+int runner_check(const proto_pipeline *p, geo_err *err);
+
+/* Called after each operation with its run time (for metrics). */
+typedef void (*runner_op_timer)(void *user, proto_op_kind op, double seconds);
+
+/* Runs p on *model. Operations may replace *model (the old one is freed);
+ * on success *model is the result and *ret_stats, *ret_summary are new
+ * JSON objects the caller owns. On failure returns a negative errno
+ * (-ECANCELED when ctx canceled) with err naming the operation
+ * ("pipeline[2] (merge_facets): ..."); *model is still a valid polyhedron
+ * the caller frees. timer may be NULL. */
+int runner_run(const proto_pipeline *p, geo_poly **model, const geo_ctx *ctx,
+               runner_op_timer timer, void *timer_user, json_t **ret_stats,
+               json_t **ret_summary, geo_err *err);
+
+#endif

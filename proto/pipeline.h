@@ -1,0 +1,126 @@
+/* pipeline.h — the job pipeline of the Job API (formats.md): a JSON array
+ * of operations, or the string "auto", parsed into structs with every
+ * parameter checked and defaulted, and written back in canonical form.
+ *
+ * An operation is either its name as a string ("inspect", "stitch") or an
+ * object {"op": NAME, PARAM: VALUE, ...}. Unknown operations and unknown
+ * parameters are errors (a typo must not silently run with a default).
+ * Errors name the place: `pipeline[2].max_angle_deg: expected a number`.
+ *
+ * Operations and parameters (lengths in the model's units, mm):
+ *   inspect
+ *   collapse_clusters {radius > 0 [0.002]}
+ *   merge_facets {max_angle_deg in (0, 90) [1.0], max_deviation ≥ 0
+ *                 [0.005], groups?: [[facet, facet, ...], ...]}
+ *   cut {plane: [a, b, c, d]} — keeps plane(p) ≤ 0; (a,b,c) non-zero,
+ *                 normalised to unit length (d scaled with it)
+ *   move_vertex {vertex, to: [x,y,z] | by: [dx,dy,dz], schedule
+ *                 "local-exp"|"scaled"|"global-exp" ["local-exp"],
+ *                 max_steps ≥ 1 [10000]}
+ *   inversion_stats {samples 1..100000 [100], magnitudes: [m > 0, ...]
+ *                 [1, .5, .1, .05, .01, .005, .001, .0005, .0001, .00005],
+ *                 seed [1], schedule ["local-exp"]}
+ *   triangulate {quad_levels 1..12 [9], binary_levels 1..20 [10],
+ *                 fill [true], refine [true], fair [true]}
+ *   fill_holes {weight "area"|"length" ["area"], refine [true],
+ *                 fair [true]}
+ *   stitch
+ * "auto" is the post-scan correction: inspect → collapse_clusters →
+ * merge_facets (automatic groups) → inspect, with the defaults above.
+ *
+ * Ownership: a proto_pipeline owns its arrays; proto_pipeline_free
+ * releases them. Functions are reentrant and thread-safe. */
+#ifndef PROTO_PIPELINE_H
+#define PROTO_PIPELINE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include <jansson.h>
+
+#include "ctx.h"
+
+typedef enum proto_op_kind {
+    PROTO_OP_INSPECT = 0,
+    PROTO_OP_COLLAPSE_CLUSTERS,
+    PROTO_OP_MERGE_FACETS,
+    PROTO_OP_CUT,
+    PROTO_OP_MOVE_VERTEX,
+    PROTO_OP_INVERSION_STATS,
+    PROTO_OP_TRIANGULATE,
+    PROTO_OP_FILL_HOLES,
+    PROTO_OP_STITCH,
+    PROTO_OP_COUNT
+} proto_op_kind;
+
+typedef enum proto_schedule {
+    PROTO_SCHED_LOCAL_EXP = 0, /* seed 000 §4.3.1 */
+    PROTO_SCHED_SCALED,        /* §4.3.2 */
+    PROTO_SCHED_GLOBAL_EXP,    /* §4.3.3 */
+} proto_schedule;
+
+enum { PROTO_PIPELINE_MAX_OPS = 64, PROTO_MAX_MAGNITUDES = 64 };
+
+typedef struct proto_op {
+    proto_op_kind kind;
+    union {
+        struct {
+            double radius;
+        } collapse;
+        struct {
+            double max_angle_deg, max_deviation;
+            uint32_t ngroups;    /* 0: find groups automatically */
+            uint32_t *gstart;    /* ngroups + 1 offsets into gfacets */
+            uint32_t *gfacets;   /* facet indices of every group */
+        } merge;
+        struct {
+            double plane[4];     /* unit normal, offset */
+        } cut;
+        struct {
+            uint32_t vertex;
+            double xyz[3];
+            bool relative;       /* xyz is "by" (else "to") */
+            proto_schedule schedule;
+            uint32_t max_steps;
+        } move;
+        struct {
+            uint32_t samples;
+            uint32_t nmagnitudes;
+            double magnitudes[PROTO_MAX_MAGNITUDES];
+            uint64_t seed;
+            proto_schedule schedule;
+        } inversion;
+        struct {
+            uint32_t quad_levels, binary_levels;
+            bool fill, refine, fair;
+        } triangulate;
+        struct {
+            bool weight_length;  /* weight by edge length (else area) */
+            bool refine, fair;
+        } fill_holes;
+    } u;
+} proto_op;
+
+typedef struct proto_pipeline {
+    size_t nops;
+    proto_op *ops;
+} proto_pipeline;
+
+/* The operation's name as in the API ("merge_facets"); NULL if invalid. */
+const char *proto_op_name(proto_op_kind kind);
+
+/* Parses a pipeline value (array or "auto") into *ret. where names the
+ * value in messages (e.g. "pipeline"; NULL for none). 0, or -EINVAL with
+ * err naming the place, or -ENOMEM; *ret is untouched on error. */
+int proto_pipeline_from_json(const json_t *v, const char *where,
+                             proto_pipeline *ret, geo_err *err);
+
+/* The canonical JSON (an array of op objects with every parameter), or
+ * NULL on out-of-memory. Parsing it gives the same pipeline. */
+json_t *proto_pipeline_to_json(const proto_pipeline *p);
+
+/* Frees the arrays of p and zeroes it; accepts NULL. */
+void proto_pipeline_free(proto_pipeline *p);
+
+#endif

@@ -1,0 +1,72 @@
+#!/bin/bash
+# restart.sh — durability: facetd is killed with SIGKILL in the middle of
+# a burst of submissions and job runs; after a restart on the same state
+# directory every job that got a 202 is still there and completes (jobs
+# that were running are queued again). Then a graceful SIGTERM with work
+# queued leaves that work queued for the next start.
+. "$(dirname "$0")/lib.sh" "$@"
+
+start_facetd --workers 1 || { not_ok "facetd starts"; finish; exit 1; }
+f=$(body brilliant.scan-k400.json)
+mkdir "$T/r"
+# Each submission leaves "CODE" in r/N.code and the body in r/N.
+printf '%s\n' $(seq 120) | xargs -P 8 -I{} sh -c \
+    "curl -s -o '$T/r/{}' -w '%{http_code}' -H 'Content-Type: application/json' --data-binary '@$f' '$URL/v1/jobs' >'$T/r/{}.code' 2>/dev/null" &
+load=$!
+# Kill once a few jobs were accepted, while the burst goes on.
+for i in $(seq $((100 * SLOW))); do
+    [ "$(grep -l 202 "$T"/r/*.code 2>/dev/null | wc -l)" -ge 5 ] && break
+    sleep 0.05
+done
+kill -KILL "$PID"
+wait "$PID" 2>/dev/null
+wait $load
+accepted=""
+for c in "$T"/r/*.code; do
+    [ "$(cat "$c")" = 202 ] && accepted="$accepted $(jstr id "${c%.code}")"
+done
+n=$(echo $accepted | wc -w)
+check "some submissions were accepted before the kill ($n)" test "$n" -gt 0
+check "some were cut off by the kill" test "$n" -lt 120
+
+STATE_KEEP=1 start_facetd --workers 2 || { not_ok "facetd restarts"; finish; exit 1; }
+ok "facetd restarts on the same store"
+missing=0
+for id in $accepted; do
+    req GET "/v1/jobs/$id"
+    [ "$CODE" = 200 ] || missing=$((missing + 1))
+done
+expect_eq "every accepted job is still in the store" 0 "$missing"
+notdone=0
+for id in $accepted; do
+    wait_job "$id" 60
+    [ "$STATE_OF" = succeeded ] || notdone=$((notdone + 1))
+done
+expect_eq "every accepted job completes after the restart" 0 "$notdone"
+if grep -q 'queued again' "$LOG"; then
+    ok "a job running at the kill was queued again"
+else
+    ok "no job was running at the kill (nothing to requeue)"
+fi
+
+# Graceful stop with queued work: it stays queued, and runs after a start.
+req GET /metrics
+stop_facetd
+STATE_KEEP=1 start_facetd --paused || { not_ok "facetd starts paused"; finish; exit 1; }
+for i in 1 2 3; do submit notch-cube.json; done
+last=$ID
+curl -s -o "$T/w" -w '%{http_code}' "$URL/v1/jobs/$last?wait=60" >"$T/wcode" &
+w=$!
+curl -s -N "$URL/v1/jobs/$last/events" >"$T/ev" &
+e=$!
+for i in $(seq 50); do [ "$(metric facetd_http_waiting_clients)" = 2 ] && break; sleep 0.1; done
+expect_eq "two clients wait on the queued job" 2 "$(metric facetd_http_waiting_clients)"
+stop_facetd
+expect_eq "SIGTERM with queued jobs and waiting clients exits 0" 0 "$STATUS"
+wait $w $e
+expect_eq "the long-poll is answered at shutdown with the job" "200 queued" "$(cat "$T/wcode") $(jstr state "$T/w")"
+check "the event stream ends at shutdown after the queued state" grep -q '"state":"queued"' "$T/ev"
+STATE_KEEP=1 start_facetd --workers 1 || { not_ok "facetd starts again"; finish; exit 1; }
+wait_job "$last"
+expect_eq "jobs queued at a graceful stop run after the next start" succeeded "$STATE_OF"
+finish

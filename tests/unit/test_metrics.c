@@ -1,0 +1,116 @@
+/* test_metrics.c — the Prometheus rendering: counters by route and code,
+ * histograms with cumulative buckets ending at +Inf equal to the count,
+ * per-op histograms only for ops that ran, and the gauges given at scrape
+ * time. */
+#include "testutil.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "metrics.h"
+
+static const char *const routes[] = {"/a", "/b/{id}"};
+
+static char *render(metrics *m, const metrics_gauges *g)
+{
+    char *text;
+    size_t len;
+    assert_int_equal(metrics_render(m, g, &text, &len), 0);
+    assert_int_equal(strlen(text), len);
+    return text;
+}
+
+static void expect_line(const char *text, const char *line)
+{
+    const char *p = text;
+    size_t n = strlen(line);
+    while ((p = strstr(p, line))) {
+        if ((p == text || p[-1] == '\n') && (p[n] == '\n'))
+            return;
+        p += n;
+    }
+    fail_msg("no line '%s' in:\n%s", line, text);
+}
+
+static void test_counters_by_route_and_code(void **state)
+{
+    (void)state;
+    metrics *m = metrics_new(routes, 2);
+    metrics_http(m, 0, 200, 10, 100, 0.001);
+    metrics_http(m, 0, 200, 10, 100, 0.001);
+    metrics_http(m, 1, 404, 0, 50, 0.002);
+    metrics_http(m, 7, 418, 0, 5, 0.002); /* unmatched route, other code */
+    metrics_gauges g = {0};
+    char *t = render(m, &g);
+    expect_line(t, "facetd_http_requests_total{route=\"/a\",code=\"200\"} 2");
+    expect_line(t, "facetd_http_requests_total{route=\"/b/{id}\",code=\"404\"} 1");
+    expect_line(t, "facetd_http_requests_total{route=\"unmatched\",code=\"other\"} 1");
+    expect_line(t, "facetd_http_received_bytes_total 20");
+    expect_line(t, "facetd_http_sent_bytes_total 255");
+    assert_null(strstr(t, "code=\"500\""));
+    free(t);
+    metrics_free(m);
+}
+
+static void test_histograms_are_cumulative(void **state)
+{
+    (void)state;
+    metrics *m = metrics_new(routes, 2);
+    metrics_op(m, PROTO_OP_INSPECT, 0.003);
+    metrics_op(m, PROTO_OP_INSPECT, 0.2);
+    metrics_op(m, PROTO_OP_INSPECT, 5000);
+    metrics_job(m, JOB_SUCCEEDED, 0.2);
+    metrics_job(m, JOB_FAILED, 1.5);
+    metrics_gauges g = {0};
+    char *t = render(m, &g);
+    expect_line(t, "facetd_op_duration_seconds_bucket{op=\"inspect\",le=\"0.0025\"} 0");
+    expect_line(t, "facetd_op_duration_seconds_bucket{op=\"inspect\",le=\"0.005\"} 1");
+    expect_line(t, "facetd_op_duration_seconds_bucket{op=\"inspect\",le=\"0.25\"} 2");
+    expect_line(t, "facetd_op_duration_seconds_bucket{op=\"inspect\",le=\"1800\"} 2");
+    expect_line(t, "facetd_op_duration_seconds_bucket{op=\"inspect\",le=\"+Inf\"} 3");
+    expect_line(t, "facetd_op_duration_seconds_count{op=\"inspect\"} 3");
+    assert_null(strstr(t, "op=\"cut\""));
+    expect_line(t, "facetd_jobs_finished_total{state=\"succeeded\"} 1");
+    expect_line(t, "facetd_jobs_finished_total{state=\"failed\"} 1");
+    expect_line(t, "facetd_job_duration_seconds_bucket{le=\"+Inf\"} 2");
+    expect_line(t, "facetd_job_duration_seconds_sum 1.700000");
+    free(t);
+    metrics_free(m);
+}
+
+static void test_gauges_come_from_the_snapshot(void **state)
+{
+    (void)state;
+    metrics *m = metrics_new(routes, 2);
+    metrics_gauges g = {.store_ok = 1, .workers = 4, .busy = 3, .waiters = 9,
+                        .queue_size = 100, .ready = 1, .paused = 1};
+    g.counts.by_state[JOB_QUEUED] = 12;
+    g.counts.file_bytes = 4096;
+    metrics_queue_full(m);
+    char *t = render(m, &g);
+    expect_line(t, "facetd_up 1");
+    expect_line(t, "facetd_jobs{state=\"queued\"} 12");
+    expect_line(t, "facetd_queue_depth 12");
+    expect_line(t, "facetd_store_bytes 4096");
+    expect_line(t, "facetd_workers_busy 3");
+    expect_line(t, "facetd_workers_paused 1");
+    expect_line(t, "facetd_http_waiting_clients 9");
+    expect_line(t, "facetd_jobs_rejected_total{reason=\"queue_full\"} 1");
+    free(t);
+    /* Without store counts the store gauges are left out, not zero. */
+    g.store_ok = 0;
+    t = render(m, &g);
+    assert_null(strstr(t, "facetd_queue_depth"));
+    free(t);
+    metrics_free(m);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_counters_by_route_and_code),
+        cmocka_unit_test(test_histograms_are_cumulative),
+        cmocka_unit_test(test_gauges_come_from_the_snapshot),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,163 @@
+/* test_pipeline.c — the job pipeline parser accepts both op forms and
+ * "auto", fills defaults, rejects unknown ops and parameters and bad
+ * values with messages naming the place, and its canonical JSON parses
+ * back to the same pipeline. */
+#include "testutil.h"
+
+#include <errno.h>
+#include <string.h>
+
+#include "pipeline.h"
+
+static int parse(const char *text, proto_pipeline *p, geo_err *err)
+{
+    json_error_t je;
+    json_t *v = json_loads(text, JSON_DECODE_ANY, &je);
+    if (!v)
+        fail_msg("test JSON: %s", je.text);
+    int r = proto_pipeline_from_json(v, "pipeline", p, err);
+    json_decref(v);
+    return r;
+}
+
+static void expect_error(const char *text, const char *msg)
+{
+    proto_pipeline p = {0};
+    geo_err err = {{0}};
+    assert_int_equal(parse(text, &p, &err), -EINVAL);
+    if (strcmp(err.msg, msg) != 0)
+        fail_msg("expected '%s', got '%s'", msg, err.msg);
+    assert_null(p.ops);
+}
+
+static void test_names_and_objects_parse_with_defaults(void **state)
+{
+    (void)state;
+    proto_pipeline p;
+    geo_err err = {{0}};
+    assert_int_equal(parse("[\"inspect\", {\"op\":\"merge_facets\","
+                           "\"max_angle_deg\":0.5}, {\"op\":\"collapse_clusters\"}]",
+                           &p, &err), 0);
+    assert_int_equal(p.nops, 3);
+    assert_int_equal(p.ops[0].kind, PROTO_OP_INSPECT);
+    assert_int_equal(p.ops[1].kind, PROTO_OP_MERGE_FACETS);
+    assert_true(p.ops[1].u.merge.max_angle_deg == 0.5);
+    assert_true(p.ops[1].u.merge.max_deviation == 0.005);
+    assert_int_equal(p.ops[1].u.merge.ngroups, 0);
+    assert_true(p.ops[2].u.collapse.radius == 0.002);
+    proto_pipeline_free(&p);
+}
+
+static void test_auto_is_the_post_scan_correction(void **state)
+{
+    (void)state;
+    proto_pipeline p;
+    assert_int_equal(parse("\"auto\"", &p, NULL), 0);
+    assert_int_equal(p.nops, 4);
+    proto_op_kind want[] = {PROTO_OP_INSPECT, PROTO_OP_COLLAPSE_CLUSTERS,
+                            PROTO_OP_MERGE_FACETS, PROTO_OP_INSPECT};
+    for (int i = 0; i < 4; i++)
+        assert_int_equal(p.ops[i].kind, want[i]);
+    proto_pipeline_free(&p);
+}
+
+static void test_errors_name_the_place(void **state)
+{
+    (void)state;
+    expect_error("[\"inspect\", \"inspect\", {\"op\":\"merge_facets\","
+                 "\"max_angle_deg\":\"1\"}]",
+                 "pipeline[2].max_angle_deg: expected a number");
+    expect_error("[\"flatten\"]", "pipeline[0]: unknown operation 'flatten'");
+    expect_error("[{\"op\":\"cut\",\"plane\":[0,0,1,0],\"keep\":1}]",
+                 "pipeline[0].keep: unknown parameter of cut");
+    expect_error("[{\"op\":\"cut\"}]", "pipeline[0].plane: required");
+    expect_error("[{\"op\":\"cut\",\"plane\":[0,0,0,1]}]",
+                 "pipeline[0].plane: normal (a, b, c) must be non-zero");
+    expect_error("[{\"op\":\"cut\",\"plane\":[0,0,1]}]",
+                 "pipeline[0].plane: expected an array of 4 numbers");
+    expect_error("[{\"op\":\"move_vertex\",\"vertex\":3,\"to\":[0,0,0],"
+                 "\"by\":[1,0,0]}]",
+                 "pipeline[0]: exactly one of \"to\" and \"by\" is required");
+    expect_error("[{\"op\":\"move_vertex\",\"vertex\":-1,\"to\":[0,0,0]}]",
+                 "pipeline[0].vertex: -1 out of range [0, 4294967294]");
+    expect_error("[{\"op\":\"move_vertex\",\"vertex\":1,\"to\":[0,0,0],"
+                 "\"schedule\":\"fast\"}]",
+                 "pipeline[0].schedule: expected one of \"local-exp\", "
+                 "\"scaled\", \"global-exp\"");
+    expect_error("[{\"op\":\"merge_facets\",\"groups\":[[1]]}]",
+                 "pipeline[0].groups[0]: expected an array of at least 2 "
+                 "facet indices");
+    expect_error("[{\"op\":\"merge_facets\",\"max_angle_deg\":0}]",
+                 "pipeline[0].max_angle_deg: 0 out of range (0, 90]");
+    expect_error("[{\"op\":\"inversion_stats\",\"magnitudes\":[1,0]}]",
+                 "pipeline[0].magnitudes[1]: expected a positive number");
+    expect_error("[{\"op\":\"triangulate\",\"quad_levels\":13}]",
+                 "pipeline[0].quad_levels: 13 out of range [1, 12]");
+    expect_error("[{\"op\":\"fill_holes\",\"refine\":\"yes\"}]",
+                 "pipeline[0].refine: expected true or false");
+    expect_error("[{\"radius\":1}]",
+                 "pipeline[0].op: required (the operation's name)");
+    expect_error("[]", "pipeline: expected at least one operation");
+    expect_error("\"manual\"",
+                 "pipeline: expected an array of operations or \"auto\"");
+    expect_error("[42]", "pipeline[0]: expected an operation name or object");
+}
+
+static void test_cut_plane_is_normalised(void **state)
+{
+    (void)state;
+    proto_pipeline p;
+    assert_int_equal(parse("[{\"op\":\"cut\",\"plane\":[0,0,2,-1]}]", &p, NULL), 0);
+    assert_true(p.ops[0].u.cut.plane[2] == 1.0);
+    assert_true(p.ops[0].u.cut.plane[3] == -0.5);
+    proto_pipeline_free(&p);
+}
+
+static void test_canonical_json_round_trips(void **state)
+{
+    (void)state;
+    const char *text =
+        "[\"inspect\", {\"op\":\"merge_facets\",\"groups\":[[1,2],[5,6,7]]},"
+        "{\"op\":\"move_vertex\",\"vertex\":4,\"by\":[0.1,0,0],"
+        "\"schedule\":\"scaled\",\"max_steps\":50},"
+        "{\"op\":\"inversion_stats\",\"samples\":10,\"magnitudes\":[1,0.1],"
+        "\"seed\":7}, {\"op\":\"triangulate\",\"fair\":false},"
+        "{\"op\":\"fill_holes\",\"weight\":\"length\"}, \"stitch\","
+        "{\"op\":\"cut\",\"plane\":[1,0,0,0.25]},"
+        "{\"op\":\"collapse_clusters\",\"radius\":0.01}]";
+    proto_pipeline a, b;
+    assert_int_equal(parse(text, &a, NULL), 0);
+    json_t *j = proto_pipeline_to_json(&a);
+    assert_non_null(j);
+    char *canon = json_dumps(j, JSON_COMPACT);
+    assert_int_equal(proto_pipeline_from_json(j, "pipeline", &b, NULL), 0);
+    json_t *j2 = proto_pipeline_to_json(&b);
+    char *canon2 = json_dumps(j2, JSON_COMPACT);
+    assert_string_equal(canon, canon2);
+    assert_int_equal(b.ops[1].u.merge.ngroups, 2);
+    assert_int_equal(b.ops[1].u.merge.gfacets[4], 7);
+    assert_true(b.ops[2].u.move.relative);
+    assert_int_equal(b.ops[2].u.move.schedule, PROTO_SCHED_SCALED);
+    assert_int_equal(b.ops[3].u.inversion.nmagnitudes, 2);
+    assert_int_equal(b.ops[3].u.inversion.seed, 7);
+    assert_false(b.ops[4].u.triangulate.fair);
+    assert_true(b.ops[5].u.fill_holes.weight_length);
+    free(canon);
+    free(canon2);
+    json_decref(j);
+    json_decref(j2);
+    proto_pipeline_free(&a);
+    proto_pipeline_free(&b);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_names_and_objects_parse_with_defaults),
+        cmocka_unit_test(test_auto_is_the_post_scan_correction),
+        cmocka_unit_test(test_errors_name_the_place),
+        cmocka_unit_test(test_cut_plane_is_normalised),
+        cmocka_unit_test(test_canonical_json_round_trips),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
