@@ -179,6 +179,8 @@ install: all
 	install -m 0644 systemd/facetd.tmpfiles $(DESTDIR)$(PREFIX)/lib/tmpfiles.d/facetd.conf
 	install -m 0644 systemd/facetd.sysusers $(DESTDIR)$(PREFIX)/lib/sysusers.d/facetd.conf
 	install -m 0644 systemd/facetd.conf.example README.md $(DESTDIR)$(PREFIX)/share/doc/facetd/
+	install -d $(DESTDIR)$(PREFIX)/lib/udev/rules.d
+	install -m 0644 systemd/70-facetd-scanners.rules $(DESTDIR)$(PREFIX)/lib/udev/rules.d/
 
 clean:
 	rm -rf build
