@@ -32,5 +32,6 @@ int cli_input_error(const char *cmd, const char *fmt, ...)
 bool cli_wants_help(int argc, char **argv);
 
 /* The commands; each lives in daemon/cmd_NAME.c. */
+int cmd_convert(int argc, char **argv);
 
 #endif

@@ -15,6 +15,7 @@ static int cmd_version(int argc, char **argv)
 
 static const cli_command commands[] = {
     {"version", "print the version", cmd_version},
+    {"convert", "convert a model between file formats", cmd_convert},
 };
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
 

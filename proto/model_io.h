@@ -55,15 +55,44 @@ proto_format proto_format_from_name(const char *name);
 const char *proto_format_name(proto_format fmt);
 const char *proto_format_mime(proto_format fmt);
 
+/* What a reader noticed without failing. Formats that carry planes
+ * (facet-model/1, .poly, FMB1) have each given plane normalised and kept;
+ * a given plane "mismatches" its facet when a vertex lies farther from it
+ * than geo_poly_eps (poly.h), when its normal points against the vertex
+ * order (Newell vector), or when its normal is zero (the plane is then
+ * recomputed by least squares). Other formats give no planes: every plane
+ * is computed and nothing is counted. */
+typedef struct proto_read_report {
+    uint32_t planes_given;     /* facets whose plane came from the input */
+    uint32_t plane_mismatches; /* of those, how many mismatch */
+    uint32_t worst_facet;      /* facet of worst_deviation, UINT32_MAX if none */
+    double worst_deviation;    /* mm, largest vertex distance from a given
+                                  plane over the whole model */
+    char first[256];           /* the first mismatch, naming its place
+                                  ("facets[3].plane: ..."), "" if none */
+} proto_read_report;
+
 /* Parses a model of format fmt from len bytes. lim NULL means defaults.
  * Returns NULL with err set on any error (or out-of-memory). */
 geo_poly *proto_model_read_mem(const void *data, size_t len, proto_format fmt,
                                const proto_limits *lim, geo_err *err);
 
+/* As proto_model_read_mem, and fills *ret_report (may be NULL) when a
+ * model is returned; on error *ret_report is left untouched. */
+geo_poly *proto_model_read_mem_ex(const void *data, size_t len,
+                                  proto_format fmt, const proto_limits *lim,
+                                  proto_read_report *ret_report, geo_err *err);
+
 /* Reads a file; fmt PROTO_FMT_UNKNOWN picks the format by extension.
  * Errors are prefixed with the path. */
 geo_poly *proto_model_read_file(const char *path, proto_format fmt,
                                 const proto_limits *lim, geo_err *err);
+
+/* As proto_model_read_file, with a report as in proto_model_read_mem_ex. */
+geo_poly *proto_model_read_file_ex(const char *path, proto_format fmt,
+                                   const proto_limits *lim,
+                                   proto_read_report *ret_report,
+                                   geo_err *err);
 
 /* Serialises p in format fmt into a malloc'd buffer. 0, or a negative
  * errno with err set (-EINVAL for a format that cannot be written). */
@@ -77,9 +106,16 @@ int proto_model_write_file(const geo_poly *p, const char *path,
 
 /* facet-model/1 from an already parsed JSON value (the daemon embeds a
  * model in a job body). path_prefix names the place in error messages
- * (e.g. "model"), may be NULL. Returns NULL with err set. */
+ * (e.g. "model" gives "model.facets[3].vertices[1]: ..."), may be NULL.
+ * Returns NULL with err set. root is only read (no reference taken). */
 geo_poly *proto_model_from_json(const json_t *root, const proto_limits *lim,
                                 const char *path_prefix, geo_err *err);
+
+/* As proto_model_from_json, with a report as in proto_model_read_mem_ex. */
+geo_poly *proto_model_from_json_ex(const json_t *root, const proto_limits *lim,
+                                   const char *path_prefix,
+                                   proto_read_report *ret_report,
+                                   geo_err *err);
 
 /* facet-model/1 as a new JSON value (planes always written), or NULL on
  * out-of-memory. */

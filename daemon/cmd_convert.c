@@ -1,0 +1,103 @@
+/* cmd_convert.c — `facet convert IN OUT [--from FMT] [--to FMT]`: reads a
+ * model in one format and writes it in another (proto/model_io.h). The
+ * formats come from the file extensions unless given. Given planes that
+ * disagree with their vertices are reported on stderr as a warning; the
+ * conversion still succeeds. */
+#include <stdio.h>
+#include <string.h>
+
+#include "cli.h"
+#include "model_io.h"
+
+static const char USAGE[] =
+    "usage: facet convert IN OUT [--from FMT] [--to FMT]\n"
+    "\n"
+    "Converts a polyhedron between file formats. Formats are taken from the\n"
+    "extensions (.json .poly .obj .stl .ply .ase .fmb) unless given:\n"
+    "  json       facet-model/1 (read, write)\n"
+    "  poly       the paper's text format: counts, vertices, facets with\n"
+    "             planes (read, write)\n"
+    "  obj        Wavefront OBJ, polygons kept (read, write)\n"
+    "  stl        STL, binary or ASCII on reading, binary (float32) on\n"
+    "             writing; facets split into triangles\n"
+    "  stl-ascii  ASCII STL on writing (exact decimals)\n"
+    "  ply        PLY, ASCII or binary on reading, binary little-endian\n"
+    "             (double) on writing\n"
+    "  ply-ascii  ASCII PLY on writing\n"
+    "  ase        3ds Max ASCII export, triangles (write only)\n"
+    "  fmb1       the scanner's binary model FMB1 (read, write)\n"
+    "\n"
+    "The output is written atomically (temporary file, then rename).\n"
+    "exit status: 0 success, 1 bad input (the error names file and place),\n"
+    "2 usage error\n";
+
+static int parse_format(const char *opt, const char *name, proto_format *ret)
+{
+    *ret = proto_format_from_name(name);
+    if (*ret == PROTO_FMT_UNKNOWN)
+        return cli_usage_error("convert", "%s: unknown format '%s'", opt,
+                               name);
+    return CLI_OK;
+}
+
+int cmd_convert(int argc, char **argv)
+{
+    if (cli_wants_help(argc, argv)) {
+        fputs(USAGE, stdout);
+        return CLI_OK;
+    }
+    const char *files[2] = {NULL, NULL};
+    int nfiles = 0;
+    proto_format from = PROTO_FMT_UNKNOWN, to = PROTO_FMT_UNKNOWN;
+    bool only_files = false;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (!only_files && strcmp(a, "--") == 0) {
+            only_files = true;
+        } else if (!only_files &&
+                   (strcmp(a, "--from") == 0 || strcmp(a, "--to") == 0)) {
+            if (i + 1 == argc)
+                return cli_usage_error("convert", "%s needs a format", a);
+            int r = parse_format(a, argv[++i], a[2] == 'f' ? &from : &to);
+            if (r != CLI_OK)
+                return r;
+        } else if (!only_files && a[0] == '-' && a[1] != '\0') {
+            return cli_usage_error("convert", "unknown option '%s'", a);
+        } else if (nfiles < 2) {
+            files[nfiles++] = a;
+        } else {
+            return cli_usage_error("convert", "unexpected argument '%s'", a);
+        }
+    }
+    if (nfiles < 2)
+        return cli_usage_error("convert", "needs an input and an output file");
+    if (from == PROTO_FMT_UNKNOWN)
+        from = proto_format_from_path(files[0]);
+    if (to == PROTO_FMT_UNKNOWN)
+        to = proto_format_from_path(files[1]);
+    if (from == PROTO_FMT_UNKNOWN)
+        return cli_usage_error("convert", "%s: cannot tell the format from "
+                                          "the name; use --from", files[0]);
+    if (to == PROTO_FMT_UNKNOWN)
+        return cli_usage_error("convert", "%s: cannot tell the format from "
+                                          "the name; use --to", files[1]);
+    if (from == PROTO_FMT_ASE)
+        return cli_usage_error("convert", "ASE can be written, not read");
+
+    geo_err err = {{0}};
+    proto_read_report rep;
+    geo_poly *p = proto_model_read_file_ex(files[0], from, NULL, &rep, &err);
+    if (!p)
+        return cli_input_error("convert", "%s", err.msg);
+    if (rep.plane_mismatches)
+        fprintf(stderr, "facet convert: %s: warning: %u of %u given planes "
+                        "disagree with their vertices (largest distance "
+                        "%.3g mm); first: %s\n",
+                files[0], rep.plane_mismatches, rep.planes_given,
+                rep.worst_deviation, rep.first);
+    int r = proto_model_write_file(p, files[1], to, &err);
+    geo_poly_free(p);
+    if (r < 0)
+        return cli_input_error("convert", "%s", err.msg);
+    return CLI_OK;
+}

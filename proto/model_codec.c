@@ -1,0 +1,418 @@
+/* model_codec.c — the pieces every model codec shares: the output buffer,
+ * exact (shortest round-trip) number printing, little-endian loads and
+ * stores, limit checks, and finishing the planes of a read model.
+ * Invariant of proto_buf: data[0..len) is valid, len ≤ cap; once failed
+ * is set the buffer never changes again. */
+#include "model_codec.h"
+
+#include <errno.h>
+#include <float.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "vec.h"
+
+static bool buf_reserve(proto_buf *b, size_t n)
+{
+    if (b->failed)
+        return false;
+    if (n <= b->cap - b->len)
+        return true;
+    if (n > SIZE_MAX / 2 - b->len) {
+        b->failed = true;
+        return false;
+    }
+    size_t cap = b->cap ? b->cap : 4096;
+    while (cap - b->len < n)
+        cap *= 2;
+    char *d = realloc(b->data, cap);
+    if (!d) {
+        b->failed = true;
+        return false;
+    }
+    b->data = d;
+    b->cap = cap;
+    return true;
+}
+
+void proto_buf_append(proto_buf *b, const void *bytes, size_t n)
+{
+    if (n == 0 || !buf_reserve(b, n))
+        return;
+    memcpy(b->data + b->len, bytes, n);
+    b->len += n;
+}
+
+void proto_buf_puts(proto_buf *b, const char *s)
+{
+    proto_buf_append(b, s, strlen(s));
+}
+
+void proto_buf_printf(proto_buf *b, const char *fmt, ...)
+{
+    char small[256];
+    va_list ap;
+    va_start(ap, fmt);
+    int n = vsnprintf(small, sizeof small, fmt, ap);
+    va_end(ap);
+    if (n < 0) {
+        b->failed = true;
+        return;
+    }
+    if ((size_t)n < sizeof small) {
+        proto_buf_append(b, small, (size_t)n);
+        return;
+    }
+    if (!buf_reserve(b, (size_t)n + 1))
+        return;
+    va_start(ap, fmt);
+    vsnprintf(b->data + b->len, (size_t)n + 1, fmt, ap);
+    va_end(ap);
+    b->len += (size_t)n;
+}
+
+size_t proto_fmt_double(char *out, double x)
+{
+    if (x == 0) {
+        /* "-0" would read back as the JSON integer 0: keep the sign */
+        strcpy(out, signbit(x) ? "-0.0" : "0");
+        return strlen(out);
+    }
+    /* %.17g always round-trips; shorter forms are tried first so that
+     * 0.1 prints as 0.1 rather than 0.10000000000000001 */
+    int n = 0;
+    for (int prec = 15; prec <= 17; prec++) {
+        n = snprintf(out, 32, "%.*g", prec, x);
+        if (prec == 17 || strtod(out, NULL) == x)
+            break;
+    }
+    return (size_t)n;
+}
+
+void proto_buf_double(proto_buf *b, double x)
+{
+    char s[32];
+    size_t n = proto_fmt_double(s, x);
+    proto_buf_append(b, s, n);
+}
+
+void proto_buf_u16le(proto_buf *b, uint16_t v)
+{
+    unsigned char s[2] = {(unsigned char)v, (unsigned char)(v >> 8)};
+    proto_buf_append(b, s, 2);
+}
+
+void proto_buf_u32le(proto_buf *b, uint32_t v)
+{
+    unsigned char s[4];
+    for (int i = 0; i < 4; i++)
+        s[i] = (unsigned char)(v >> (8 * i));
+    proto_buf_append(b, s, 4);
+}
+
+void proto_buf_f32le(proto_buf *b, float v)
+{
+    uint32_t u;
+    memcpy(&u, &v, 4);
+    proto_buf_u32le(b, u);
+}
+
+void proto_buf_f64le(proto_buf *b, double v)
+{
+    uint64_t u;
+    memcpy(&u, &v, 8);
+    unsigned char s[8];
+    for (int i = 0; i < 8; i++)
+        s[i] = (unsigned char)(u >> (8 * i));
+    proto_buf_append(b, s, 8);
+}
+
+uint16_t proto_ld_u16le(const unsigned char *p)
+{
+    return (uint16_t)(p[0] | (unsigned)p[1] << 8);
+}
+
+uint32_t proto_ld_u32le(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 |
+           (uint32_t)p[3] << 24;
+}
+
+double proto_ld_f64le(const unsigned char *p)
+{
+    uint64_t u = 0;
+    for (int i = 7; i >= 0; i--)
+        u = u << 8 | p[i];
+    double d;
+    memcpy(&d, &u, 8);
+    return d;
+}
+
+float proto_ld_f32le(const unsigned char *p)
+{
+    uint32_t u = proto_ld_u32le(p);
+    float f;
+    memcpy(&f, &u, 4);
+    return f;
+}
+
+void proto_scan_init(proto_scan *s, const void *data, size_t len,
+                     bool hash_comments)
+{
+    s->p = data;
+    s->end = s->p + len;
+    s->line = 1;
+    s->tok_line = 1;
+    s->hash_comments = hash_comments;
+}
+
+static bool is_space(char c)
+{
+    return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' ||
+           c == '\f';
+}
+
+bool proto_scan_token(proto_scan *s, const char **ret, size_t *ret_len)
+{
+    for (;;) {
+        while (s->p < s->end && is_space(*s->p)) {
+            if (*s->p == '\n')
+                s->line++;
+            s->p++;
+        }
+        if (s->p < s->end && s->hash_comments && *s->p == '#') {
+            while (s->p < s->end && *s->p != '\n')
+                s->p++;
+            continue;
+        }
+        break;
+    }
+    if (s->p == s->end)
+        return false;
+    const char *t = s->p;
+    while (s->p < s->end && !is_space(*s->p) &&
+           !(s->hash_comments && *s->p == '#'))
+        s->p++;
+    *ret = t;
+    *ret_len = (size_t)(s->p - t);
+    s->tok_line = s->line;
+    return true;
+}
+
+bool proto_scan_line(proto_scan *s, const char **ret, size_t *ret_len)
+{
+    if (s->p == s->end)
+        return false;
+    const char *a = s->p;
+    const char *nl = memchr(a, '\n', (size_t)(s->end - a));
+    const char *b = nl ? nl : s->end;
+    s->p = nl ? nl + 1 : s->end;
+    s->tok_line = s->line;
+    if (nl)
+        s->line++;
+    while (a < b && is_space(*a))
+        a++;
+    while (b > a && is_space(b[-1]))
+        b--;
+    *ret = a;
+    *ret_len = (size_t)(b - a);
+    return true;
+}
+
+int proto_parse_double(const char *tok, size_t len, double *ret)
+{
+    /* strtod needs a terminated string; longer tokens are no numbers a
+     * writer would produce (the longest %.17g form has 24 bytes) */
+    char buf[64];
+    if (len == 0 || len >= sizeof buf)
+        return -EINVAL;
+    memcpy(buf, tok, len);
+    buf[len] = '\0';
+    char c = buf[0] == '-' || buf[0] == '+' ? buf[1] : buf[0];
+    /* only decimal digits or '.': no "nan", "inf", hex floats */
+    if (!((c >= '0' && c <= '9') || c == '.'))
+        return -EINVAL;
+    for (size_t i = 0; i < len; i++)
+        if (buf[i] == 'x' || buf[i] == 'X')
+            return -EINVAL;
+    char *endp;
+    errno = 0;
+    double d = strtod(buf, &endp);
+    if (endp != buf + len)
+        return -EINVAL;
+    if (!isfinite(d))
+        return -ERANGE;
+    *ret = d;
+    return 0;
+}
+
+int proto_parse_u32(const char *tok, size_t len, uint32_t *ret)
+{
+    if (len == 0)
+        return -EINVAL;
+    uint64_t v = 0;
+    for (size_t i = 0; i < len; i++) {
+        if (tok[i] < '0' || tok[i] > '9')
+            return -EINVAL;
+        v = v * 10 + (uint64_t)(tok[i] - '0');
+        if (v > UINT32_MAX)
+            return -ERANGE;
+    }
+    *ret = (uint32_t)v;
+    return 0;
+}
+
+int proto_parse_i64(const char *tok, size_t len, int64_t *ret)
+{
+    bool neg = len > 0 && tok[0] == '-';
+    size_t i = neg || (len > 0 && tok[0] == '+') ? 1 : 0;
+    if (i == len)
+        return -EINVAL;
+    int64_t v = 0;
+    for (; i < len; i++) {
+        if (tok[i] < '0' || tok[i] > '9')
+            return -EINVAL;
+        v = v * 10 + (tok[i] - '0');
+        if (v > ((int64_t)1 << 62))
+            return -ERANGE;
+    }
+    *ret = neg ? -v : v;
+    return 0;
+}
+
+const char *proto_tok_show(const char *tok, size_t len, char *out)
+{
+    size_t n = len > 24 ? 24 : len;
+    for (size_t i = 0; i < n; i++) {
+        unsigned char c = (unsigned char)tok[i];
+        out[i] = c >= 0x20 && c < 0x7f ? (char)c : '?';
+    }
+    if (len > n) {
+        memcpy(out + n, "...", 3);
+        n += 3;
+    }
+    out[n] = '\0';
+    return out;
+}
+
+int proto_check_limits(const proto_limits *lim, uint64_t nverts,
+                       uint64_t nfacets, uint64_t ncorners, geo_err *err)
+{
+    uint64_t max_v = lim->max_vertices, max_c = lim->max_corners;
+    if (max_v > GEO_POLY_MAX_VERTS)
+        max_v = GEO_POLY_MAX_VERTS;
+    if (max_c > GEO_POLY_MAX_CORNERS)
+        max_c = GEO_POLY_MAX_CORNERS;
+    if (nverts > max_v)
+        return geo_err_set(err, -ERANGE,
+                           "vertices: %llu exceed the limit of %llu",
+                           (unsigned long long)nverts,
+                           (unsigned long long)max_v);
+    if (nfacets > lim->max_facets)
+        return geo_err_set(err, -ERANGE, "facets: %llu exceed the limit of %u",
+                           (unsigned long long)nfacets, lim->max_facets);
+    if (ncorners > max_c)
+        return geo_err_set(err, -ERANGE,
+                           "facets: %llu vertex indices in all exceed the "
+                           "limit of %llu",
+                           (unsigned long long)ncorners,
+                           (unsigned long long)max_c);
+    return 0;
+}
+
+static void note_mismatch(proto_read_report *rep, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+
+static void note_mismatch(proto_read_report *rep, const char *fmt, ...)
+{
+    if (rep->plane_mismatches++ == 0) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(rep->first, sizeof rep->first, fmt, ap);
+        va_end(ap);
+    }
+}
+
+/* Normalises plane in place; false for a zero or non-finite normal. The
+ * largest component is divided out first so that squaring cannot
+ * overflow. */
+static bool normalise_plane(double plane[4])
+{
+    double m = fmax(fabs(plane[0]), fmax(fabs(plane[1]), fabs(plane[2])));
+    if (!(m > 0) || !isfinite(m) || !isfinite(plane[3]))
+        return false;
+    /* a plane already unit within rounding (as every writer here emits)
+     * is kept bit for bit, so that write/read cycles are exact */
+    if (m > 0.5 && m <= 1) {
+        double n2 = geo_vdot(plane, plane);
+        if (fabs(n2 - 1) <= 4 * DBL_EPSILON)
+            return true;
+    }
+    double q[4];
+    for (int k = 0; k < 4; k++)
+        q[k] = plane[k] / m;
+    double n = geo_vlen(q);
+    if (!isfinite(q[3] / n))
+        return false;
+    for (int k = 0; k < 4; k++)
+        plane[k] = q[k] / n;
+    return true;
+}
+
+/* A least-squares plane for facet f; a zero component is stored as +0
+ * so that files written later do not show "-0.0" for computed planes. */
+static void fit_plane(geo_poly *p, uint32_t f)
+{
+    geo_poly_facet_fit_plane(p, f, GEO_PLANE_UNWEIGHTED, p->planes[f]);
+    for (int k = 0; k < 4; k++)
+        p->planes[f][k] += 0.0;
+}
+
+void proto_finish_planes(geo_poly *p, const bool *given,
+                         proto_read_report *rep)
+{
+    rep->worst_facet = UINT32_MAX;
+    double eps = geo_poly_eps(p);
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        double *pl = p->planes[f];
+        if (!given || !given[f]) {
+            fit_plane(p, f);
+            continue;
+        }
+        rep->planes_given++;
+        if (!normalise_plane(pl)) {
+            note_mismatch(rep, "facets[%u].plane: zero normal; recomputed "
+                               "by least squares", f);
+            fit_plane(p, f);
+            continue;
+        }
+        uint32_t n = geo_poly_facet_size(p, f);
+        const uint32_t *v = geo_poly_facet(p, f);
+        double worst = 0;
+        uint32_t worst_i = 0;
+        for (uint32_t i = 0; i < n; i++) {
+            double d = fabs(geo_plane_eval(pl, p->verts[v[i]]));
+            if (d > worst) {
+                worst = d;
+                worst_i = i;
+            }
+        }
+        if (worst > rep->worst_deviation) {
+            rep->worst_deviation = worst;
+            rep->worst_facet = f;
+        }
+        double area[3];
+        geo_poly_facet_area_vector(p, f, area);
+        if (worst > eps)
+            note_mismatch(rep, "facets[%u].plane: vertex %u (facets[%u]."
+                               "vertices[%u]) lies %.3g mm off the plane "
+                               "(tolerance %.3g mm)",
+                          f, v[worst_i], f, worst_i, worst, eps);
+        else if (geo_vdot(area, pl) < 0)
+            note_mismatch(rep, "facets[%u].plane: the normal points against "
+                               "the vertex order (inward)", f);
+    }
+}

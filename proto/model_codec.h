@@ -1,0 +1,138 @@
+/* model_codec.h — internal to proto/: what the model format codecs share
+ * (a growable output buffer, exact number printing, plane finishing,
+ * limit checks) and the entry points of each codec, dispatched by
+ * model_io.c. Nothing outside proto/ includes this header.
+ *
+ * Reader contract (every proto_*_read below): data holds len bytes (not
+ * NUL-terminated), lim is never NULL, rep is never NULL and zeroed by the
+ * caller. A reader returns a new geo_poly whose planes are unit (or zero
+ * for a degenerate facet) and whose indices are validated, or NULL with
+ * err naming the place ("line 17: ...", "byte 84: ...",
+ * "facets[3].vertices[1]: ..."). It never allocates more than a small
+ * multiple of len, whatever counts the input claims.
+ *
+ * Writer contract: appends to buf; the model has finite coordinates and
+ * planes and valid indices (model_io.c checks that first). Returns 0 or a
+ * negative errno with err set; out-of-memory shows as buf->failed. */
+#ifndef PROTO_MODEL_CODEC_H
+#define PROTO_MODEL_CODEC_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "model_io.h"
+
+/* A growable byte buffer. After an allocation failure `failed` is set and
+ * every later append is a no-op, so writers check once at the end. */
+typedef struct proto_buf {
+    char *data;
+    size_t len, cap;
+    bool failed;
+} proto_buf;
+
+void proto_buf_append(proto_buf *b, const void *bytes, size_t n);
+void proto_buf_puts(proto_buf *b, const char *s);
+void proto_buf_printf(proto_buf *b, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+/* The shortest decimal that reads back (strtod) as exactly x; "-0.0" for
+ * negative zero. x must be finite. */
+void proto_buf_double(proto_buf *b, double x);
+void proto_buf_u16le(proto_buf *b, uint16_t v);
+void proto_buf_u32le(proto_buf *b, uint32_t v);
+void proto_buf_f32le(proto_buf *b, float v);
+void proto_buf_f64le(proto_buf *b, double v);
+
+/* Writes the shortest round-trip decimal of finite x into out (at least
+ * 32 bytes); returns its length. */
+size_t proto_fmt_double(char *out, double x);
+
+/* Little-endian loads from unaligned bytes. */
+uint16_t proto_ld_u16le(const unsigned char *p);
+uint32_t proto_ld_u32le(const unsigned char *p);
+double proto_ld_f64le(const unsigned char *p);
+float proto_ld_f32le(const unsigned char *p);
+
+/* A whitespace tokenizer over text that is not NUL-terminated; counts
+ * lines (from 1) for error messages. With hash_comments, '#' starts a
+ * comment that runs to the end of the line. */
+typedef struct proto_scan {
+    const char *p, *end;
+    uint32_t line;      /* line of the position p */
+    uint32_t tok_line;  /* line of the last token returned */
+    bool hash_comments;
+} proto_scan;
+
+void proto_scan_init(proto_scan *s, const void *data, size_t len,
+                     bool hash_comments);
+/* The next token (*ret, *ret_len), or false at the end of the text. */
+bool proto_scan_token(proto_scan *s, const char **ret, size_t *ret_len);
+/* The rest of the current line (without its newline) as one span,
+ * advancing past the newline; false at the end of the text. Leading and
+ * trailing blanks are trimmed. */
+bool proto_scan_line(proto_scan *s, const char **ret, size_t *ret_len);
+
+/* A finite double from a whole token (C locale syntax, strtod). 0,
+ * -EINVAL when the token is not a number or not finite, -ERANGE when it
+ * overflows a double. */
+int proto_parse_double(const char *tok, size_t len, double *ret);
+/* An unsigned 32-bit integer written in decimal digits only. 0, -EINVAL,
+ * or -ERANGE above UINT32_MAX. */
+int proto_parse_u32(const char *tok, size_t len, uint32_t *ret);
+/* A signed decimal integer within ±2^62. 0, -EINVAL or -ERANGE. */
+int proto_parse_i64(const char *tok, size_t len, int64_t *ret);
+/* Formats a token for an error message: at most 24 bytes, non-printable
+ * bytes as '?', into out (32 bytes). */
+const char *proto_tok_show(const char *tok, size_t len, char *out);
+
+/* Fails with -ERANGE and a message when a count exceeds lim ("vertices:
+ * 3000000 exceed the limit of 2000000"). Counts are 64-bit so that a
+ * claimed count is checked before any arithmetic on it. */
+int proto_check_limits(const proto_limits *lim, uint64_t nverts,
+                       uint64_t nfacets, uint64_t ncorners, geo_err *err);
+
+/* Completes the planes of a freshly read model: facets with given[f]
+ * false (or given NULL: all) get a least-squares plane; given planes are
+ * normalised and checked against their vertices, filling rep (see
+ * proto_read_report). Always succeeds. */
+void proto_finish_planes(geo_poly *p, const bool *given,
+                         proto_read_report *rep);
+
+/* The codecs. */
+geo_poly *proto_json_read(const void *data, size_t len,
+                          const proto_limits *lim, proto_read_report *rep,
+                          geo_err *err);
+geo_poly *proto_json_from_value(const json_t *root, const proto_limits *lim,
+                                proto_read_report *rep, geo_err *err);
+int proto_json_write(const geo_poly *p, proto_buf *buf, geo_err *err);
+
+geo_poly *proto_polytxt_read(const void *data, size_t len,
+                             const proto_limits *lim, proto_read_report *rep,
+                             geo_err *err);
+int proto_polytxt_write(const geo_poly *p, proto_buf *buf, geo_err *err);
+
+geo_poly *proto_obj_read(const void *data, size_t len,
+                         const proto_limits *lim, proto_read_report *rep,
+                         geo_err *err);
+int proto_obj_write(const geo_poly *p, proto_buf *buf, geo_err *err);
+
+geo_poly *proto_stl_read(const void *data, size_t len,
+                         const proto_limits *lim, proto_read_report *rep,
+                         geo_err *err);
+int proto_stl_write(const geo_poly *p, bool ascii, proto_buf *buf,
+                    geo_err *err);
+
+geo_poly *proto_ply_read(const void *data, size_t len,
+                         const proto_limits *lim, proto_read_report *rep,
+                         geo_err *err);
+int proto_ply_write(const geo_poly *p, bool ascii, proto_buf *buf,
+                    geo_err *err);
+
+int proto_ase_write(const geo_poly *p, proto_buf *buf, geo_err *err);
+
+geo_poly *proto_fmb1_read(const void *data, size_t len,
+                          const proto_limits *lim, proto_read_report *rep,
+                          geo_err *err);
+int proto_fmb1_write(const geo_poly *p, proto_buf *buf, geo_err *err);
+
+#endif

@@ -1,0 +1,441 @@
+/* model_io.c — the model_io.h entry points: limits, format names and
+ * extensions, dispatch to the codecs (model_json.c, model_poly.c, ...),
+ * whole-file reading under the size limit and atomic file writing
+ * (temporary file in the target's directory, fsync, rename), so a reader
+ * of the target sees the old file or the new one, never a partial one. */
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "model_codec.h"
+
+void proto_limits_default(proto_limits *lim)
+{
+    lim->max_vertices = 2000000;
+    lim->max_facets = 4000000;
+    lim->max_corners = 16000000;
+    lim->max_bytes = (size_t)512 << 20;
+}
+
+static const struct {
+    proto_format fmt;
+    const char *name, *ext, *mime;
+} formats[] = {
+    {PROTO_FMT_JSON, "json", "json", "application/json"},
+    {PROTO_FMT_POLY, "poly", "poly", "text/plain"},
+    {PROTO_FMT_OBJ, "obj", "obj", "model/obj"},
+    {PROTO_FMT_STL, "stl", "stl", "model/stl"},
+    {PROTO_FMT_STL_ASCII, "stl-ascii", NULL, "model/stl"},
+    {PROTO_FMT_PLY, "ply", "ply", "application/x-ply"},
+    {PROTO_FMT_PLY_ASCII, "ply-ascii", NULL, "application/x-ply"},
+    {PROTO_FMT_ASE, "ase", "ase", "text/plain"},
+    {PROTO_FMT_FMB1, "fmb1", "fmb", "application/octet-stream"},
+};
+enum { NFORMATS = sizeof formats / sizeof formats[0] };
+
+proto_format proto_format_from_path(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    const char *dot = strrchr(slash ? slash + 1 : path, '.');
+    if (!dot)
+        return PROTO_FMT_UNKNOWN;
+    for (int i = 0; i < NFORMATS; i++)
+        if (formats[i].ext && strcasecmp(dot + 1, formats[i].ext) == 0)
+            return formats[i].fmt;
+    if (strcasecmp(dot + 1, "fmb1") == 0)
+        return PROTO_FMT_FMB1;
+    return PROTO_FMT_UNKNOWN;
+}
+
+proto_format proto_format_from_name(const char *name)
+{
+    for (int i = 0; i < NFORMATS; i++)
+        if (strcasecmp(name, formats[i].name) == 0)
+            return formats[i].fmt;
+    if (strcasecmp(name, "fmb") == 0)
+        return PROTO_FMT_FMB1;
+    return PROTO_FMT_UNKNOWN;
+}
+
+const char *proto_format_name(proto_format fmt)
+{
+    for (int i = 0; i < NFORMATS; i++)
+        if (formats[i].fmt == fmt)
+            return formats[i].name;
+    return "unknown";
+}
+
+const char *proto_format_mime(proto_format fmt)
+{
+    for (int i = 0; i < NFORMATS; i++)
+        if (formats[i].fmt == fmt)
+            return formats[i].mime;
+    return "application/octet-stream";
+}
+
+geo_poly *proto_model_read_mem_ex(const void *data, size_t len,
+                                  proto_format fmt, const proto_limits *lim,
+                                  proto_read_report *ret_report, geo_err *err)
+{
+    proto_limits dl;
+    if (!lim) {
+        proto_limits_default(&dl);
+        lim = &dl;
+    }
+    if (len > lim->max_bytes) {
+        geo_err_set(err, -ERANGE, "%zu bytes exceed the limit of %zu", len,
+                    lim->max_bytes);
+        return NULL;
+    }
+    if (!data && len) {
+        geo_err_set(err, -EINVAL, "no data");
+        return NULL;
+    }
+    if (!data)
+        data = "";
+    proto_read_report rep;
+    memset(&rep, 0, sizeof rep);
+    geo_poly *p = NULL;
+    switch (fmt) {
+    case PROTO_FMT_JSON:
+        p = proto_json_read(data, len, lim, &rep, err);
+        break;
+    case PROTO_FMT_POLY:
+        p = proto_polytxt_read(data, len, lim, &rep, err);
+        break;
+    case PROTO_FMT_OBJ:
+        p = proto_obj_read(data, len, lim, &rep, err);
+        break;
+    case PROTO_FMT_STL:
+    case PROTO_FMT_STL_ASCII:
+        p = proto_stl_read(data, len, lim, &rep, err);
+        break;
+    case PROTO_FMT_PLY:
+    case PROTO_FMT_PLY_ASCII:
+        p = proto_ply_read(data, len, lim, &rep, err);
+        break;
+    case PROTO_FMT_FMB1:
+        p = proto_fmb1_read(data, len, lim, &rep, err);
+        break;
+    case PROTO_FMT_ASE:
+        geo_err_set(err, -EINVAL, "ASE files can be written, not read");
+        break;
+    case PROTO_FMT_UNKNOWN:
+    default:
+        geo_err_set(err, -EINVAL, "unknown model format");
+        break;
+    }
+    if (p && ret_report)
+        *ret_report = rep;
+    return p;
+}
+
+geo_poly *proto_model_read_mem(const void *data, size_t len, proto_format fmt,
+                               const proto_limits *lim, geo_err *err)
+{
+    return proto_model_read_mem_ex(data, len, fmt, lim, NULL, err);
+}
+
+/* Reads the whole of fd into a malloc'd buffer, failing past max bytes
+ * (checked on the size before reading when fd is a regular file). */
+static int slurp(int fd, size_t max, char **ret, size_t *ret_len,
+                 geo_err *err)
+{
+    struct stat st;
+    if (fstat(fd, &st) < 0)
+        return geo_err_set(err, -errno, "%s", strerror(errno));
+    if (S_ISDIR(st.st_mode))
+        return geo_err_set(err, -EISDIR, "is a directory");
+    size_t cap = 65536;
+    if (S_ISREG(st.st_mode)) {
+        if ((uint64_t)st.st_size > max)
+            return geo_err_set(err, -ERANGE,
+                               "%llu bytes exceed the limit of %zu",
+                               (unsigned long long)st.st_size, max);
+        cap = (size_t)st.st_size + 1;
+    }
+    char *buf = malloc(cap);
+    if (!buf)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    size_t len = 0;
+    for (;;) {
+        if (len == cap) {
+            if (cap > max) {
+                free(buf);
+                return geo_err_set(err, -ERANGE,
+                                   "more than %zu bytes (the limit)", max);
+            }
+            size_t ncap = cap * 2;
+            char *nb = realloc(buf, ncap);
+            if (!nb) {
+                free(buf);
+                return geo_err_set(err, -ENOMEM, "out of memory");
+            }
+            buf = nb;
+            cap = ncap;
+        }
+        ssize_t n = read(fd, buf + len, cap - len);
+        if (n < 0) {
+            if (errno == EINTR)
+                continue;
+            int e = errno;
+            free(buf);
+            return geo_err_set(err, -e, "%s", strerror(e));
+        }
+        if (n == 0)
+            break;
+        len += (size_t)n;
+    }
+    if (len > max) {
+        free(buf);
+        return geo_err_set(err, -ERANGE, "more than %zu bytes (the limit)",
+                           max);
+    }
+    *ret = buf;
+    *ret_len = len;
+    return 0;
+}
+
+static const char *EXTENSIONS = ".json .poly .obj .stl .ply .ase .fmb";
+
+geo_poly *proto_model_read_file_ex(const char *path, proto_format fmt,
+                                   const proto_limits *lim,
+                                   proto_read_report *ret_report,
+                                   geo_err *err)
+{
+    proto_limits dl;
+    if (!lim) {
+        proto_limits_default(&dl);
+        lim = &dl;
+    }
+    if (fmt == PROTO_FMT_UNKNOWN) {
+        fmt = proto_format_from_path(path);
+        if (fmt == PROTO_FMT_UNKNOWN) {
+            geo_err_set(err, -EINVAL,
+                        "%s: cannot tell the format from the name (known "
+                        "extensions: %s)", path, EXTENSIONS);
+            return NULL;
+        }
+    }
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0) {
+        geo_err_set(err, -errno, "%s: %s", path, strerror(errno));
+        return NULL;
+    }
+    char *data = NULL;
+    size_t len = 0;
+    int r = slurp(fd, lim->max_bytes, &data, &len, err);
+    close(fd);
+    geo_poly *p = NULL;
+    if (r == 0)
+        p = proto_model_read_mem_ex(data, len, fmt, lim, ret_report, err);
+    free(data);
+    if (!p)
+        geo_err_prefix(err, path);
+    return p;
+}
+
+geo_poly *proto_model_read_file(const char *path, proto_format fmt,
+                                const proto_limits *lim, geo_err *err)
+{
+    return proto_model_read_file_ex(path, fmt, lim, NULL, err);
+}
+
+/* What every writer relies on: finite numbers and valid indices, so that
+ * no writer produces a file that its reader would reject. */
+static int check_writable(const geo_poly *p, geo_err *err)
+{
+    for (uint32_t i = 0; i < p->nverts; i++)
+        for (int k = 0; k < 3; k++)
+            if (!isfinite(p->verts[i][k]))
+                return geo_err_set(err, -EINVAL,
+                                   "vertices[%u][%d]: not a finite number", i,
+                                   k);
+    for (uint32_t f = 0; f < p->nfacets; f++)
+        for (int k = 0; k < 4; k++)
+            if (!isfinite(p->planes[f][k]))
+                return geo_err_set(err, -EINVAL,
+                                   "facets[%u].plane[%d]: not a finite number",
+                                   f, k);
+    return geo_poly_validate_indices(p, err);
+}
+
+int proto_model_write_mem(const geo_poly *p, proto_format fmt, char **ret_buf,
+                          size_t *ret_len, geo_err *err)
+{
+    int r = check_writable(p, err);
+    if (r < 0)
+        return r;
+    proto_buf b = {0};
+    switch (fmt) {
+    case PROTO_FMT_JSON:
+        r = proto_json_write(p, &b, err);
+        break;
+    case PROTO_FMT_POLY:
+        r = proto_polytxt_write(p, &b, err);
+        break;
+    case PROTO_FMT_OBJ:
+        r = proto_obj_write(p, &b, err);
+        break;
+    case PROTO_FMT_STL:
+    case PROTO_FMT_STL_ASCII:
+        r = proto_stl_write(p, fmt == PROTO_FMT_STL_ASCII, &b, err);
+        break;
+    case PROTO_FMT_PLY:
+    case PROTO_FMT_PLY_ASCII:
+        r = proto_ply_write(p, fmt == PROTO_FMT_PLY_ASCII, &b, err);
+        break;
+    case PROTO_FMT_ASE:
+        r = proto_ase_write(p, &b, err);
+        break;
+    case PROTO_FMT_FMB1:
+        r = proto_fmb1_write(p, &b, err);
+        break;
+    case PROTO_FMT_UNKNOWN:
+    default:
+        r = geo_err_set(err, -EINVAL, "unknown model format");
+        break;
+    }
+    if (r == 0 && b.failed)
+        r = geo_err_set(err, -ENOMEM, "out of memory");
+    if (r < 0) {
+        free(b.data);
+        return r;
+    }
+    if (!b.data) {
+        b.data = malloc(1);
+        if (!b.data)
+            return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    *ret_buf = b.data;
+    *ret_len = b.len;
+    return 0;
+}
+
+static int write_all(int fd, const char *data, size_t len)
+{
+    while (len) {
+        ssize_t n = write(fd, data, len);
+        if (n < 0) {
+            if (errno == EINTR)
+                continue;
+            return -errno;
+        }
+        data += n;
+        len -= (size_t)n;
+    }
+    return 0;
+}
+
+/* Writes data to path through a temporary file beside it. A new file
+ * gets mode 0644, an existing one keeps its mode. */
+static int write_atomic(const char *path, const char *data, size_t len,
+                        geo_err *err)
+{
+    size_t pl = strlen(path);
+    char *tmp = malloc(pl + 16);
+    if (!tmp)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    memcpy(tmp, path, pl);
+    memcpy(tmp + pl, ".tmp.XXXXXX", 12);
+    int fd = mkostemp(tmp, O_CLOEXEC);
+    if (fd < 0) {
+        int e = errno;
+        free(tmp);
+        return geo_err_set(err, -e, "%s: %s", path, strerror(e));
+    }
+    struct stat st;
+    mode_t mode = stat(path, &st) == 0 ? (st.st_mode & 07777) : 0644;
+    int r = fchmod(fd, mode) < 0 ? -errno : 0;
+    if (r == 0)
+        r = write_all(fd, data, len);
+    if (r == 0 && fsync(fd) < 0)
+        r = -errno;
+    if (close(fd) < 0 && r == 0)
+        r = -errno;
+    if (r == 0 && rename(tmp, path) < 0)
+        r = -errno;
+    if (r < 0) {
+        unlink(tmp);
+        geo_err_set(err, r, "%s: %s", path, strerror(-r));
+    }
+    free(tmp);
+    return r;
+}
+
+int proto_model_write_file(const geo_poly *p, const char *path,
+                           proto_format fmt, geo_err *err)
+{
+    if (fmt == PROTO_FMT_UNKNOWN) {
+        fmt = proto_format_from_path(path);
+        if (fmt == PROTO_FMT_UNKNOWN)
+            return geo_err_set(err, -EINVAL,
+                               "%s: cannot tell the format from the name "
+                               "(known extensions: %s)", path, EXTENSIONS);
+    }
+    char *data;
+    size_t len;
+    int r = proto_model_write_mem(p, fmt, &data, &len, err);
+    if (r < 0) {
+        geo_err_prefix(err, path);
+        return r;
+    }
+    r = write_atomic(path, data, len, err);
+    free(data);
+    return r;
+}
+
+/* Prefixes a facet-model/1 error with the place of the model in a larger
+ * document: "model.facets[3]: ..." for a message that names a key,
+ * "model: ..." otherwise. */
+static void prefix_json_path(geo_err *err, const char *prefix)
+{
+    if (!err || !prefix || !*prefix)
+        return;
+    static const char *const keys[] = {"format", "units", "vertices",
+                                       "facets"};
+    for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++) {
+        size_t n = strlen(keys[i]);
+        char c = err->msg[n];
+        if (strncmp(err->msg, keys[i], n) == 0 &&
+            (c == '[' || c == '.' || c == ':')) {
+            char tmp[sizeof err->msg];
+            memcpy(tmp, err->msg, sizeof tmp);
+            geo_err_set(err, 0, "%s.%s", prefix, tmp);
+            return;
+        }
+    }
+    geo_err_prefix(err, prefix);
+}
+
+geo_poly *proto_model_from_json_ex(const json_t *root, const proto_limits *lim,
+                                   const char *path_prefix,
+                                   proto_read_report *ret_report,
+                                   geo_err *err)
+{
+    proto_limits dl;
+    if (!lim) {
+        proto_limits_default(&dl);
+        lim = &dl;
+    }
+    proto_read_report rep;
+    memset(&rep, 0, sizeof rep);
+    geo_poly *p = proto_json_from_value(root, lim, &rep, err);
+    if (!p)
+        prefix_json_path(err, path_prefix);
+    else if (ret_report)
+        *ret_report = rep;
+    return p;
+}
+
+geo_poly *proto_model_from_json(const json_t *root, const proto_limits *lim,
+                                const char *path_prefix, geo_err *err)
+{
+    return proto_model_from_json_ex(root, lim, path_prefix, NULL, err);
+}
