@@ -16,6 +16,7 @@ static int cmd_version(int argc, char **argv)
 static const cli_command commands[] = {
     {"version", "print the version", cmd_version},
     {"convert", "convert a model between file formats", cmd_convert},
+    {"cut", "cut a model by a plane (seed 000 §3)", cmd_cut},
 };
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
 

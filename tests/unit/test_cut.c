@@ -13,6 +13,7 @@
 
 #include "cut.h"
 #include "cut_shapes.h"
+#include "model_io.h"
 #include "predicates.h"
 #include "topo.h"
 #include "vec.h"
@@ -603,6 +604,53 @@ static void test_random_planes_nonconvex_models(void **state)
     }
 }
 
+static geo_poly *load(const char *name)
+{
+    geo_err err = {{0}};
+    geo_poly *p = proto_model_read_file(tu_model_path(name), PROTO_FMT_UNKNOWN,
+                                        NULL, &err);
+    if (!p)
+        fail_msg("%s: %s", name, err.msg);
+    return p;
+}
+
+static void test_sample_models_random_planes(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *name;
+        int planes;
+    } models[] = {{"brilliant.truth.json", 200},
+                  {"brilliant.scan-k100.json", 60},
+                  {"brilliant.scan-k400.json", 40},
+                  {"brilliant.scan-k800.json", 20}};
+    for (size_t i = 0; i < sizeof models / sizeof models[0]; i++) {
+        geo_poly *p = load(models[i].name);
+        assert_int_equal(check_random_halves(p, 7 + i, models[i].planes), 0);
+        geo_poly_free(p);
+    }
+}
+
+static void test_sample_files_match_the_built_models(void **state)
+{
+    (void)state;
+    geo_poly *p = load("notch-cube.json");
+    geo_cut_report rep;
+    geo_poly *o = cut_ok(p, 0, 0, 1, -8, &rep);
+    assert_close(geo_poly_volume(o), 768.0, 1e-12);
+    geo_poly_free(o);
+    o = cut_ok(p, 0, 0, 1, -6, &rep);
+    assert_int_equal(o->nfacets, 6);
+    geo_poly_free(o);
+    geo_poly_free(p);
+    p = load("l-prism.json");
+    o = cut_ok(p, 0, 1, 0, -4, &rep);
+    assert_close(geo_poly_volume(o), 240.0, 1e-12);
+    assert_int_equal(o->nverts, 8);
+    geo_poly_free(o);
+    geo_poly_free(p);
+}
+
 /* For each vertex of a, the distance to the nearest vertex of b. */
 static double vertex_set_distance(const geo_poly *a, const geo_poly *b)
 {
@@ -679,6 +727,8 @@ int main(void)
         cmocka_unit_test(test_main_facet_variant_replaces_nonplanar_facet),
         cmocka_unit_test(test_random_planes_nonconvex_models),
         cmocka_unit_test(test_convex_cut_equals_halfspace_intersection),
+        cmocka_unit_test(test_sample_models_random_planes),
+        cmocka_unit_test(test_sample_files_match_the_built_models),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
