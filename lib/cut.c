@@ -576,6 +576,63 @@ static int inplane_edges(cutter *k)
     return 0;
 }
 
+/* A vertex on the plane whose neighbours all lie on the kept side is the
+ * apex of a cone below the plane: of the solid (a peak: the new facets
+ * keep away from it) or of a cavity (the solid lies above it, and a new
+ * facet would pass over the apex, touching it). The latter is refused.
+ * Inside is decided by the winding number of each new facet around the
+ * apex in the plane's projection, with exact orientation signs. */
+static int check_cavity_apexes(cutter *k, uint32_t first_new)
+{
+    const geo_poly *p = k->p;
+    const geo_topo *t = k->t;
+    const geo_poly *o = k->out;
+    int drop = dominant_axis(k->unit);
+    int u = (drop + 1) % 3, w = (drop + 2) % 3;
+    for (uint32_t v = 0; v < p->nverts; v++) {
+        if (k->side[v] != 0 || t->vstart[v] == t->vstart[v + 1])
+            continue;
+        bool apex = true;
+        for (uint32_t i = t->vstart[v]; i < t->vstart[v + 1] && apex; i++) {
+            uint32_t c = t->vcorners[i];
+            apex = k->side[p->fidx[geo_topo_next(p, t, c)]] < 0 &&
+                   k->side[p->fidx[geo_topo_prev(p, t, c)]] < 0;
+        }
+        if (!apex)
+            continue;
+        const double *q = p->verts[v];
+        for (uint32_t f = first_new; f < o->nfacets; f++) {
+            uint32_t n = geo_poly_facet_size(o, f);
+            const uint32_t *vs = geo_poly_facet(o, f);
+            bool vertex_of_f = false;
+            for (uint32_t j = 0; j < n; j++)
+                vertex_of_f |= vs[j] == v;
+            if (vertex_of_f)
+                continue;
+            int wn = 0;
+            bool on = false;
+            for (uint32_t j = 0; j < n && !on; j++) {
+                const double *a = o->verts[vs[j]];
+                const double *b = o->verts[vs[j + 1 < n ? j + 1 : 0]];
+                int s = geo_orient2d_proj(a, b, q, drop);
+                if (s == 0 && fmin(a[u], b[u]) <= q[u] && q[u] <= fmax(a[u], b[u]) &&
+                    fmin(a[w], b[w]) <= q[w] && q[w] <= fmax(a[w], b[w]))
+                    on = true;
+                else if (a[w] <= q[w] && b[w] > q[w] && s > 0)
+                    wn++;
+                else if (a[w] > q[w] && b[w] <= q[w] && s < 0)
+                    wn--;
+            }
+            if (on || wn != 0)
+                return geo_err_set(k->err, -ENOTSUP,
+                                   "vertices[%u]: the plane touches the apex "
+                                   "of a cavity from inside; a new facet "
+                                   "would pass over it", v);
+        }
+    }
+    return 0;
+}
+
 /* Removes on-plane vertices left in exactly two facets (they lie on the
  * straight edge between those two). Returns the count or -EINVAL. */
 static int64_t drop_hanging(cutter *k)
@@ -802,6 +859,8 @@ int geo_cut(const geo_poly *p, const double plane[4],
     if ((r = build_section(&k, &rp.components)) < 0)
         goto done;
     rp.new_facets = out->nfacets - first_new;
+    if ((r = check_cavity_apexes(&k, first_new)) < 0)
+        goto done;
     if (o.main_facet != GEO_NONE && rp.components != 1) {
         r = geo_err_set(err, -EINVAL,
                         "main facet: the section has %u components, the "

@@ -329,6 +329,29 @@ static void test_vertices_and_edges_on_plane(void **state)
     geo_poly_free(p);
 }
 
+static void test_convex_edge_in_plane_stays_between_its_facets(void **state)
+{
+    (void)state;
+    /* two tips: (2, 7) touches y = 7 with its vertical edge, (8, 9) is cut */
+    static const double xy[8][2] = {{0, 0}, {10, 0}, {10, 6}, {8, 9},
+                                    {6, 6}, {4, 6}, {2, 7}, {0, 6}};
+    geo_poly *p = cs_prism(xy, 8, 0, 2);
+    double vol = geo_poly_volume(p);
+    geo_cut_report rep;
+    geo_poly *o = cut_ok(p, 0, 1, 0, -7, &rep);
+    /* the cut-off tip: base 8/3 at y = 7, height 2, thickness 2 */
+    assert_close(geo_poly_volume(o), vol - 8.0 / 3.0 * 2.0, 1e-12);
+    assert_int_equal(rep.components, 1);
+    /* the touching edge keeps its two side facets and both vertices */
+    assert_int_equal(rep.removed_vertices, 2);
+    geo_poly_free(o);
+    o = cut_ok(p, 0, -1, 0, 7, &rep);
+    assert_close(geo_poly_volume(o), 8.0 / 3.0 * 2.0, 1e-12);
+    assert_int_equal(o->nverts, 6);
+    geo_poly_free(o);
+    geo_poly_free(p);
+}
+
 static void test_plane_missing_or_touching_is_unchanged_or_empty(void **state)
 {
     (void)state;
@@ -406,6 +429,72 @@ static void test_pinching_results_are_refused(void **state)
     geo_poly *o = cut_ok(p, 0, -1, 0, 5, &rep);
     assert_close(geo_poly_volume(o), 10.0 * 3 * 2, 1e-12);
     geo_poly_free(o);
+    geo_poly_free(p);
+}
+
+/* A 10-cube with a square pyramid on its bottom face [3,7]², apex
+ * (5, 5, apex_z): dug into the cube (apex_z > 0) or standing out of it
+ * (apex_z < 0). */
+static geo_poly *dented_box(double apex_z)
+{
+    double v[13][3] = {
+        {0, 0, 0}, {10, 0, 0}, {10, 10, 0}, {0, 10, 0},
+        {3, 3, 0}, {7, 3, 0}, {7, 7, 0}, {3, 7, 0}, {5, 5, apex_z},
+        {0, 0, 10}, {10, 0, 10}, {10, 10, 10}, {0, 10, 10}};
+    uint32_t idx[64], start[18], c = 0, f = 0;
+    static const uint32_t top[4] = {9, 10, 11, 12};
+    start[f++] = c;
+    for (int i = 0; i < 4; i++)
+        idx[c++] = top[i];
+    for (uint32_t i = 0; i < 4; i++) {
+        uint32_t j = (i + 1) % 4;
+        uint32_t side[4] = {i, j, 9 + j, 9 + i};
+        uint32_t trap[4] = {j, i, 4 + i, 4 + j};
+        uint32_t dent[3] = {4 + j, 4 + i, 8};
+        start[f++] = c;
+        for (int q = 0; q < 4; q++)
+            idx[c++] = side[q];
+        start[f++] = c;
+        for (int q = 0; q < 4; q++)
+            idx[c++] = trap[q];
+        start[f++] = c;
+        for (int q = 0; q < 3; q++)
+            idx[c++] = dent[q];
+    }
+    start[f] = c;
+    return geo_poly_from_arrays(13, &v[0][0], f, start, idx, NULL, NULL);
+}
+
+static void test_cavity_apex_on_plane(void **state)
+{
+    (void)state;
+    geo_poly *p = dented_box(4);
+    assert_null(cs_check_valid(p, 1e-12));
+    assert_close(geo_poly_volume(p), 1000.0 - 64.0 / 3.0, 1e-12);
+    geo_err err = {{0}};
+    /* keeping below the apex: the new facet would pass over it */
+    assert_int_equal(cut_code(p, 0, 0, 1, -4, NULL, &err), -ENOTSUP);
+    assert_non_null(strstr(err.msg, "cavity"));
+    /* a little lower the dent is a hole in the section */
+    assert_int_equal(cut_code(p, 0, 0, 1, -3, NULL, &err), -ENOTSUP);
+    assert_non_null(strstr(err.msg, "hole"));
+    /* keeping above: a plain block, the apex gone */
+    geo_cut_report rep;
+    geo_poly *o = cut_ok(p, 0, 0, -1, 4, &rep);
+    assert_close(geo_poly_volume(o), 600.0, 1e-12);
+    assert_int_equal(o->nverts, 8);
+    geo_poly_free(o);
+    geo_poly_free(p);
+    /* the apex of a peak of the solid on the plane is fine: the new facet
+     * keeps away from it */
+    p = dented_box(-4);
+    double vol = 1000.0 + 64.0 / 3.0;
+    assert_close(geo_poly_volume(p), vol, 1e-12);
+    o = cut_ok(p, 1.5, 0, -1, -11.5, &rep);
+    geo_poly *q = cut_ok(p, -1.5, 0, 1, 11.5, &rep);
+    assert_close(geo_poly_volume(o) + geo_poly_volume(q), vol, 1e-12);
+    geo_poly_free(o);
+    geo_poly_free(q);
     geo_poly_free(p);
 }
 
@@ -719,9 +808,11 @@ int main(void)
         cmocka_unit_test(test_comb_gives_one_component_per_prong),
         cmocka_unit_test(test_vertices_and_edges_on_plane),
         cmocka_unit_test(test_plane_missing_or_touching_is_unchanged_or_empty),
+        cmocka_unit_test(test_convex_edge_in_plane_stays_between_its_facets),
         cmocka_unit_test(test_reflex_vertex_on_plane),
         cmocka_unit_test(test_pinching_results_are_refused),
         cmocka_unit_test(test_section_with_hole_is_refused),
+        cmocka_unit_test(test_cavity_apex_on_plane),
         cmocka_unit_test(test_rejects_bad_input),
         cmocka_unit_test(test_cancel_leaves_output_empty),
         cmocka_unit_test(test_main_facet_variant_replaces_nonplanar_facet),
