@@ -1,0 +1,279 @@
+/* stats.c — geo_inspect: one pass of each analysis over the topology,
+ * then the self-intersection search (definitions in stats.h). Invariant:
+ * the polyhedron is only read; every count is deterministic (independent
+ * of the thread count). */
+#include "stats.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "topo.h"
+#include "vec.h"
+
+void geo_inspect_opts_default(geo_inspect_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    geo_selfint_opts_default(&o->selfint);
+    o->coplanar_deg[0] = 0.5;
+    o->coplanar_deg[1] = 1.0;
+    o->coplanar_deg[2] = 2.0;
+}
+
+void geo_stats_clear(geo_stats *s)
+{
+    if (!s)
+        return;
+    geo_selfint_clear(&s->selfint);
+    free(s->degree_count);
+    memset(s, 0, sizeof *s);
+}
+
+static int cmp_u32(const void *x, const void *y)
+{
+    uint32_t a = *(const uint32_t *)x, b = *(const uint32_t *)y;
+    return (a > b) - (a < b);
+}
+
+static int cmp_u64(const void *x, const void *y)
+{
+    uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
+    return (a > b) - (a < b);
+}
+
+/* Vertex degrees (distinct neighbours through the corners at each
+ * vertex) into a histogram; also vertices in fewer than 3 facets. */
+static int degrees(const geo_poly *p, const geo_topo *t, geo_stats *s)
+{
+    uint32_t maxc = 0;
+    for (uint32_t v = 0; v < p->nverts; v++)
+        if (t->vstart[v + 1] - t->vstart[v] > maxc)
+            maxc = t->vstart[v + 1] - t->vstart[v];
+    uint32_t *nb = malloc((2 * (size_t)maxc + 1) * sizeof *nb);
+    uint32_t *deg = malloc(((size_t)p->nverts + 1) * sizeof *deg);
+    if (!nb || !deg) {
+        free(nb), free(deg);
+        return -ENOMEM;
+    }
+    uint32_t maxd = 0;
+    for (uint32_t v = 0; v < p->nverts; v++) {
+        uint32_t n = 0;
+        for (uint32_t k = t->vstart[v]; k < t->vstart[v + 1]; k++) {
+            uint32_t c = t->vcorners[k];
+            nb[n++] = p->fidx[geo_topo_next(p, t, c)];
+            nb[n++] = p->fidx[geo_topo_prev(p, t, c)];
+        }
+        qsort(nb, n, sizeof *nb, cmp_u32);
+        uint32_t d = 0;
+        for (uint32_t i = 0; i < n; i++)
+            d += i == 0 || nb[i] != nb[i - 1];
+        deg[v] = d;
+        if (d > maxd)
+            maxd = d;
+        if (t->vstart[v + 1] - t->vstart[v] < 3)
+            s->low_degree_vertices++;
+    }
+    s->degree_count = calloc((size_t)maxd + 1, sizeof *s->degree_count);
+    if (!s->degree_count) {
+        free(nb), free(deg);
+        return -ENOMEM;
+    }
+    s->max_degree = maxd;
+    for (uint32_t v = 0; v < p->nverts; v++)
+        s->degree_count[deg[v]]++;
+    free(nb), free(deg);
+    return 0;
+}
+
+/* Adjacent facet pairs (each once) whose normals are within each
+ * threshold; zero-length edges. */
+static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
+{
+    uint32_t nf = p->nfacets, nc = t->ncorners;
+    double (*nrm)[3] = malloc(((size_t)nf + 1) * sizeof *nrm);
+    uint64_t *pairs = malloc(((size_t)nc + 1) * sizeof *pairs);
+    if (!nrm || !pairs) {
+        free(nrm), free(pairs);
+        return -ENOMEM;
+    }
+    for (uint32_t f = 0; f < nf; f++) {
+        geo_poly_facet_area_vector(p, f, nrm[f]);
+        geo_vnormalize(nrm[f]);
+    }
+    /* key: lower facet in the high half, the other facet and whether
+     * they disagree on the edge in the low half (facet indices < 2³¹) */
+    size_t np = 0;
+    for (uint32_t c = 0; c < nc; c++) {
+        uint32_t m = t->mate[c];
+        const double *a = p->verts[p->fidx[c]];
+        const double *b = p->verts[p->fidx[geo_topo_next(p, t, c)]];
+        if ((m == GEO_NONE || c < m) && a[0] == b[0] && a[1] == b[1] &&
+            a[2] == b[2])
+            s->degenerate_edges++;
+        if (m == GEO_NONE || m < c)
+            continue;
+        uint32_t f = t->corner_facet[c], g = t->corner_facet[m];
+        if (f == g)
+            continue;
+        uint32_t lo = f < g ? f : g, hi = f < g ? g : f;
+        uint32_t flipped = t->edge_kind[c] == GEO_EDGE_FLIPPED;
+        pairs[np++] = (uint64_t)lo << 32 | (uint64_t)hi << 1 | flipped;
+    }
+    qsort(pairs, np, sizeof *pairs, cmp_u64);
+    for (size_t i = 0; i < np; i++) {
+        if (i > 0 && pairs[i] >> 1 == pairs[i - 1] >> 1)
+            continue;
+        uint32_t f = (uint32_t)(pairs[i] >> 32);
+        uint32_t g = (uint32_t)(pairs[i] & 0xffffffffu) >> 1;
+        double n2[3], x[3];
+        geo_vscale(nrm[g], pairs[i] & 1 ? -1.0 : 1.0, n2);
+        geo_vcross(nrm[f], n2, x);
+        double ang = atan2(geo_vlen(x), geo_vdot(nrm[f], n2)) * 180.0 / M_PI;
+        for (int k = 0; k < GEO_STATS_NCOPLANAR; k++)
+            if (ang < s->coplanar_deg[k])
+                s->near_coplanar[k]++;
+    }
+    free(nrm), free(pairs);
+    return 0;
+}
+
+static uint32_t uf_find(uint32_t *parent, uint32_t x)
+{
+    while (parent[x] != x) {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
+    }
+    return x;
+}
+
+/* Union-find over edges shorter than the radius. */
+static int clusters(const geo_poly *p, geo_stats *s)
+{
+    uint32_t nv = p->nverts;
+    uint32_t *parent = malloc(((size_t)nv + 1) * sizeof *parent);
+    uint32_t *size = calloc((size_t)nv + 1, sizeof *size);
+    if (!parent || !size) {
+        free(parent), free(size);
+        return -ENOMEM;
+    }
+    for (uint32_t v = 0; v < nv; v++)
+        parent[v] = v;
+    double r = s->short_edge_radius;
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        uint32_t n = geo_poly_facet_size(p, f);
+        const uint32_t *fv = geo_poly_facet(p, f);
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t a = fv[i], b = fv[(i + 1) % n];
+            if (geo_vdist(p->verts[a], p->verts[b]) < r) {
+                a = uf_find(parent, a);
+                b = uf_find(parent, b);
+                if (a != b)
+                    parent[a < b ? b : a] = a < b ? a : b;
+            }
+        }
+    }
+    for (uint32_t v = 0; v < nv; v++)
+        size[uf_find(parent, v)]++;
+    for (uint32_t v = 0; v < nv; v++)
+        if (size[v] >= 2) {
+            s->short_edge_clusters++;
+            s->short_edge_cluster_vertices += size[v];
+        }
+    free(parent), free(size);
+    return 0;
+}
+
+/* Progress of the self-intersection search mapped into [lo, 1]. */
+typedef struct sub_progress {
+    const geo_ctx *outer;
+    double lo;
+} sub_progress;
+
+static int sub_report(void *user, double fraction)
+{
+    const sub_progress *sp = user;
+    return geo_ctx_progress(sp->outer, sp->lo + (1.0 - sp->lo) * fraction);
+}
+
+int geo_inspect(const geo_poly *p, const geo_inspect_opts *opts,
+                const geo_ctx *ctx, geo_stats *ret, geo_err *err)
+{
+    memset(ret, 0, sizeof *ret);
+    geo_inspect_opts o;
+    if (opts)
+        o = *opts;
+    else
+        geo_inspect_opts_default(&o);
+    int rc = geo_poly_validate_indices(p, err);
+    if (rc < 0)
+        return rc;
+    geo_topo *t = geo_topo_build(p, err);
+    if (!t)
+        return -ENOMEM;
+
+    ret->vertices = p->nverts;
+    ret->facets = p->nfacets;
+    ret->edges = t->nedges;
+    ret->boundary_edges = t->nboundary_edges;
+    ret->nonmanifold_edges = t->nnonmanifold_edges;
+    ret->nonmanifold_vertices = t->nnonmanifold_vertices;
+    ret->closed = t->nboundary_edges == 0 && t->nnonmanifold_edges == 0;
+    uint32_t *lstart = NULL, *lcorners = NULL, nloops = 0;
+    rc = geo_topo_boundary_loops(p, t, &lstart, &lcorners, &nloops);
+    free(lstart), free(lcorners);
+    if (rc < 0)
+        goto oom;
+    ret->holes = nloops;
+
+    geo_orient_report orep;
+    if ((rc = geo_orient_analyze(p, t, NULL, &orep, err)) < 0)
+        goto fail;
+    ret->orientation = orep.orientation;
+    ret->inconsistent_facets = orep.ninconsistent;
+    ret->shells = orep.nshells;
+    ret->orientable = orep.orientable;
+
+    ret->volume = geo_poly_volume(p);
+    ret->area = geo_poly_area(p);
+    ret->max_nonplanarity = geo_poly_max_nonplanarity(p);
+    ret->eps = o.eps > 0 ? o.eps : geo_poly_eps(p);
+    memcpy(ret->coplanar_deg, o.coplanar_deg, sizeof ret->coplanar_deg);
+    ret->short_edge_radius = o.short_edge_radius > 0
+                                 ? o.short_edge_radius
+                                 : 1e-3 * geo_poly_size(p);
+    if (degrees(p, t, ret) < 0 || neighbours(p, t, ret) < 0 ||
+        clusters(p, ret) < 0)
+        goto oom;
+    geo_topo_free(t);
+    t = NULL;
+    if ((rc = geo_ctx_progress(ctx, 0.1)) < 0)
+        goto fail;
+
+    geo_ctx sub = {0};
+    sub_progress sp = {ctx, 0.1};
+    if (ctx)
+        sub = *ctx;
+    sub.progress = sub_report;
+    sub.user = &sp;
+    rc = geo_selfint_find(p, NULL, &o.selfint, &sub, &ret->selfint, err);
+    if (rc < 0)
+        goto fail;
+    ret->self_intersecting_facets = ret->selfint.nflagged;
+    ret->degenerate_facets = ret->selfint.ndegenerate;
+    for (uint32_t f = 0; f < p->nfacets; f++)
+        ret->nonconvex_facets +=
+            (ret->selfint.facet_flags[f] & GEO_SI_NONCONVEX) != 0;
+    ret->valid = ret->closed && ret->nonmanifold_vertices == 0 &&
+                 ret->low_degree_vertices == 0 &&
+                 ret->orientation == GEO_ORIENT_OUTWARD &&
+                 ret->max_nonplanarity <= ret->eps &&
+                 ret->selfint.count == 0 && ret->degenerate_facets == 0;
+    return 0;
+oom:
+    rc = geo_err_set(err, -ENOMEM, "inspect: out of memory");
+fail:
+    geo_topo_free(t);
+    geo_stats_clear(ret);
+    return rc;
+}
