@@ -678,6 +678,74 @@ static int64_t drop_hanging(cutter *k)
     return dropped;
 }
 
+typedef struct wedge {
+    uint32_t v, prev, next; /* a facet's corner at v and its neighbours */
+} wedge;
+
+static int cmp_wedge(const void *a, const void *b)
+{
+    const wedge *x = a, *y = b;
+    if (x->v != y->v)
+        return x->v < y->v ? -1 : 1;
+    if (x->prev != y->prev)
+        return x->prev < y->prev ? -1 : 1;
+    return (x->next > y->next) - (x->next < y->next);
+}
+
+/* Only vertices on the plane can lose part of their fan; each must still
+ * have its facets in one closed fan (the facet after the one with edge
+ * v→n is the one with edge n→v). Two fans mean the kept part touches
+ * itself at the vertex (e.g. a saddle vertex on the plane): refused. */
+static int check_plane_fans(cutter *k)
+{
+    const geo_poly *o = k->out;
+    uint32_t nold = k->p->nverts;
+    size_t n = 0, cap = 0;
+    wedge *w = NULL;
+    for (uint32_t f = 0; f < o->nfacets; f++) {
+        uint32_t s = o->fstart[f], e = o->fstart[f + 1];
+        for (uint32_t c = s; c < e; c++) {
+            uint32_t v = o->fidx[c];
+            if (v >= nold || k->side[v] != 0)
+                continue;
+            if (grow((void **)&w, &cap, n + 1, sizeof *w) < 0) {
+                free(w);
+                return geo_err_set(k->err, -ENOMEM, "out of memory");
+            }
+            w[n].v = v;
+            w[n].prev = o->fidx[c > s ? c - 1 : e - 1];
+            w[n].next = o->fidx[c + 1 < e ? c + 1 : s];
+            n++;
+        }
+    }
+    qsort(w, n, sizeof *w, cmp_wedge);
+    int r = 0;
+    for (size_t a = 0; a < n && r == 0;) {
+        size_t b = a;
+        while (b < n && w[b].v == w[a].v)
+            b++;
+        /* walk the fan from the first wedge; it must visit all b − a */
+        size_t steps = 0;
+        uint32_t want = w[a].next;
+        do {
+            size_t x = a;
+            while (x < b && w[x].prev != want)
+                x++;
+            if (x == b)
+                break;
+            want = w[x].next;
+            steps++;
+        } while (want != w[a].next && steps <= b - a);
+        if (steps != b - a || want != w[a].next)
+            r = geo_err_set(k->err, -ENOTSUP,
+                            "vertices[%u]: the kept part would touch itself "
+                            "at this vertex on the plane", w[a].v);
+        a = b;
+    }
+    free(w);
+    return r;
+}
+
 void geo_cut_opts_default(geo_cut_opts *opts)
 {
     opts->main_facet = GEO_NONE;
@@ -875,6 +943,8 @@ int geo_cut(const geo_poly *p, const double plane[4],
         }
         rp.hanging_dropped = (uint32_t)d;
     }
+    if ((r = check_plane_fans(&k)) < 0)
+        goto done;
     uint32_t *vmap = malloc(((size_t)out->nverts + 1) * sizeof *vmap);
     if (!vmap || geo_poly_compact(out, NULL, vmap, NULL) < 0) {
         free(vmap);

@@ -15,12 +15,38 @@
 #include "cut_shapes.h"
 #include "model_io.h"
 #include "predicates.h"
+#include "stats.h"
 #include "topo.h"
 #include "vec.h"
 
 static double tol_of(const geo_poly *p)
 {
     return 1e-9 * (1.0 + geo_poly_size(p));
+}
+
+/* NULL when geo_inspect finds p valid, else what it found wrong. */
+static const char *inspect_problem(const geo_poly *p)
+{
+    static char msg[1024];
+    geo_stats st;
+    geo_err err = {{0}};
+    if (geo_inspect(p, NULL, NULL, &st, &err) < 0) {
+        snprintf(msg, sizeof msg, "inspect failed: %s", err.msg);
+        return msg;
+    }
+    const char *bad = NULL;
+    if (!st.valid) {
+        snprintf(msg, sizeof msg,
+                 "inspect: closed %d, nonmanifold vertices %u, low degree %u, "
+                 "orientation %d, nonplanarity %.3g (eps %.3g), "
+                 "self-intersections %u, degenerate facets %u",
+                 st.closed, st.nonmanifold_vertices, st.low_degree_vertices,
+                 (int)st.orientation, st.max_nonplanarity, st.eps,
+                 st.self_intersecting_facets, st.degenerate_facets);
+        bad = msg;
+    }
+    geo_stats_clear(&st);
+    return bad;
 }
 
 /* Cuts p by (a,b,c,d), asserts success and a valid (or empty) result. */
@@ -35,6 +61,8 @@ static geo_poly *cut_ok(const geo_poly *p, double a, double b, double c,
         fail_msg("geo_cut(%g,%g,%g,%g) = %d: %s", a, b, c, d, r, err.msg);
     if (!rep->empty) {
         const char *bad = cs_check_valid(out, tol_of(p));
+        if (!bad)
+            bad = inspect_problem(out);
         if (bad)
             fail_msg("cut by (%g,%g,%g,%g): %s", a, b, c, d, bad);
     } else {
@@ -415,6 +443,52 @@ static void test_reflex_vertex_on_plane(void **state)
     geo_poly_free(p);
 }
 
+/* A block [−1,1]² × [−1, ·] whose top is a saddle of four triangles
+ * around (0, 0, 0), corners at heights +h, −h, +h, −h. */
+static geo_poly *saddle_block(double h)
+{
+    double v[9][3] = {{0, 0, 0}};
+    static const double cx[4] = {1, -1, -1, 1}, cy[4] = {1, 1, -1, -1};
+    for (int i = 0; i < 4; i++) {
+        v[1 + i][0] = v[5 + i][0] = cx[i];
+        v[1 + i][1] = v[5 + i][1] = cy[i];
+        v[1 + i][2] = i % 2 ? -h : h;
+        v[5 + i][2] = -1;
+    }
+    uint32_t idx[32], start[10], c = 0, f = 0;
+    for (uint32_t i = 0; i < 4; i++) {
+        uint32_t j = (i + 1) % 4;
+        start[f++] = c; /* top triangle, counter-clockwise from above */
+        idx[c++] = 0, idx[c++] = 1 + i, idx[c++] = 1 + j;
+        start[f++] = c; /* wall, outward */
+        idx[c++] = 5 + i, idx[c++] = 5 + j, idx[c++] = 1 + j, idx[c++] = 1 + i;
+    }
+    start[f++] = c; /* bottom, seen from below */
+    for (uint32_t i = 4; i-- > 0;)
+        idx[c++] = 5 + i;
+    start[f] = c;
+    return geo_poly_from_arrays(9, &v[0][0], f, start, idx, NULL, NULL);
+}
+
+static void test_saddle_vertex_on_plane(void **state)
+{
+    (void)state;
+    geo_poly *p = saddle_block(0.5);
+    assert_null(cs_check_valid(p, 1e-12));
+    /* below: the section is two triangles meeting at the saddle vertex,
+     * which become two new facets; the solid stays manifold there */
+    geo_cut_report rep;
+    geo_poly *o = cut_ok(p, 0, 0, 1, 0, &rep);
+    assert_int_equal(rep.components, 2);
+    assert_int_equal(rep.new_facets, 2);
+    /* above: two blobs touching only at the saddle vertex */
+    geo_err err = {{0}};
+    assert_int_equal(cut_code(p, 0, 0, -1, 0, NULL, &err), -ENOTSUP);
+    assert_non_null(strstr(err.msg, "touch itself"));
+    geo_poly_free(o);
+    geo_poly_free(p);
+}
+
 static void test_pinching_results_are_refused(void **state)
 {
     (void)state;
@@ -654,7 +728,11 @@ static int check_random_halves(const geo_poly *p, uint64_t seed, int count)
                 fail_msg("plane %d (%.17g,%.17g,%.17g,%.17g): %s / %s", i,
                          pl[0], pl[1], pl[2], pl[3], ea.msg, eb.msg);
             const char *ba = ra.empty ? NULL : cs_check_valid(a, tol_of(p));
+            if (!ba && !ra.empty)
+                ba = inspect_problem(a);
             const char *bb = rb.empty ? NULL : cs_check_valid(b, tol_of(p));
+            if (!bb && !rb.empty)
+                bb = inspect_problem(b);
             if (ba || bb)
                 fail_msg("plane %d (%.17g,%.17g,%.17g,%.17g): %s / %s", i,
                          pl[0], pl[1], pl[2], pl[3], ba ? ba : "ok",
@@ -811,6 +889,7 @@ int main(void)
         cmocka_unit_test(test_convex_edge_in_plane_stays_between_its_facets),
         cmocka_unit_test(test_reflex_vertex_on_plane),
         cmocka_unit_test(test_pinching_results_are_refused),
+        cmocka_unit_test(test_saddle_vertex_on_plane),
         cmocka_unit_test(test_section_with_hole_is_refused),
         cmocka_unit_test(test_cavity_apex_on_plane),
         cmocka_unit_test(test_rejects_bad_input),
