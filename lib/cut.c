@@ -718,6 +718,8 @@ static int check_plane_fans(cutter *k)
             n++;
         }
     }
+    if (n == 0)
+        return 0;
     qsort(w, n, sizeof *w, cmp_wedge);
     int r = 0;
     for (size_t a = 0; a < n && r == 0;) {

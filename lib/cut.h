@@ -23,9 +23,10 @@
  *
  * Results that facet-model/1 cannot represent are refused with -ENOTSUP
  * and a message, never returned: a section component with a hole (a facet
- * cannot have holes, see README "Plane cut"), and a plane that touches the
- * inside of a reflex edge lying in it (the kept solid would pinch along
- * that edge).
+ * cannot have holes, see README "Plane cut"), and a kept part that would
+ * pinch — the plane touching from inside a reflex edge lying in it or the
+ * apex of a cavity, or a vertex on the plane left with two separate fans
+ * of facets (a saddle vertex with the two humps kept).
  *
  * Thread safety: geo_cut is reentrant; the input is only read. */
 #ifndef GEO_CUT_H
