@@ -36,5 +36,6 @@ int cmd_convert(int argc, char **argv);
 int cmd_cut(int argc, char **argv);
 int cmd_inspect(int argc, char **argv);
 int cmd_orient(int argc, char **argv);
+int cmd_inside(int argc, char **argv);
 
 #endif

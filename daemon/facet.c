@@ -19,6 +19,7 @@ static const cli_command commands[] = {
     {"cut", "cut a model by a plane (seed 000 §3)", cmd_cut},
     {"inspect", "print a model's statistics and defects as JSON", cmd_inspect},
     {"orient", "make a model's facets consistent and outward", cmd_orient},
+    {"inside", "classify points as inside, outside or on a model", cmd_inside},
 };
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
 

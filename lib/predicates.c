@@ -198,8 +198,15 @@ int geo_orient2d_proj(const double a[3], const double b[3], const double c[3],
                       int drop)
 {
     int u = (drop + 1) % 3, v = (drop + 2) % 3;
+    /* the filter of geo_orient2d on the projected coordinates in place */
+    double left = (a[u] - c[u]) * (b[v] - c[v]);
+    double right = (a[v] - c[v]) * (b[u] - c[u]);
+    double det = left - right;
+    double bound = O2D_BOUND * (fabs(left) + fabs(right));
+    if (fabs(det) > bound && fabs(det) > TINY)
+        return sign_of(det);
     double pa[2] = {a[u], a[v]}, pb[2] = {b[u], b[v]}, pc[2] = {c[u], c[v]};
-    return geo_orient2d(pa, pb, pc);
+    return orient2d_exact(pa, pb, pc);
 }
 
 /* Shewchuk's orient3d(a,b,c,d) = det[a−d; b−d; c−d], positive when d is
@@ -390,4 +397,31 @@ int geo_plane_crossing_cmp(const double plane[4], const double x0[3],
             return sign_of(diff);
     }
     return crossing_cmp_exact(plane, x0, x1, y0, y1, k);
+}
+
+static int normal_sign_exact(const double p0[3], const double n[3],
+                             const double p[3])
+{
+    double acc[16], tmp[16], diff[2], prod[4];
+    int len = 1;
+    acc[0] = 0.0;
+    for (int k = 0; k < 3; k++) {
+        two_diff(p[k], p0[k], &diff[1], &diff[0]);
+        int pn = scale_expansion(2, diff, n[k], prod);
+        len = expansion_sum(len, acc, pn, prod, acc, tmp);
+    }
+    return expansion_sign(len, acc);
+}
+
+int geo_normal_sign(const double p0[3], const double n[3], const double p[3])
+{
+    double t0 = n[0] * (p[0] - p0[0]), t1 = n[1] * (p[1] - p0[1]),
+           t2 = n[2] * (p[2] - p0[2]);
+    double v = (t0 + t1) + t2;
+    /* each term carries a difference, a product and two sums: γ4 with
+     * slack, as for the plane */
+    double mag = fabs(t0) + fabs(t1) + fabs(t2);
+    if (fabs(v) > PLANE_BOUND * mag && fabs(v) > TINY)
+        return sign_of(v);
+    return normal_sign_exact(p0, n, p);
 }

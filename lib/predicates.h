@@ -57,4 +57,11 @@ int geo_plane_crossing_cmp(const double plane[4], const double x0[3],
                            const double x1[3], const double y0[3],
                            const double y1[3], int k);
 
+/* Exact sign of n · (p − p0) for the given doubles (seed 003's point +
+ * normal form nfN): the differences p − p0 are formed exactly (two-term
+ * expansions), so no rounding of an offset d = −n·p0 enters the answer.
+ * +1 when p lies on the side n points to, −1 on the other side, 0 exactly
+ * on the plane through p0 perpendicular to n. n = 0 gives 0. */
+int geo_normal_sign(const double p0[3], const double n[3], const double p[3]);
+
 #endif

@@ -157,6 +157,42 @@ static void test_orient2d_proj_axes(void **state)
     assert_int_equal(geo_orient2d_proj(a3, b3, c3, 1), 1);
 }
 
+/* The projected orientation (its own filter, then the exact path) gives
+ * the integer-exact sign on near-collinear points far from the origin,
+ * for each dropped axis; the normal form N·(p − p0) likewise. */
+static void test_orient2d_proj_and_normal_sign_exact(void **state)
+{
+    (void)state;
+    uint64_t rng = 31;
+    for (int t = 0; t < 20000; t++) {
+        int64_t P[3][3];
+        for (int i = 0; i < 3; i++)
+            for (int k = 0; k < 3; k++)
+                P[i][k] = ((int64_t)1 << 40) +
+                          (int64_t)(geo_rand_next(&rng) % 5) * (i + 1) +
+                          (int64_t)(geo_rand_next(&rng) % 3);
+        double D[3][3];
+        for (int i = 0; i < 3; i++)
+            for (int k = 0; k < 3; k++)
+                D[i][k] = (double)P[i][k] * 0x1p-30;
+        for (int drop = 0; drop < 3; drop++) {
+            int u = (drop + 1) % 3, v = (drop + 2) % 3;
+            i128 det = (i128)(P[1][u] - P[0][u]) * (P[2][v] - P[0][v]) -
+                       (i128)(P[1][v] - P[0][v]) * (P[2][u] - P[0][u]);
+            assert_int_equal(geo_orient2d_proj(D[0], D[1], D[2], drop),
+                             sign128(det));
+        }
+        int64_t N[3] = {(int64_t)(geo_rand_next(&rng) % 7) - 3,
+                        (int64_t)(geo_rand_next(&rng) % 7) - 3,
+                        (int64_t)(geo_rand_next(&rng) % 7) - 3};
+        double n[3] = {(double)N[0], (double)N[1], (double)N[2]};
+        i128 dot = 0;
+        for (int k = 0; k < 3; k++)
+            dot += (i128)N[k] * (P[2][k] - P[0][k]);
+        assert_int_equal(geo_normal_sign(D[0], n, D[2]), sign128(dot));
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -166,6 +202,7 @@ int main(void)
         cmocka_unit_test(test_orient3d_beats_naive),
         cmocka_unit_test(test_plane_sign_exact),
         cmocka_unit_test(test_orient2d_proj_axes),
+        cmocka_unit_test(test_orient2d_proj_and_normal_sign_exact),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,0 +1,61 @@
+/* stone_sim.h — a shadow-profile scanner simulator for tests and
+ * benchmarks.
+ *
+ * A stone is the intersection of the half-spaces of its facet planes
+ * (brilliant, princess and emerald cuts with seeded random proportions).
+ * A scan is what a shadow-profile scanner (seed 000 §1.2) reconstructs:
+ * for K views over 180° about the holder axis (z), the silhouette — the
+ * convex hull of the stone's vertices projected along the view direction,
+ * with optional noise — gives one half-space per silhouette edge, its plane
+ * parallel to the view direction; a top view (along z) bounds the model.
+ * The scanned model is the intersection of all of them, so true facets
+ * come out split into slivers of nearly coplanar facets and vertices of
+ * degree > 3 split into clusters, as in the paper.
+ *
+ * Test tooling, not product code: the clipper snaps vertices within a
+ * tolerance of a plane onto it, which is adequate for generating convex
+ * models and nothing else. */
+#ifndef FACET_STONE_SIM_H
+#define FACET_STONE_SIM_H
+
+#include <stdint.h>
+
+#include "poly.h"
+
+/* Cuts: a round brilliant (121 facets), princess, emerald, and a
+ * 16-fold brilliant with twice the facets (large scans for benchmarks). */
+enum sim_cut { SIM_BRILLIANT, SIM_PRINCESS, SIM_EMERALD, SIM_JUBILEE };
+
+/* The true stone of the given cut, about 6.5 mm across, with proportions
+ * drawn from seed. NULL on out-of-memory. Valid convex polyhedron. */
+geo_poly *sim_stone(enum sim_cut cut, uint64_t seed);
+
+/* The intersection of n half-spaces plane(p) ≤ 0 (planes: 4·n doubles,
+ * normals of any length), clipped from the box [−r, r]³. Redundant planes
+ * leave no facet. NULL when the intersection is empty or on OOM. */
+geo_poly *sim_halfspace_intersection(const double *planes, uint32_t n,
+                                     double r);
+
+/* Clips convex p by plane(x) ≤ 0, snapping vertices within tol of the
+ * plane onto it; returns a new polyhedron (p unchanged), or NULL when
+ * nothing remains or on OOM. *ret_changed tells whether the plane cut. */
+geo_poly *sim_clip_convex(const geo_poly *p, const double plane[4], double tol,
+                          int *ret_changed);
+
+/* A scan of stone with k views over 180° about z plus one top view;
+ * noise is the standard deviation of the silhouette noise in mm (the
+ * sample models use 0.001). NULL on failure. */
+geo_poly *sim_scan(const geo_poly *stone, uint32_t k, double noise,
+                   uint64_t seed);
+
+/* Symmetric Hausdorff distance estimate between two closed polyhedra:
+ * the largest distance from sample points of either surface (every
+ * vertex, facet centroids and samples per facet proportional to area) to
+ * the other surface. */
+double sim_hausdorff(const geo_poly *a, const geo_poly *b, uint32_t samples);
+
+/* One-sided: largest distance from samples of a's surface to b's. */
+double sim_hausdorff_directed(const geo_poly *a, const geo_poly *b,
+                              uint32_t samples);
+
+#endif
