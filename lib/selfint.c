@@ -473,12 +473,13 @@ static bool point_hits_facet(const geo_poly *p, const facet_ref *F,
     return point_in_facet2(p, F->id, F->s->axis, q) >= 0;
 }
 
-/* Segment pq crosses π_F strictly (p and q on opposite sides). Does the
- * crossing point lie in closed F? Winding number of the line pq with
- * respect to F's polygon seen along pq: h, h2 are sides against two
- * planes through pq (their intersection), t the turn of each edge around
- * pq. The winding's sign convention does not matter: only ≠ 0 is used. */
-static bool segment_pierces_facet(const geo_poly *p, const facet_ref *F,
+/* Segment pq crosses π_F strictly (p and q on opposite sides). Where is
+ * the crossing point with respect to closed F: +1 inside, 0 on its
+ * boundary, −1 outside? Winding number of the line pq with respect to F's
+ * polygon seen along pq: h, h2 are sides against two planes through pq
+ * (their intersection), t the turn of each edge around pq. The winding's
+ * sign convention does not matter: only ≠ 0 is used. */
+static int segment_pierces_facet(const geo_poly *p, const facet_ref *F,
                                   const double P[3], const double Q[3])
 {
     double d[3];
@@ -504,13 +505,13 @@ static bool segment_pierces_facet(const geo_poly *p, const facet_ref *F,
             /* the edge's line meets line pq (or is parallel): on it? */
             if (ha != 0 || hb != 0) {
                 if (ha * hb <= 0)
-                    return true;
+                    return 0;
             } else {
                 if (h2a == 2)
                     h2a = geo_orient3d(P, Q, s2, a);
                 h2b = geo_orient3d(P, Q, s2, b);
                 if (h2a * h2b <= 0)
-                    return true;
+                    return 0;
             }
         }
         if (ha <= 0) {
@@ -521,7 +522,7 @@ static bool segment_pierces_facet(const geo_poly *p, const facet_ref *F,
         }
         a = b, ha = hb, h2a = h2b;
     }
-    return wn != 0;
+    return wn ? 1 : -1;
 }
 
 /* Facets F, G (both) lie in one plane (all of one's vertices on the
@@ -636,7 +637,7 @@ static bool edges_hit(const geo_poly *p, const facet_ref *F,
         if (sg[j] == 0 && gpos[j] < 0 && point_hits_facet(p, F, a))
             return true;
         if (sg[j] * sg[j1] < 0) {
-            if (segment_pierces_facet(p, F, a, b))
+            if (segment_pierces_facet(p, F, a, b) >= 0)
                 return true;
         } else if (sg[j] == 0 && sg[j1] == 0 &&
                    !is_edge(F, gpos[j], gpos[j1])) {
@@ -754,15 +755,40 @@ int geo_facets_intersect(const geo_poly *p, uint32_t f, uint32_t g,
     if (f == g || sf->degenerate || sg->degenerate)
         return 0;
     facet_ref F = facet_at(p, f, sf), G = facet_at(p, g, sg);
-    pair_scratch sc = {0};
     uint32_t n = F.n > G.n ? F.n : G.n;
-    if (scratch_reserve(&sc, n) < 0) {
-        scratch_free(&sc);
-        return -ENOMEM;
+    enum { SMALL = 64 };
+    int8_t s1[SMALL], s2[SMALL];
+    int32_t p1[SMALL], p2[SMALL];
+    pair_scratch sc = {SMALL, s1, s2, p1, p2};
+    pair_scratch heap = {0};
+    if (n > SMALL) {
+        if (scratch_reserve(&heap, n) < 0) {
+            scratch_free(&heap);
+            return -ENOMEM;
+        }
+        sc = heap;
     }
     bool hit = pair_test(p, &F, &G, &sc);
-    scratch_free(&sc);
+    scratch_free(&heap);
     return hit;
+}
+
+int geo_segment_meets_facet(const geo_poly *p, uint32_t f,
+                            const geo_facet_shape *s, const double a[3],
+                            const double b[3])
+{
+    if (s->degenerate)
+        return -1;
+    facet_ref F = facet_at(p, f, s);
+    int sa = side_of(p, &F, a), sb = side_of(p, &F, b);
+    if (sa * sb > 0)
+        return -1;
+    if (sa == 0 && sb == 0)
+        return segment_hits_facet(p, &F, a, b, -1, -1, s->axis, s->turn) ? 0
+                                                                        : -1;
+    if (sa == 0 || sb == 0)
+        return point_hits_facet(p, &F, sa == 0 ? a : b) ? 0 : -1;
+    return segment_pierces_facet(p, &F, a, b);
 }
 
 /* ------------------------------------------------------- the search */
@@ -936,6 +962,10 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     if (rc < 0)
         return rc;
     uint32_t nf = p->nfacets;
+    if (bvh && bvh->nitems != nf)
+        return geo_err_set(err, -EINVAL,
+                           "self-intersection: the BVH has %u items for %u "
+                           "facets", bvh->nitems, nf);
     search s = {0};
     geo_bvh *own = NULL;
     geo_facet_shape *shapes = malloc(((size_t)nf + 1) * sizeof *shapes);

@@ -90,6 +90,18 @@ bool geo_facet_self_intersects(const geo_poly *p, uint32_t f,
 int geo_facets_intersect(const geo_poly *p, uint32_t f, uint32_t g,
                          const geo_facet_shape *sf, const geo_facet_shape *sg);
 
+/* Where segment ab meets facet f (shape s), exactly under the model
+ * above, a and b being any points (not taken as the facet's vertices):
+ * +1 when a and b lie strictly on opposite sides of the facet's plane and
+ * the crossing point is strictly inside the polygon; 0 when the segment
+ * touches the closed facet in any other way (an endpoint on it, a pass
+ * through its boundary, a run along its plane over it); −1 when it misses
+ * it, and for a degenerate facet. Used for ray parity (point in
+ * polyhedron): 0 means "degenerate ray, shoot another". */
+int geo_segment_meets_facet(const geo_poly *p, uint32_t f,
+                            const geo_facet_shape *s, const double a[3],
+                            const double b[3]);
+
 /* Per-facet flags of geo_selfint.facet_flags. */
 enum {
     GEO_SI_PAIR = 1,       /* the facet is in an intersecting pair */
@@ -126,7 +138,8 @@ typedef struct geo_selfint {
  * from the calling thread only; cancellation is honoured within
  * milliseconds. On success *ret owns malloc'd arrays (release with
  * geo_selfint_clear) and 0 is returned; on error (-ENOMEM, -ECANCELED,
- * -EINVAL for invalid indices) *ret is zeroed and err set. */
+ * -EINVAL for invalid indices or a BVH whose item count is not p's facet
+ * count) *ret is zeroed and err set. */
 int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
                      const geo_selfint_opts *opts, const geo_ctx *ctx,
                      geo_selfint *ret, geo_err *err);

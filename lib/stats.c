@@ -87,7 +87,7 @@ static int degrees(const geo_poly *p, const geo_topo *t, geo_stats *s)
 }
 
 /* Adjacent facet pairs (each once) whose normals are within each
- * threshold; zero-length edges. */
+ * threshold; zero-length edges; facets winding against their plane. */
 static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
 {
     uint32_t nf = p->nfacets, nc = t->ncorners;
@@ -100,6 +100,8 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
     for (uint32_t f = 0; f < nf; f++) {
         geo_poly_facet_area_vector(p, f, nrm[f]);
         geo_vnormalize(nrm[f]);
+        if (geo_vdot(nrm[f], p->planes[f]) < 0)
+            s->inverted_facets++;
     }
     /* key: lower facet in the high half, the other facet and whether
      * they disagree on the edge in the low half (facet indices < 2³¹) */
@@ -265,7 +267,7 @@ int geo_inspect(const geo_poly *p, const geo_inspect_opts *opts,
         ret->nonconvex_facets +=
             (ret->selfint.facet_flags[f] & GEO_SI_NONCONVEX) != 0;
     ret->valid = ret->closed && ret->nonmanifold_vertices == 0 &&
-                 ret->low_degree_vertices == 0 &&
+                 ret->low_degree_vertices == 0 && ret->inverted_facets == 0 &&
                  ret->orientation == GEO_ORIENT_OUTWARD &&
                  ret->max_nonplanarity <= ret->eps &&
                  ret->selfint.count == 0 && ret->degenerate_facets == 0;

@@ -10,6 +10,11 @@
  *   corners. Non-manifold vertex: its facets form several fans or it is on
  *   a non-manifold edge.
  * - orientation, inconsistent_facets, shells: lib/orient.h.
+ * - inverted facet: its polygon winds against its own stored plane (the
+ *   Newell normal of its vertex cycle and the plane's normal have a
+ *   negative dot product) — a facet turned over, e.g. by a vertex moved
+ *   across it during re-planarization (seed 000 §4.3.4–4.3.5), or a model
+ *   whose planes were not negated with their facets.
  * - degenerate facet: fewer than three distinct points, or all its points
  *   on one line (exact); zero area follows. Degenerate edge: its two
  *   vertices (distinct indices) at the same position.
@@ -33,8 +38,8 @@
  *   0.27 mm on a true brilliant to 0.05 mm on its K=400 scan, hiding the
  *   very clusters it should count).
  * - valid: closed, no non-manifold vertex, every vertex in ≥ 3 facets,
- *   outward, max_nonplanarity ≤ eps, no self-intersection, no degenerate
- *   facet.
+ *   outward, no inverted facet, max_nonplanarity ≤ eps, no
+ *   self-intersection, no degenerate facet.
  *
  * Complexity: O(n log n) overall (topology O(corners), BVH O(n log n),
  * degree and near-coplanar counts O(corners log)), the self-intersection
@@ -72,6 +77,7 @@ typedef struct geo_stats {
     uint32_t low_degree_vertices; /* in fewer than 3 facets (isolated too) */
     enum geo_orientation orientation;
     uint32_t inconsistent_facets;
+    uint32_t inverted_facets; /* winding against their own plane */
     uint32_t shells;
     bool orientable;
     double volume;           /* signed, mm³ (geo_poly_volume) */

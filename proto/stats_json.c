@@ -62,6 +62,8 @@ json_t *proto_stats_to_json(const geo_stats *s)
                               json_string(geo_orientation_name(s->orientation)));
     rc |= json_object_set_new(o, "inconsistent_facets",
                               json_integer(s->inconsistent_facets));
+    rc |= json_object_set_new(o, "inverted_facets",
+                              json_integer(s->inverted_facets));
     rc |= json_object_set_new(o, "shells", json_integer(s->shells));
     rc |= json_object_set_new(o, "orientable", json_boolean(s->orientable));
     rc |= json_object_set_new(o, "volume", json_real(s->volume));

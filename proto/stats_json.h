@@ -10,8 +10,9 @@
  * self_intersecting_facets, near_coplanar_pairs {"0.5": n, "1": n,
  * "2": n} (keys are the thresholds in degrees, %g), vertex_degrees
  * {"3": n, ...} (degrees with at least one vertex), short_edge_clusters,
- * valid. Also: eps, shells, orientable, low_degree_vertices,
- * degenerate_edges, short_edge_radius, short_edge_cluster_vertices.
+ * valid. Also: eps, inverted_facets, shells, orientable,
+ * low_degree_vertices, degenerate_edges, short_edge_radius,
+ * short_edge_cluster_vertices.
  *
  * Ownership: the returned value is new (json_decref); NULL on
  * out-of-memory. Reentrant. */

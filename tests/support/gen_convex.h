@@ -3,10 +3,6 @@
  * convex polygon whose vertices are rounded three-plane intersections, so
  * facets are planar within rounding, not exactly).
  *
- * Also a convex clipper and random polyhedra made with it (gc_*): the
- * cube [-2, 2]³ clipped by random tangent planes, vertices interpolated
- * along clipped edges, so facets are planar to rounding (≈1e-16).
- *
  * Self-contained (lib/ only); deterministic for a seed. */
 #ifndef FACET_GEN_CONVEX_H
 #define FACET_GEN_CONVEX_H
@@ -26,16 +22,5 @@
  * geo_poly_free. */
 geo_poly *gen_convex_polyhedron(uint64_t seed, unsigned nplanes,
                                 const double center[3], double radius);
-
-/* The cube [-2, 2]³ cut by nplanes planes n·x = 1 with random unit
- * normals n (seeded), keeping n·x ≤ 1. Facets are counter-clockwise from
- * outside, planes are the exact cutting planes. Returns NULL on
- * out-of-memory. */
-geo_poly *gc_random_convex(uint64_t seed, uint32_t nplanes);
-
-/* Clips p in place by the half-space plane(x) ≤ 0 (plane a,b,c,d with a
- * unit normal), closing the cut with one new facet whose plane is `plane`.
- * p must be convex and closed. 0, or -ENOMEM. */
-int gc_clip(geo_poly *p, const double plane[4]);
 
 #endif

@@ -179,6 +179,63 @@ static void test_shells_are_judged_separately(void **state)
     geo_poly_free(b);
 }
 
+/* Box [0,4]³ with the box [1,3]³ inside; the inner one reversed when
+ * `cavity` (a hollow solid), else facing out. */
+static geo_poly *hollow_box(bool cavity)
+{
+    const double lo1[3] = {0, 0, 0}, hi1[3] = {4, 4, 4};
+    const double lo2[3] = {1, 1, 1}, hi2[3] = {3, 3, 3};
+    geo_poly *a = tu_box(lo1, hi1), *b = tu_box(lo2, hi2);
+    geo_poly *p = geo_poly_copy(a);
+    for (uint32_t v = 0; v < b->nverts; v++)
+        geo_poly_add_vertex(p, b->verts[v]);
+    for (uint32_t f = 0; f < b->nfacets; f++) {
+        uint32_t idx[4];
+        for (int k = 0; k < 4; k++)
+            idx[k] = geo_poly_facet(b, f)[k] + a->nverts;
+        int64_t g = geo_poly_add_facet(p, idx, 4);
+        memcpy(p->planes[g], b->planes[f], sizeof p->planes[g]);
+        if (cavity)
+            geo_poly_flip_facet(p, (uint32_t)g);
+    }
+    geo_poly_free(a);
+    geo_poly_free(b);
+    return p;
+}
+
+static void test_cavity_shell_is_rightly_inward(void **state)
+{
+    (void)state;
+    geo_poly *p = hollow_box(true);
+    geo_orient_report r = analyze(p, NULL);
+    assert_int_equal(r.nshells, 2);
+    assert_int_equal(r.ninverted_shells, 0);
+    assert_int_equal(r.orientation, GEO_ORIENT_OUTWARD);
+    assert_true(fabs(r.volume - 56.0) < 1e-12);
+    geo_orient_report rep;
+    assert_int_equal(geo_orient_repair(p, &rep, NULL), 0);
+    assert_int_equal(rep.nflipped, 0);
+    /* the whole hollow solid turned inside out is inward */
+    for (uint32_t f = 0; f < p->nfacets; f++)
+        geo_poly_flip_facet(p, f);
+    r = analyze(p, NULL);
+    assert_int_equal(r.orientation, GEO_ORIENT_INWARD);
+    assert_int_equal(r.ninverted_shells, 2);
+    geo_poly_free(p);
+
+    /* an inner shell facing out is the wrong one: repair turns it */
+    p = hollow_box(false);
+    geo_poly *want = hollow_box(true);
+    r = analyze(p, NULL);
+    assert_int_equal(r.ninverted_shells, 1);
+    assert_int_equal(r.orientation, GEO_ORIENT_INCONSISTENT);
+    assert_int_equal(geo_orient_repair(p, &rep, NULL), 0);
+    assert_int_equal(rep.nflipped, 6);
+    assert_same_facets(p, want);
+    geo_poly_free(p);
+    geo_poly_free(want);
+}
+
 static void test_moebius_band_is_not_orientable(void **state)
 {
     (void)state;
@@ -240,6 +297,7 @@ int main(void)
         cmocka_unit_test(test_inverted_model_is_inward_and_repaired),
         cmocka_unit_test(test_scattered_and_majority_flips_are_undone),
         cmocka_unit_test(test_shells_are_judged_separately),
+        cmocka_unit_test(test_cavity_shell_is_rightly_inward),
         cmocka_unit_test(test_moebius_band_is_not_orientable),
         cmocka_unit_test(test_orientation_names),
     };

@@ -276,6 +276,35 @@ static void test_edge_in_plane_across_facet_counts(void **state)
     }
 }
 
+static void test_segment_meets_facet_three_ways(void **state)
+{
+    (void)state;
+    const double v[][3] = {SQUARE};
+    const uint32_t sizes[] = {4}, idx[] = {0, 1, 2, 3};
+    geo_poly *p = mk(v, 4, sizes, 1, idx);
+    geo_facet_shape s;
+    geo_facet_shape_of(p, 0, &s);
+    static const struct {
+        double a[3], b[3];
+        int want;
+    } cases[] = {
+        {{1, 1, -1}, {1.2, 0.9, 1}, 1},  /* through the interior */
+        {{3, 1, -1}, {3, 1, 1}, -1},     /* beside it */
+        {{1, 0, -1}, {1, 0, 1}, 0},      /* through an edge */
+        {{2, 2, -1}, {2, 2, 1}, 0},      /* through a corner */
+        {{1, 1, 0}, {1, 1, 1}, 0},       /* an endpoint on the facet */
+        {{3, 3, 0}, {3, 3, 1}, -1},      /* an endpoint on the plane only */
+        {{-1, 1, 0}, {3, 1, 0}, 0},      /* in the plane, across it */
+        {{-1, 3, 0}, {3, 3, 0}, -1},     /* in the plane, beside it */
+        {{1, 1, 1}, {1, 1, 2}, -1},      /* short of the plane */
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++)
+        assert_int_equal(geo_segment_meets_facet(p, 0, &s, cases[i].a,
+                                                 cases[i].b),
+                         cases[i].want);
+    geo_poly_free(p);
+}
+
 static void test_own_polygon_self_intersection(void **state)
 {
     (void)state;
@@ -332,6 +361,34 @@ static void test_large_facet_sweep_matches_quadratic(void **state)
     geo_facet_shape_of(p, 0, &s);
     assert_true(geo_facet_self_intersects(p, 0, &s));
     geo_poly_free(p);
+}
+
+static void test_large_facet_pairs(void **state)
+{
+    (void)state;
+    /* a 150-gon star in z = 0 and a triangle piercing its centre, then
+     * one piercing the gap between two of its spikes */
+    enum { N = 150 };
+    for (int k = 0; k < 2; k++) {
+        double v[N + 3][3];
+        uint32_t idx[N + 3], start[3] = {0, N, N + 3};
+        for (uint32_t i = 0; i < N; i++) {
+            double a = 2 * M_PI * i / N, r = (i % 2) ? 1.0 : 0.5;
+            v[i][0] = r * cos(a), v[i][1] = r * sin(a), v[i][2] = 0;
+            idx[i] = i;
+        }
+        /* the gap: just outside the inner radius, between spikes 1 and 3 */
+        double x = k ? 0.52 * cos(2 * M_PI * 2 / N) : 0.0;
+        double y = k ? 0.52 * sin(2 * M_PI * 2 / N) : 0.0;
+        double t[3][3] = {{x - 1e-3, y, -1}, {x + 1e-3, y, -1}, {x, y, 1}};
+        memcpy(v[N], t, sizeof t);
+        idx[N] = N, idx[N + 1] = N + 1, idx[N + 2] = N + 2;
+        geo_poly *p = geo_poly_from_arrays(N + 3, &v[0][0], 2, start, idx,
+                                           NULL, NULL);
+        assert_non_null(p);
+        assert_int_equal(pair(p, 0, 1), k ? 0 : 1);
+        geo_poly_free(p);
+    }
 }
 
 static void test_degenerate_facets_are_flagged_not_paired(void **state)
@@ -602,6 +659,14 @@ static void test_cancel_stops_with_ecanceled(void **state)
     assert_true(calls > 1);
     assert_null(r.pairs);
     assert_non_null(strstr(err.msg, "canceled"));
+    /* a hierarchy of another model is refused, not followed */
+    const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    geo_poly *box = tu_box(lo, hi);
+    geo_bvh *other = geo_bvh_build_facets(box, NULL);
+    assert_int_equal(geo_selfint_find(p, other, NULL, NULL, &r, &err),
+                     -EINVAL);
+    geo_bvh_free(other);
+    geo_poly_free(box);
     atomic_int flag = 1;
     geo_ctx c2 = {0};
     c2.cancel = &flag;
@@ -614,12 +679,15 @@ static void test_random_convex_clean_until_vertex_pushed_through(void **state)
 {
     (void)state;
     for (uint64_t seed = 1; seed <= 40; seed++) {
-        geo_poly *p = gc_random_convex(seed, 12 + (uint32_t)(seed % 30));
+        const double cen[3] = {0.1 * (double)seed, -0.2, 0.3};
+        geo_poly *p = gen_convex_polyhedron(seed, 12 + (unsigned)(seed % 30),
+                                            cen, 1.0);
         assert_non_null(p);
         assert_true(geo_poly_max_nonplanarity(p) <= geo_poly_eps(p));
         assert_int_equal(count_all(p), 0);
         /* vertex 0 goes just beyond the facet facing away from it most */
-        const double *v0 = p->verts[0];
+        double v0[3];
+        geo_vsub(p->verts[0], cen, v0);
         uint32_t far = 0;
         double best = INFINITY;
         for (uint32_t f = 0; f < p->nfacets; f++) {
@@ -656,8 +724,10 @@ int main(void)
         cmocka_unit_test(test_nonconvex_facets),
         cmocka_unit_test(test_crossing_along_a_diagonal_counts),
         cmocka_unit_test(test_edge_in_plane_across_facet_counts),
+        cmocka_unit_test(test_segment_meets_facet_three_ways),
         cmocka_unit_test(test_own_polygon_self_intersection),
         cmocka_unit_test(test_large_facet_sweep_matches_quadratic),
+        cmocka_unit_test(test_large_facet_pairs),
         cmocka_unit_test(test_degenerate_facets_are_flagged_not_paired),
         cmocka_unit_test(test_nonplanar_neighbours_are_not_false_contacts),
         cmocka_unit_test(test_closed_models_are_clean),

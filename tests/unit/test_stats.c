@@ -5,6 +5,7 @@
  * keys of proto_stats_to_json. */
 #include "testutil.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -59,6 +60,7 @@ static void test_valid_sample_models(void **state)
         assert_int_equal(s.orientation, GEO_ORIENT_OUTWARD);
         assert_int_equal(s.selfint.count, 0);
         assert_int_equal(s.degenerate_facets, 0);
+        assert_int_equal(s.inverted_facets, 0);
         assert_true(s.max_nonplanarity <= s.eps);
         assert_true(s.valid);
         geo_stats_clear(&s);
@@ -259,6 +261,19 @@ static void test_degenerate_facet_and_nonplanarity(void **state)
     geo_stats_clear(&s);
     geo_poly_free(p);
 
+    /* a facet whose plane was not negated with it: inverted; its
+     * neighbours now disagree with it too */
+    p = box123();
+    uint32_t *fv = p->fidx + p->fstart[3];
+    uint32_t t0 = fv[0];
+    fv[0] = fv[3], fv[3] = t0, t0 = fv[1], fv[1] = fv[2], fv[2] = t0;
+    s = inspect(p, NULL);
+    assert_int_equal(s.inverted_facets, 1);
+    assert_int_equal(s.inconsistent_facets, 1);
+    assert_false(s.valid);
+    geo_stats_clear(&s);
+    geo_poly_free(p);
+
     /* one vertex off its facets' stored planes by 1e-6 */
     p = box123();
     p->verts[7][0] += 1e-6;
@@ -323,6 +338,97 @@ static void test_inspection_independent_of_thread_count(void **state)
     geo_poly_free(p);
 }
 
+static void test_empty_and_vertex_only_models(void **state)
+{
+    (void)state;
+    geo_poly *p = geo_poly_new();
+    geo_stats s = inspect(p, NULL);
+    assert_int_equal(s.facets, 0);
+    assert_int_equal(s.selfint.count, 0);
+    assert_int_equal(s.orientation, GEO_ORIENT_OUTWARD);
+    assert_true(s.valid); /* the empty polyhedron: nothing is wrong */
+    json_t *j = proto_stats_to_json(&s);
+    assert_non_null(j);
+    json_decref(j);
+    geo_stats_clear(&s);
+    const double x[3] = {1, 2, 3};
+    geo_poly_add_vertex(p, x);
+    s = inspect(p, NULL);
+    assert_int_equal(s.low_degree_vertices, 1);
+    assert_int_equal(s.degree_count[0], 1);
+    assert_false(s.valid);
+    geo_stats_clear(&s);
+    geo_poly_free(p);
+}
+
+static void test_random_garbage_models_never_fail(void **state)
+{
+    (void)state;
+    /* facets of random indices over a few vertices: non-manifold edges,
+     * repeated indices, coincident and collinear points everywhere */
+    uint64_t rng = 77;
+    for (int trial = 0; trial < 60; trial++) {
+        geo_poly *p = geo_poly_new();
+        uint32_t nv = 4 + (uint32_t)(geo_rand_next(&rng) % 12);
+        for (uint32_t v = 0; v < nv; v++) {
+            double x[3];
+            for (int k = 0; k < 3; k++)
+                x[k] = (double)(geo_rand_next(&rng) % 3);
+            geo_poly_add_vertex(p, x);
+        }
+        uint32_t nf = 1 + (uint32_t)(geo_rand_next(&rng) % 20);
+        for (uint32_t f = 0; f < nf; f++) {
+            uint32_t n = 3 + (uint32_t)(geo_rand_next(&rng) % 5), idx[8];
+            for (uint32_t i = 0; i < n; i++) {
+                idx[i] = (uint32_t)(geo_rand_next(&rng) % nv);
+                if (i && idx[i] == idx[i - 1])
+                    idx[i] = (idx[i] + 1) % nv;
+            }
+            if (idx[n - 1] == idx[0])
+                n--;
+            if (n >= 3 && idx[n - 1] != idx[0])
+                geo_poly_add_facet(p, idx, n);
+        }
+        geo_poly_compute_planes(p, GEO_PLANE_UNWEIGHTED);
+        geo_stats s;
+        assert_int_equal(geo_inspect(p, NULL, NULL, &s, NULL), 0);
+        json_t *j = proto_stats_to_json(&s);
+        assert_non_null(j);
+        json_decref(j);
+        geo_stats_clear(&s);
+        geo_orient_report rep;
+        int rc = geo_orient_repair(p, &rep, NULL);
+        assert_true(rc == 0 || rc == -EINVAL);
+        geo_poly_free(p);
+    }
+}
+
+static int record_progress(void *user, double fraction)
+{
+    double *last = user;
+    assert_true(fraction >= *last); /* monotonic */
+    assert_true(fraction <= 1.0);
+    *last = fraction;
+    return fraction > 0.5; /* then ask to stop */
+}
+
+static void test_progress_is_monotonic_and_cancel_stops(void **state)
+{
+    (void)state;
+    geo_poly *p = gs_sphere(16, 1.0);
+    double last = 0;
+    geo_ctx ctx = {0};
+    ctx.progress = record_progress;
+    ctx.user = &last;
+    geo_stats s;
+    geo_err err = {{0}};
+    assert_int_equal(geo_inspect(p, NULL, &ctx, &s, &err), -ECANCELED);
+    assert_true(last > 0.5);
+    assert_null(s.degree_count);
+    assert_null(s.selfint.pairs);
+    geo_poly_free(p);
+}
+
 static void test_json_has_every_key(void **state)
 {
     (void)state;
@@ -374,6 +480,9 @@ int main(void)
         cmocka_unit_test(test_degenerate_facet_and_nonplanarity),
         cmocka_unit_test(test_near_coplanar_thresholds),
         cmocka_unit_test(test_inspection_independent_of_thread_count),
+        cmocka_unit_test(test_empty_and_vertex_only_models),
+        cmocka_unit_test(test_random_garbage_models_never_fail),
+        cmocka_unit_test(test_progress_is_monotonic_and_cancel_stops),
         cmocka_unit_test(test_json_has_every_key),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
