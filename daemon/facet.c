@@ -16,6 +16,7 @@ static int cmd_version(int argc, char **argv)
 static const cli_command commands[] = {
     {"version", "print the version", cmd_version},
     {"convert", "convert a model between file formats", cmd_convert},
+    {"cut", "cut a model by a plane (seed 000 §3)", cmd_cut},
     {"inspect", "print a model's statistics and defects as JSON", cmd_inspect},
     {"orient", "make a model's facets consistent and outward", cmd_orient},
     {"run", "run a job pipeline on a model offline", cmd_run},
