@@ -122,6 +122,39 @@ all-tests: all $(UNIT_BINS) $(TOOL_BINS)
 bench: all $(BENCH_BINS) $(TOOL_BINS)
 	@sh tests/bench/run.sh $(B)
 
+# fsp-mock, the mocked USB scanner harness of the tests (scanner/mock_*.c,
+# kept out of libfacetscan): a umockdev testbed playing FSP/1 devices.
+MOCK_SRCS := $(sort $(wildcard scanner/mock_*.c))
+FSP_MOCK  := $(B)/fsp-mock
+$(B)/obj/scanner/mock_%.o: scanner/mock_%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) $(call pkg_cflags,$(PKG_PROTO) $(PKG_MOCK)) -c $< -o $@
+$(FSP_MOCK): $(call obj,$(MOCK_SRCS)) $(LIBPROTO) $(LIBFACET)
+	$(CC) $(LDFLAGS) -o $@ $^ $(call pkg_libs,$(PKG_MOCK) $(PKG_PROTO)) \
+	    $(LDLIBS_BASE)
+all-tests: $(FSP_MOCK)
+
+# libFuzzer targets (tests/fuzz/fuzz_*.c), built with clang apart from the
+# unit tests: make fuzz [FUZZ_SECONDS=60] runs each for FUZZ_SECONDS.
+FUZZ_SECONDS ?= 60
+FUZZ_CC      ?= clang
+FUZZ_DIR     := build/fuzz
+FUZZ_CFLAGS   = -std=c11 -D_GNU_SOURCE -g -O1 -fno-omit-frame-pointer \
+    -fsanitize=fuzzer-no-link,address,undefined \
+    -fno-sanitize-recover=undefined -Ilib -Iproto $(call pkg_cflags,$(PKG_PROTO))
+FUZZ_SRCS    := $(sort $(wildcard tests/fuzz/fuzz_*.c))
+FUZZ_BINS    := $(patsubst tests/fuzz/%.c,$(FUZZ_DIR)/%,$(FUZZ_SRCS))
+FUZZ_OBJS    := $(patsubst %.c,$(FUZZ_DIR)/obj/%.o,$(LIB_SRCS) $(PROTO_SRCS))
+$(FUZZ_DIR)/obj/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -MMD -MP -c $< -o $@
+$(FUZZ_DIR)/fuzz_%: tests/fuzz/fuzz_%.c $(FUZZ_OBJS)
+	$(FUZZ_CC) $(FUZZ_CFLAGS) -fsanitize=fuzzer -o $@ $^ \
+	    $(call pkg_libs,$(PKG_PROTO)) -lm -lpthread
+fuzz: deps
+	@$(MAKE) --no-print-directory $(FUZZ_BINS)
+	@sh tests/fuzz/run.sh $(FUZZ_DIR) $(FUZZ_SECONDS)
+
 run: deps
 	@$(MAKE) --no-print-directory all
 	@mkdir -p var
@@ -146,6 +179,8 @@ install: all
 	install -m 0644 systemd/facetd.tmpfiles $(DESTDIR)$(PREFIX)/lib/tmpfiles.d/facetd.conf
 	install -m 0644 systemd/facetd.sysusers $(DESTDIR)$(PREFIX)/lib/sysusers.d/facetd.conf
 	install -m 0644 systemd/facetd.conf.example README.md $(DESTDIR)$(PREFIX)/share/doc/facetd/
+	install -d $(DESTDIR)$(PREFIX)/lib/udev/rules.d
+	install -m 0644 systemd/70-facetd-scanners.rules $(DESTDIR)$(PREFIX)/lib/udev/rules.d/
 
 clean:
 	rm -rf build

@@ -34,6 +34,7 @@ bool cli_wants_help(int argc, char **argv);
 /* The commands; each lives in daemon/cmd_NAME.c. */
 int cmd_inside(int argc, char **argv);
 int cmd_convert(int argc, char **argv);
+int cmd_cut(int argc, char **argv);
 int cmd_inspect(int argc, char **argv);
 int cmd_orient(int argc, char **argv);
 int cmd_triangulate(int argc, char **argv);

@@ -17,6 +17,7 @@ static const cli_command commands[] = {
     {"version", "print the version", cmd_version},
     {"inside", "classify points as inside, outside or on a model", cmd_inside},
     {"convert", "convert a model between file formats", cmd_convert},
+    {"cut", "cut a model by a plane (seed 000 §3)", cmd_cut},
     {"inspect", "print a model's statistics and defects as JSON", cmd_inspect},
     {"orient", "make a model's facets consistent and outward", cmd_orient},
     {"triangulate", "triangulate a functionally defined object",

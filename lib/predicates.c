@@ -254,15 +254,24 @@ int geo_orient3d(const double a[3], const double b[3], const double c[3],
     return orient3d_exact(a, b, c, d);
 }
 
-static int plane_sign_exact(const double plane[4], const double p[3])
+/* plane(p) exactly as an expansion; acc has room for 8. */
+static int plane_value_exact(const double plane[4], const double p[3],
+                             double *acc)
 {
-    double acc[8], tmp[8], prod[2];
+    double tmp[8], prod[2];
     int n = 1;
     acc[0] = plane[3];
     for (int k = 0; k < 3; k++) {
         two_product(plane[k], p[k], &prod[1], &prod[0]);
         n = expansion_sum(n, acc, 2, prod, acc, tmp);
     }
+    return n;
+}
+
+static int plane_sign_exact(const double plane[4], const double p[3])
+{
+    double acc[8];
+    int n = plane_value_exact(plane, p, acc);
     return expansion_sign(n, acc);
 }
 
@@ -274,6 +283,120 @@ int geo_plane_sign(const double plane[4], const double p[3])
     if (fabs(v) > PLANE_BOUND * mag && fabs(v) > TINY)
         return sign_of(v);
     return plane_sign_exact(plane, p);
+}
+
+/* Coordinate k of a crossing point as the exact fraction num/den: a point
+ * on the plane is x0[k]/1; the crossing of x0x1 is
+ * (s0·x1[k] − s1·x0[k]) / (s0 − s1) with s = plane(·) exact.
+ * num has room for 28, den for 14. */
+static void crossing_fraction(const double plane[4], const double x0[3],
+                              const double x1[3], int k, double *num,
+                              int *nnum, double *den, int *nden)
+{
+    if (!x1) {
+        num[0] = x0[k];
+        den[0] = 1.0;
+        *nnum = *nden = 1;
+        return;
+    }
+    double s0[8], s1[8], a[16], b[16], tmp[32];
+    int n0 = plane_value_exact(plane, x0, s0);
+    int n1 = plane_value_exact(plane, x1, s1);
+    int an = scale_expansion(n0, s0, x1[k], a);
+    int bn = scale_expansion(n1, s1, -x0[k], b);
+    *nnum = expansion_sum(an, a, bn, b, num, tmp);
+    negate(n1, s1);
+    *nden = expansion_sum(n0, s0, n1, s1, den, tmp);
+}
+
+/* h = e · f for expansions longer than expansion_product's buffers allow:
+ * h and tmp have room for 2·elen·flen, part for 2·elen. */
+static int long_product(int elen, const double *e, int flen, const double *f,
+                        double *h, double *tmp, double *part)
+{
+    int n = 0;
+    for (int j = 0; j < flen; j++) {
+        int pn = scale_expansion(elen, e, f[j], part);
+        if (n == 0) {
+            for (int i = 0; i < pn; i++)
+                h[i] = part[i];
+            n = pn;
+        } else {
+            n = expansion_sum(n, h, pn, part, h, tmp);
+        }
+    }
+    return n;
+}
+
+static int crossing_cmp_exact(const double plane[4], const double x0[3],
+                              const double x1[3], const double y0[3],
+                              const double y1[3], int k)
+{
+    double nx[28], dx[14], ny[28], dy[14];
+    int nnx, ndx, nny, ndy;
+    crossing_fraction(plane, x0, x1, k, nx, &nnx, dx, &ndx);
+    crossing_fraction(plane, y0, y1, k, ny, &nny, dy, &ndy);
+    /* X − Y = (nx·dy − ny·dx) / (dx·dy) */
+    double p1[2 * 28 * 14], p2[2 * 28 * 14], tmp[4 * 28 * 14], part[56];
+    double diff[4 * 28 * 14];
+    int n1 = long_product(nnx, nx, ndy, dy, p1, tmp, part);
+    int n2 = long_product(nny, ny, ndx, dx, p2, tmp, part);
+    negate(n2, p2);
+    int nd = expansion_sum(n1, p1, n2, p2, diff, tmp);
+    return expansion_sign(nd, diff) * expansion_sign(ndx, dx) *
+           expansion_sign(ndy, dy);
+}
+
+/* Floating-point coordinate k of a crossing with a bound on its error;
+ * false when no useful bound is available. */
+static int crossing_approx(const double plane[4], const double x0[3],
+                           const double x1[3], int k, double *ret_val,
+                           double *ret_err)
+{
+    if (!x1) {
+        *ret_val = x0[k];
+        *ret_err = 0.0;
+        return 1;
+    }
+    const double *pt[2] = {x0, x1};
+    double a[2], bnd[2];
+    for (int i = 0; i < 2; i++) {
+        double t0 = plane[0] * pt[i][0], t1 = plane[1] * pt[i][1];
+        double t2 = plane[2] * pt[i][2];
+        double v = ((t0 + t1) + t2) + plane[3];
+        double mag = fabs(t0) + fabs(t1) + fabs(t2) + fabs(plane[3]);
+        /* |fl(v)| is within the bound of |v| whatever the signs */
+        a[i] = fabs(v);
+        bnd[i] = PLANE_BOUND * mag;
+    }
+    double den = a[0] + a[1] - bnd[0] - bnd[1];
+    if (!(den > TINY))
+        return 0;
+    double t = a[0] / (a[0] + a[1]);
+    double dt = (bnd[0] + bnd[1]) / den + 8.0 * EPS;
+    double d = x1[k] - x0[k];
+    double val = x0[k] + t * d;
+    *ret_val = val;
+    *ret_err = dt * fabs(d) * (1.0 + 8.0 * EPS) +
+               4.0 * EPS * (fabs(val) + fabs(x0[k]));
+    return 1;
+}
+
+int geo_plane_crossing_cmp(const double plane[4], const double x0[3],
+                           const double x1[3], const double y0[3],
+                           const double y1[3], int k)
+{
+    double vx, ex, vy, ey;
+    if (crossing_approx(plane, x0, x1, k, &vx, &ex) &&
+        crossing_approx(plane, y0, y1, k, &vy, &ey)) {
+        double diff = vx - vy;
+        double bound = (ex + ey) * (1.0 + 8.0 * EPS);
+        if (!x1 && !y1)
+            return sign_of(diff);
+        if (fabs(diff) > bound && fabs(diff) > TINY)
+            return sign_of(diff);
+    }
+    return crossing_cmp_exact(plane, x0, x1, y0, y1, k);
 }
 
 static int normal_sign_exact(const double p0[3], const double n[3],

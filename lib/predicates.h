@@ -44,6 +44,19 @@ int geo_orient2d_proj(const double a[3], const double b[3], const double c[3],
  * +1 outside (the side the normal points to), −1 inside, 0 exactly on it. */
 int geo_plane_sign(const double plane[4], const double p[3]);
 
+/* Exact comparison of coordinate k (0, 1 or 2) of two points X and Y that
+ * lie on the plane (coefficients taken as exact). Each point is given as
+ * x0, x1: when x1 is NULL, X is x0 itself (which the caller knows to lie
+ * on the plane); otherwise X is the crossing of segment x0x1 with the
+ * plane, and x0, x1 must lie strictly on opposite sides (geo_plane_sign
+ * −1/+1). Likewise Y from y0, y1. Returns −1, 0, +1 as X[k] is less than,
+ * equal to, greater than Y[k] for the exact real crossing points (no
+ * rounding of the crossings is involved). Used to order the crossings of
+ * a plane cut along a facet's section line. */
+int geo_plane_crossing_cmp(const double plane[4], const double x0[3],
+                           const double x1[3], const double y0[3],
+                           const double y1[3], int k);
+
 /* Exact sign of n · (p − p0) for the given doubles (seed 003's point +
  * normal form nfN): the differences p − p0 are formed exactly (two-term
  * expansions), so no rounding of an offset d = −n·p0 enters the answer.

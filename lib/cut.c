@@ -1,0 +1,984 @@
+/* cut.c — plane cut of an arbitrary polyhedron (seed 000 §3).
+ *
+ * Stages (the paper's, with the topology of lib/topo.h as preprocessing):
+ *  1. the side of every vertex, decided once and exactly (geo_plane_sign);
+ *  2. one new vertex per crossed edge, shared by the edge's two facets
+ *     through the mate corner;
+ *  3. per cut facet, the ordered list of events on its section line
+ *     l = facet ∩ plane: crossed edges and on-plane vertices (the paper's
+ *     list with its ordering coordinate, kept sorted by binary-search
+ *     insertion with an exact comparison), each with its direction: ENTRY
+ *     (+1, the facet's inside begins along l), EXIT (−1, it ends), PASS (0,
+ *     a reflex on-plane vertex inside a segment of l) — a convex on-plane
+ *     vertex touching l from one side is the paper's "hanging" vertex and
+ *     is not listed; a reflex one touching from the kept side is an EXIT
+ *     and an ENTRY at once (DOUBLE);
+ *  4. the facet's kept pieces by the paper's two cycles: along the
+ *     boundary while it stays on the kept side (cycle B), then along l from
+ *     an EXIT back to the ENTRY that opens its segment (cycle A); each such
+ *     segment of l, reversed, is an edge of a new facet;
+ *  5. the section components: the edges of the new facets chained at their
+ *     shared vertices. A crossed edge's vertex is shared by exactly the two
+ *     facets of that edge, so following the chain is the paper's transition
+ *     F(facet, edge) = (next facet, next edge); edges of the model lying in
+ *     the plane join the chain when only one of their two facets is kept
+ *     there;
+ *  6. dropping the removed side, the hanging on-plane vertices, and
+ *     renumbering (geo_poly_compact).
+ *
+ * Invariants: side[] is never recomputed; every crossing point is computed
+ * once; the kept pieces of a facet and the new facets use the same vertex
+ * ids along every shared edge, so the result is closed by construction. */
+#include "cut.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "predicates.h"
+#include "vec.h"
+
+enum ev_type { EV_ENTRY, EV_EXIT, EV_DOUBLE, EV_PASS };
+enum seg_type { SEG_KEPT, SEG_REMOVED };
+
+/* A node of a cut facet's boundary: a vertex, or the crossing point of the
+ * edge that follows vertex i. */
+typedef struct node {
+    uint32_t i;      /* position of the vertex in the facet */
+    uint32_t vout;   /* vertex id in the output */
+    uint8_t crossing;
+    uint8_t in, out; /* seg_type of the boundary before / after the node */
+    int32_t ev;      /* index of its event in the sorted list, or -1 */
+} node;
+
+typedef struct event {
+    uint8_t type;
+    uint32_t node;
+    const double *p0, *p1; /* the point: p0, or the crossing of p0p1 */
+    int32_t partner;       /* EXIT/DOUBLE: sorted index of its ENTRY */
+} event;
+
+typedef struct cutter {
+    const geo_poly *p;
+    const geo_topo *t;
+    const double *plane; /* as given: decides every side */
+    double unit[4];      /* normalised: the new facets' plane */
+    int8_t *side;
+    uint32_t *xv;        /* per corner: crossing vertex id or GEO_NONE */
+    geo_poly *out;
+    geo_err *err;
+
+    /* edges of the new facets (src, dst), output vertex ids */
+    uint32_t (*cap)[2];
+    size_t ncap, capcap;
+    /* corners of kept in-plane edges (candidates for the section) */
+    uint32_t *kin;
+    size_t nkin, capkin;
+    uint8_t *kept_inplane; /* per corner: its edge lies in the plane and
+                              its facet is kept along it */
+
+    /* scratch of one facet */
+    node *nodes;
+    size_t capnodes;
+    event *ev;
+    size_t capev;
+    uint32_t *piece;
+    size_t cappiece;
+    uint8_t *used;
+    size_t capused;
+
+    uint32_t pieces, split_facets, removed_facets, new_vertices;
+} cutter;
+
+static int grow(void **buf, size_t *cap, size_t need, size_t elem)
+{
+    if (need <= *cap)
+        return 0;
+    size_t c = *cap ? *cap : 16;
+    while (c < need)
+        c *= 2;
+    void *b = realloc(*buf, c * elem);
+    if (!b)
+        return -ENOMEM;
+    *buf = b;
+    *cap = c;
+    return 0;
+}
+
+static int push_cap(cutter *k, uint32_t a, uint32_t b)
+{
+    if (grow((void **)&k->cap, &k->capcap, k->ncap + 1, sizeof *k->cap) < 0)
+        return -ENOMEM;
+    k->cap[k->ncap][0] = a;
+    k->cap[k->ncap][1] = b;
+    k->ncap++;
+    return 0;
+}
+
+static int push_kin(cutter *k, uint32_t corner)
+{
+    if (k->kept_inplane[corner])
+        return 0;
+    if (grow((void **)&k->kin, &k->capkin, k->nkin + 1, sizeof *k->kin) < 0)
+        return -ENOMEM;
+    k->kept_inplane[corner] = 1;
+    k->kin[k->nkin++] = corner;
+    return 0;
+}
+
+static int dominant_axis(const double v[3])
+{
+    int k = 0;
+    for (int j = 1; j < 3; j++)
+        if (fabs(v[j]) > fabs(v[k]))
+            k = j;
+    return k;
+}
+
+/* The crossing of edge a–b (sides of opposite sign) computed from the end
+ * nearer to the plane, so the parameter is at most 1/2 and the point lies
+ * in that half; the same edge gives the same bits whichever facet asks. */
+static void crossing_point(const double plane[4], const double a[3],
+                           const double b[3], double ret[3])
+{
+    double fa = geo_plane_eval(plane, a), fb = geo_plane_eval(plane, b);
+    const double *p0 = a, *p1 = b;
+    double f0 = fa, f1 = fb;
+    if (fabs(fb) < fabs(fa) || (fabs(fb) == fabs(fa) && memcmp(b, a, 24) < 0)) {
+        p0 = b, p1 = a, f0 = fb, f1 = fa;
+    }
+    double t = f0 / (f0 - f1);
+    if (!(t >= 0.0))
+        t = 0.0;
+    if (t > 0.5)
+        t = 0.5;
+    for (int j = 0; j < 3; j++) {
+        double x = p0[j] + t * (p1[j] - p0[j]);
+        double lo = fmin(a[j], b[j]), hi = fmax(a[j], b[j]);
+        ret[j] = fmin(fmax(x, lo), hi);
+    }
+}
+
+/* ---- one cut facet ---------------------------------------------------- */
+
+typedef struct facet_frame {
+    int k;      /* axis along which l is ordered */
+    int esign;  /* sign of e[k], e = plane normal × facet normal */
+    int drop;   /* axis dropped for the facet's 2D orientation */
+    int osign;  /* sign of the facet normal on that axis */
+} facet_frame;
+
+/* Order of two points of l along e: −1, 0, +1. */
+static int along(const cutter *k, const facet_frame *fr, const double *a0,
+                 const double *a1, const double *b0, const double *b1)
+{
+    return fr->esign *
+           geo_plane_crossing_cmp(k->plane, a0, a1, b0, b1, fr->k);
+}
+
+static int insert_event(cutter *k, const facet_frame *fr, size_t *nev,
+                        const event *e)
+{
+    if (grow((void **)&k->ev, &k->capev, *nev + 1, sizeof *k->ev) < 0)
+        return -ENOMEM;
+    /* binary search for the first event after e along l (ties keep the
+     * boundary order; a tie means the facet touches itself, which the
+     * pattern check below then reports) */
+    size_t lo = 0, hi = *nev;
+    while (lo < hi) {
+        size_t mid = (lo + hi) / 2;
+        const event *m = &k->ev[mid];
+        if (along(k, fr, m->p0, m->p1, e->p0, e->p1) <= 0)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    memmove(k->ev + lo + 1, k->ev + lo, (*nev - lo) * sizeof *k->ev);
+    k->ev[lo] = *e;
+    (*nev)++;
+    return 0;
+}
+
+static int facet_error(cutter *k, uint32_t f, const char *what)
+{
+    return geo_err_set(k->err, -EINVAL,
+                       "facets[%u]: %s (a self-intersecting or strongly "
+                       "non-planar facet)", f, what);
+}
+
+static int cut_facet(cutter *k, uint32_t f)
+{
+    const geo_poly *p = k->p;
+    uint32_t n = geo_poly_facet_size(p, f), c0 = p->fstart[f];
+    const uint32_t *vs = geo_poly_facet(p, f);
+    const int8_t *side = k->side;
+
+    double nf[3], e[3];
+    geo_poly_facet_area_vector(p, f, nf);
+    geo_vcross(k->unit, nf, e);
+    if (!(geo_vlen(e) > 0.0))
+        return facet_error(k, f, "crosses the plane but is parallel to it");
+    facet_frame fr;
+    fr.k = dominant_axis(e);
+    fr.esign = e[fr.k] > 0 ? 1 : -1;
+    fr.drop = dominant_axis(nf);
+    fr.osign = nf[fr.drop] > 0 ? 1 : -1;
+
+    /* boundary nodes with the kept/removed type of the segments between */
+    if (grow((void **)&k->nodes, &k->capnodes, 2 * (size_t)n, sizeof *k->nodes) < 0)
+        return -ENOMEM;
+    uint32_t nn = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t j = i + 1 < n ? i + 1 : 0;
+        int si = side[vs[i]], sj = side[vs[j]];
+        node *v = &k->nodes[nn++];
+        v->i = i;
+        v->vout = vs[i];
+        v->crossing = 0;
+        v->ev = -1;
+        if (si * sj < 0) {
+            v->out = si < 0 ? SEG_KEPT : SEG_REMOVED;
+            node *x = &k->nodes[nn++];
+            x->i = i;
+            x->vout = k->xv[c0 + i];
+            x->crossing = 1;
+            x->ev = -1;
+            x->in = v->out;
+            x->out = sj < 0 ? SEG_KEPT : SEG_REMOVED;
+        } else if (si < 0 || sj < 0) {
+            v->out = SEG_KEPT;
+        } else if (si > 0 || sj > 0) {
+            v->out = SEG_REMOVED;
+        } else {
+            /* an edge in the plane borders the kept side when it runs
+             * against e (the facet's inside is then below l) */
+            int d = along(k, &fr, p->verts[vs[j]], NULL, p->verts[vs[i]], NULL);
+            if (d == 0)
+                return facet_error(k, f, "an edge in the plane has zero length");
+            v->out = d < 0 ? SEG_KEPT : SEG_REMOVED;
+        }
+    }
+    for (uint32_t a = 0; a < nn; a++) {
+        node *v = &k->nodes[a];
+        if (!v->crossing)
+            v->in = k->nodes[a ? a - 1 : nn - 1].out;
+    }
+
+    /* events, sorted along l */
+    size_t nev = 0;
+    for (uint32_t a = 0; a < nn; a++) {
+        node *v = &k->nodes[a];
+        event ev = {0, a, NULL, NULL, -1};
+        if (v->crossing) {
+            uint32_t j = v->i + 1 < n ? v->i + 1 : 0;
+            ev.p0 = p->verts[vs[v->i]];
+            ev.p1 = p->verts[vs[j]];
+        } else {
+            if (side[vs[v->i]] != 0)
+                continue;
+            ev.p0 = p->verts[vs[v->i]];
+        }
+        if (v->in == SEG_REMOVED && v->out == SEG_KEPT) {
+            ev.type = EV_ENTRY;
+        } else if (v->in == SEG_KEPT && v->out == SEG_REMOVED) {
+            ev.type = EV_EXIT;
+        } else {
+            /* a single on-plane vertex between two vertices of one side:
+             * convex, it only touches l (hanging); reflex, l runs through
+             * the facet on both of its sides */
+            uint32_t ip = v->i ? v->i - 1 : n - 1, in = v->i + 1 < n ? v->i + 1 : 0;
+            int sp = side[vs[ip]], sn = side[vs[in]];
+            if (sp == 0 || sn == 0 || sp != sn)
+                continue;
+            int turn = fr.osign * geo_orient2d_proj(p->verts[vs[ip]],
+                                                    p->verts[vs[v->i]],
+                                                    p->verts[vs[in]], fr.drop);
+            if (turn >= 0)
+                continue;
+            ev.type = sp < 0 ? EV_DOUBLE : EV_PASS;
+        }
+        int r = insert_event(k, &fr, &nev, &ev);
+        if (r < 0)
+            return r;
+    }
+
+    /* the paper's direction sweep: outside, ENTRY opens a segment of l
+     * inside the facet, PASS lies inside one, EXIT closes it, DOUBLE
+     * closes one and opens the next */
+    int32_t open = -1;
+    for (size_t s = 0; s < nev; s++) {
+        event *ev = &k->ev[s];
+        k->nodes[ev->node].ev = (int32_t)s;
+        switch (ev->type) {
+        case EV_ENTRY:
+            if (open >= 0)
+                return facet_error(k, f, "two entries in a row along the section");
+            open = (int32_t)s;
+            break;
+        case EV_PASS:
+            if (open < 0)
+                return facet_error(k, f, "a reflex vertex outside the section");
+            break;
+        case EV_EXIT:
+        case EV_DOUBLE:
+            if (open < 0)
+                return facet_error(k, f, "an exit before any entry along the section");
+            ev->partner = open;
+            open = ev->type == EV_DOUBLE ? (int32_t)s : -1;
+            break;
+        }
+    }
+    if (open >= 0 || nev == 0)
+        return facet_error(k, f, "the section does not close");
+
+    /* cycles B (boundary, kept side) and A (along l back to the entry) */
+    if (grow((void **)&k->used, &k->capused, nev, 1) < 0)
+        return -ENOMEM;
+    memset(k->used, 0, nev);
+    uint32_t pieces = 0;
+    size_t guard = 0, limit = 4 * ((size_t)nn + nev) + 16;
+    for (size_t s0 = 0; s0 < nev; s0++) {
+        const event *start = &k->ev[s0];
+        if ((start->type != EV_ENTRY && start->type != EV_DOUBLE) || k->used[s0])
+            continue;
+        size_t np = 0;
+        uint32_t cur = start->node;
+        for (;;) {
+            k->used[k->nodes[cur].ev] = 1;
+            /* cycle B */
+            uint32_t a = cur;
+            for (;;) {
+                if (++guard > limit)
+                    return facet_error(k, f, "the pieces do not close");
+                if (grow((void **)&k->piece, &k->cappiece, np + 1, sizeof *k->piece) < 0)
+                    return -ENOMEM;
+                k->piece[np++] = k->nodes[a].vout;
+                if (a != cur && k->nodes[a].ev >= 0) {
+                    uint8_t ty = k->ev[k->nodes[a].ev].type;
+                    if (ty == EV_EXIT || ty == EV_DOUBLE)
+                        break;
+                }
+                const node *na = &k->nodes[a];
+                if (!na->crossing && na->out == SEG_KEPT &&
+                    side[vs[na->i]] == 0 &&
+                    side[vs[na->i + 1 < n ? na->i + 1 : 0]] == 0) {
+                    int r = push_kin(k, c0 + na->i);
+                    if (r < 0)
+                        return r;
+                }
+                a = a + 1 < nn ? a + 1 : 0;
+                if (k->nodes[a].in != SEG_KEPT)
+                    return facet_error(k, f, "the kept boundary is interrupted");
+            }
+            /* cycle A: from the exit against e to its entry; the new
+             * facet gets the same segment along e */
+            int32_t x = k->nodes[a].ev, en = k->ev[x].partner;
+            for (int32_t s = x; s > en; s--) {
+                uint32_t hi = k->nodes[k->ev[s].node].vout;
+                uint32_t lo = k->nodes[k->ev[s - 1].node].vout;
+                int r = push_cap(k, lo, hi);
+                if (r < 0)
+                    return r;
+                if (s - 1 > en) {
+                    if (grow((void **)&k->piece, &k->cappiece, np + 1, sizeof *k->piece) < 0)
+                        return -ENOMEM;
+                    k->piece[np++] = lo;
+                }
+            }
+            cur = k->ev[en].node;
+            if (cur == start->node)
+                break;
+            if (k->used[en])
+                return facet_error(k, f, "an entry is reached twice");
+        }
+        if (np < 3)
+            return facet_error(k, f, "a piece with fewer than 3 vertices");
+        int64_t nf_out = geo_poly_add_facet(k->out, k->piece, (uint32_t)np);
+        if (nf_out < 0)
+            return (int)nf_out;
+        memcpy(k->out->planes[nf_out], p->planes[f], sizeof p->planes[f]);
+        pieces++;
+    }
+    for (size_t s = 0; s < nev; s++)
+        if (!k->used[s] && (k->ev[s].type == EV_ENTRY || k->ev[s].type == EV_DOUBLE))
+            return facet_error(k, f, "an entry is not on any piece");
+    k->pieces += pieces;
+    k->split_facets++;
+    return 0;
+}
+
+/* ---- the section: chaining the new facets' edges ------------------------ */
+
+/* Among the edges leaving v (at least two: the section touches itself at
+ * v), the one that follows the edge arriving from u: the first clockwise
+ * from the direction v→u, so each new facet keeps its inside on the left
+ * and the loops split at v instead of crossing there. */
+static uint32_t pick_out(const cutter *k, const uint32_t *head,
+                         const uint32_t *nextedge, uint32_t u, uint32_t v,
+                         int drop, int osign)
+{
+    const double(*P)[3] = (const double(*)[3])k->out->verts;
+    uint32_t best = GEO_NONE;
+    int best_half = 0;
+    for (uint32_t e = head[v]; e != GEO_NONE; e = nextedge[e]) {
+        uint32_t w = k->cap[e][1];
+        /* half 1: clockwise of v→u within (0, π]; half 2: (π, 2π] */
+        int o = osign * geo_orient2d_proj(P[v], P[u], P[w], drop);
+        int half;
+        if (o < 0)
+            half = 1;
+        else if (o > 0)
+            half = 2;
+        else {
+            double du[3], dw[3];
+            geo_vsub(P[u], P[v], du);
+            geo_vsub(P[w], P[v], dw);
+            half = geo_vdot(du, dw) < 0 ? 1 : 3; /* straight on / back */
+        }
+        if (best == GEO_NONE || half < best_half) {
+            best = e;
+            best_half = half;
+            continue;
+        }
+        if (half == best_half && half < 3) {
+            uint32_t bw = k->cap[best][1];
+            /* w before bw when w is counter-clockwise of bw, i.e. less
+             * far clockwise from v→u */
+            if (osign * geo_orient2d_proj(P[v], P[bw], P[w], drop) > 0)
+                best = e;
+        }
+    }
+    return best;
+}
+
+static int build_section(cutter *k, uint32_t *ret_components)
+{
+    uint32_t nv = k->out->nverts;
+    size_t m = k->ncap;
+    uint32_t *head = malloc(((size_t)nv + 1) * sizeof *head);
+    uint32_t *nextedge = malloc((m + 1) * sizeof *nextedge);
+    uint32_t *outdeg = calloc((size_t)nv + 1, sizeof *outdeg);
+    uint8_t *used = calloc(m + 1, 1);
+    uint32_t *loop = malloc((m + 1) * sizeof *loop);
+    int r = 0;
+    if (!head || !nextedge || !outdeg || !used || !loop) {
+        r = geo_err_set(k->err, -ENOMEM, "out of memory building the section");
+        goto done;
+    }
+    for (uint32_t v = 0; v < nv; v++)
+        head[v] = GEO_NONE;
+    for (size_t e = m; e-- > 0;) {
+        uint32_t a = k->cap[e][0];
+        nextedge[e] = head[a];
+        head[a] = (uint32_t)e;
+        outdeg[a]++;
+    }
+    int drop = dominant_axis(k->unit);
+    int osign = k->unit[drop] > 0 ? 1 : -1;
+    uint32_t comps = 0;
+    for (size_t e0 = 0; e0 < m; e0++) {
+        if (used[e0])
+            continue;
+        size_t len = 0;
+        size_t e = e0;
+        for (;;) {
+            used[e] = 1;
+            loop[len++] = k->cap[e][0];
+            uint32_t u = k->cap[e][0], v = k->cap[e][1];
+            uint32_t nx = outdeg[v] == 1 ? head[v]
+                        : outdeg[v] == 0 ? GEO_NONE
+                        : pick_out(k, head, nextedge, u, v, drop, osign);
+            if (nx == GEO_NONE) {
+                r = geo_err_set(k->err, -EINVAL,
+                                "section: the boundary of a new facet does "
+                                "not close at vertex %u", v);
+                goto done;
+            }
+            if (nx == e0)
+                break;
+            if (used[nx]) {
+                r = geo_err_set(k->err, -EINVAL,
+                                "section: the boundary of a new facet runs "
+                                "into itself at vertex %u", v);
+                goto done;
+            }
+            e = nx;
+        }
+        if (len < 3) {
+            r = geo_err_set(k->err, -EINVAL,
+                            "section: a component with %zu vertices", len);
+            goto done;
+        }
+        int64_t f = geo_poly_add_facet(k->out, loop, (uint32_t)len);
+        if (f < 0) {
+            r = geo_err_set(k->err, (int)f, "out of memory adding a facet");
+            goto done;
+        }
+        memcpy(k->out->planes[f], k->unit, sizeof k->unit);
+        double area[3];
+        geo_poly_facet_area_vector(k->out, (uint32_t)f, area);
+        if (!(geo_vdot(area, k->unit) > 0)) {
+            r = geo_err_set(k->err, -ENOTSUP,
+                            "section: component %u has a hole (the new "
+                            "facet would need an inner boundary, which "
+                            "facet-model/1 cannot represent)", comps);
+            goto done;
+        }
+        comps++;
+    }
+    *ret_components = comps;
+done:
+    free(head), free(nextedge), free(outdeg), free(used), free(loop);
+    return r;
+}
+
+/* Edges of the model lying in the plane whose facet is kept along them
+ * become edges of the section unless the facet across is kept there too
+ * (then the edge stays between those two facets; when that edge is reflex
+ * the kept solid would pinch along it: refused). */
+static int inplane_edges(cutter *k)
+{
+    const geo_poly *p = k->p;
+    for (size_t i = 0; i < k->nkin; i++) {
+        uint32_t c = k->kin[i], m = k->t->mate[c];
+        uint32_t a = p->fidx[c], b = p->fidx[geo_topo_next(p, k->t, c)];
+        if (!k->kept_inplane[m]) {
+            int r = push_cap(k, b, a);
+            if (r < 0)
+                return r;
+            continue;
+        }
+        if (c > m)
+            continue;
+        /* the lowest vertex of each facet: on its inner side of the edge */
+        const double *lowest[2] = {NULL, NULL};
+        uint32_t fs[2] = {k->t->corner_facet[c], k->t->corner_facet[m]};
+        for (int s = 0; s < 2; s++) {
+            double best = 0;
+            uint32_t nv = geo_poly_facet_size(p, fs[s]);
+            const uint32_t *vs = geo_poly_facet(p, fs[s]);
+            for (uint32_t j = 0; j < nv; j++) {
+                double h = geo_plane_eval(k->plane, p->verts[vs[j]]);
+                if (k->side[vs[j]] < 0 && (!lowest[s] || h < best)) {
+                    lowest[s] = p->verts[vs[j]];
+                    best = h;
+                }
+            }
+        }
+        if (lowest[0] && lowest[1] &&
+            geo_orient3d(p->verts[a], p->verts[b], lowest[0], lowest[1]) > 0)
+            return geo_err_set(k->err, -ENOTSUP,
+                               "facets[%u]: the plane touches the reflex "
+                               "edge %u-%u from inside; the kept part would "
+                               "pinch along it", fs[0], a, b);
+    }
+    return 0;
+}
+
+/* A vertex on the plane whose neighbours all lie on the kept side is the
+ * apex of a cone below the plane: of the solid (a peak: the new facets
+ * keep away from it) or of a cavity (the solid lies above it, and a new
+ * facet would pass over the apex, touching it). The latter is refused.
+ * Inside is decided by the winding number of each new facet around the
+ * apex in the plane's projection, with exact orientation signs. */
+static int check_cavity_apexes(cutter *k, uint32_t first_new)
+{
+    const geo_poly *p = k->p;
+    const geo_topo *t = k->t;
+    const geo_poly *o = k->out;
+    int drop = dominant_axis(k->unit);
+    int u = (drop + 1) % 3, w = (drop + 2) % 3;
+    for (uint32_t v = 0; v < p->nverts; v++) {
+        if (k->side[v] != 0 || t->vstart[v] == t->vstart[v + 1])
+            continue;
+        bool apex = true;
+        for (uint32_t i = t->vstart[v]; i < t->vstart[v + 1] && apex; i++) {
+            uint32_t c = t->vcorners[i];
+            apex = k->side[p->fidx[geo_topo_next(p, t, c)]] < 0 &&
+                   k->side[p->fidx[geo_topo_prev(p, t, c)]] < 0;
+        }
+        if (!apex)
+            continue;
+        const double *q = p->verts[v];
+        for (uint32_t f = first_new; f < o->nfacets; f++) {
+            uint32_t n = geo_poly_facet_size(o, f);
+            const uint32_t *vs = geo_poly_facet(o, f);
+            bool vertex_of_f = false;
+            for (uint32_t j = 0; j < n; j++)
+                vertex_of_f |= vs[j] == v;
+            if (vertex_of_f)
+                continue;
+            int wn = 0;
+            bool on = false;
+            for (uint32_t j = 0; j < n && !on; j++) {
+                const double *a = o->verts[vs[j]];
+                const double *b = o->verts[vs[j + 1 < n ? j + 1 : 0]];
+                int s = geo_orient2d_proj(a, b, q, drop);
+                if (s == 0 && fmin(a[u], b[u]) <= q[u] && q[u] <= fmax(a[u], b[u]) &&
+                    fmin(a[w], b[w]) <= q[w] && q[w] <= fmax(a[w], b[w]))
+                    on = true;
+                else if (a[w] <= q[w] && b[w] > q[w] && s > 0)
+                    wn++;
+                else if (a[w] > q[w] && b[w] <= q[w] && s < 0)
+                    wn--;
+            }
+            if (on || wn != 0)
+                return geo_err_set(k->err, -ENOTSUP,
+                                   "vertices[%u]: the plane touches the apex "
+                                   "of a cavity from inside; a new facet "
+                                   "would pass over it", v);
+        }
+    }
+    return 0;
+}
+
+/* Removes on-plane vertices left in exactly two facets (they lie on the
+ * straight edge between those two). Returns the count or -EINVAL. */
+static int64_t drop_hanging(cutter *k)
+{
+    geo_poly *o = k->out;
+    uint32_t nold = k->p->nverts;
+    uint8_t *cnt = calloc((size_t)nold + 1, 1);
+    if (!cnt)
+        return -ENOMEM;
+    uint32_t nc = geo_poly_ncorners(o);
+    for (uint32_t c = 0; c < nc; c++) {
+        uint32_t v = o->fidx[c];
+        if (v < nold && k->side[v] == 0 && cnt[v] < 3)
+            cnt[v]++;
+    }
+    int64_t dropped = 0;
+    for (uint32_t v = 0; v < nold; v++)
+        if (cnt[v] == 2)
+            dropped++;
+    if (dropped == 0) {
+        free(cnt);
+        return 0;
+    }
+    uint32_t w = 0;
+    for (uint32_t f = 0; f < o->nfacets; f++) {
+        uint32_t s = o->fstart[f], e = o->fstart[f + 1], start = w;
+        for (uint32_t c = s; c < e; c++) {
+            uint32_t v = o->fidx[c];
+            if (v < nold && cnt[v] == 2)
+                continue;
+            o->fidx[w++] = v;
+        }
+        o->fstart[f] = start;
+        if (w - start < 3) {
+            free(cnt);
+            return geo_err_set(k->err, -EINVAL,
+                               "result facet %u degenerates when its "
+                               "hanging vertices are removed", f);
+        }
+    }
+    o->fstart[o->nfacets] = w;
+    free(cnt);
+    return dropped;
+}
+
+typedef struct wedge {
+    uint32_t v, prev, next; /* a facet's corner at v and its neighbours */
+} wedge;
+
+static int cmp_wedge(const void *a, const void *b)
+{
+    const wedge *x = a, *y = b;
+    if (x->v != y->v)
+        return x->v < y->v ? -1 : 1;
+    if (x->prev != y->prev)
+        return x->prev < y->prev ? -1 : 1;
+    return (x->next > y->next) - (x->next < y->next);
+}
+
+/* Only vertices on the plane can lose part of their fan; each must still
+ * have its facets in one closed fan (the facet after the one with edge
+ * v→n is the one with edge n→v). Two fans mean the kept part touches
+ * itself at the vertex (e.g. a saddle vertex on the plane): refused. */
+static int check_plane_fans(cutter *k)
+{
+    const geo_poly *o = k->out;
+    uint32_t nold = k->p->nverts;
+    size_t n = 0, cap = 0;
+    wedge *w = NULL;
+    for (uint32_t f = 0; f < o->nfacets; f++) {
+        uint32_t s = o->fstart[f], e = o->fstart[f + 1];
+        for (uint32_t c = s; c < e; c++) {
+            uint32_t v = o->fidx[c];
+            if (v >= nold || k->side[v] != 0)
+                continue;
+            if (grow((void **)&w, &cap, n + 1, sizeof *w) < 0) {
+                free(w);
+                return geo_err_set(k->err, -ENOMEM, "out of memory");
+            }
+            w[n].v = v;
+            w[n].prev = o->fidx[c > s ? c - 1 : e - 1];
+            w[n].next = o->fidx[c + 1 < e ? c + 1 : s];
+            n++;
+        }
+    }
+    if (n == 0)
+        return 0;
+    qsort(w, n, sizeof *w, cmp_wedge);
+    int r = 0;
+    for (size_t a = 0; a < n && r == 0;) {
+        size_t b = a;
+        while (b < n && w[b].v == w[a].v)
+            b++;
+        /* walk the fan from the first wedge; it must visit all b − a */
+        size_t steps = 0;
+        uint32_t want = w[a].next;
+        do {
+            size_t x = a;
+            while (x < b && w[x].prev != want)
+                x++;
+            if (x == b)
+                break;
+            want = w[x].next;
+            steps++;
+        } while (want != w[a].next && steps <= b - a);
+        if (steps != b - a || want != w[a].next)
+            r = geo_err_set(k->err, -ENOTSUP,
+                            "vertices[%u]: the kept part would touch itself "
+                            "at this vertex on the plane", w[a].v);
+        a = b;
+    }
+    free(w);
+    return r;
+}
+
+void geo_cut_opts_default(geo_cut_opts *opts)
+{
+    opts->main_facet = GEO_NONE;
+    opts->topo = NULL;
+    opts->drop_hanging = true;
+}
+
+static int check_input(const geo_poly *p, const double plane[4],
+                       const geo_cut_opts *o, geo_err *err)
+{
+    for (int j = 0; j < 4; j++)
+        if (!isfinite(plane[j]))
+            return geo_err_set(err, -EINVAL, "plane[%d]: not a finite number", j);
+    if (plane[0] == 0 && plane[1] == 0 && plane[2] == 0)
+        return geo_err_set(err, -EINVAL, "plane: the normal (a, b, c) is zero");
+    if (!isfinite(geo_vlen(plane)) || !(geo_vlen(plane) > 0))
+        return geo_err_set(err, -EINVAL, "plane: the normal cannot be normalised");
+    if (o->main_facet != GEO_NONE && o->main_facet >= p->nfacets)
+        return geo_err_set(err, -EINVAL, "main facet %u out of range (%u facets)",
+                           o->main_facet, p->nfacets);
+    return geo_poly_validate_indices(p, err);
+}
+
+int geo_cut(const geo_poly *p, const double plane[4],
+            const geo_cut_opts *opts, const geo_ctx *ctx, geo_poly *out,
+            geo_cut_report *rep, geo_err *err)
+{
+    geo_cut_opts o;
+    if (opts)
+        o = *opts;
+    else
+        geo_cut_opts_default(&o);
+    geo_cut_report rp;
+    memset(&rp, 0, sizeof rp);
+    rp.first_new_facet = GEO_NONE;
+    geo_poly_clear(out);
+    int r = check_input(p, plane, &o, err);
+    if (r < 0)
+        return r;
+
+    cutter k;
+    memset(&k, 0, sizeof k);
+    k.p = p;
+    k.plane = plane;
+    k.out = out;
+    k.err = err;
+    double len = geo_vlen(plane);
+    for (int j = 0; j < 4; j++)
+        k.unit[j] = plane[j] / len;
+
+    geo_topo *own = NULL;
+    k.t = o.topo;
+    if (!k.t) {
+        own = geo_topo_build(p, err);
+        if (!own)
+            return -ENOMEM;
+        k.t = own;
+    } else if (k.t->nverts != p->nverts || k.t->ncorners != geo_poly_ncorners(p)) {
+        return geo_err_set(err, -EINVAL, "topology does not match the model");
+    }
+    if (!geo_topo_is_closed_manifold(k.t)) {
+        r = geo_err_set(err, -EINVAL,
+                        "model is not a closed oriented manifold (%u boundary, "
+                        "%u non-manifold, %u flipped edges, %u non-manifold "
+                        "vertices)", k.t->nboundary_edges, k.t->nnonmanifold_edges,
+                        k.t->nflipped_edges, k.t->nnonmanifold_vertices);
+        goto done;
+    }
+
+    k.side = malloc((size_t)p->nverts + 1);
+    if (!k.side)
+        goto oom;
+    uint32_t nneg = 0, npos = 0;
+    for (uint32_t v = 0; v < p->nverts; v++) {
+        k.side[v] = (int8_t)geo_plane_sign(plane, p->verts[v]);
+        if (k.t->vertex_kind[v] == GEO_VERTEX_ISOLATED)
+            continue;
+        nneg += k.side[v] < 0;
+        npos += k.side[v] > 0;
+    }
+    if (o.main_facet != GEO_NONE) {
+        const uint32_t *vs = geo_poly_facet(p, o.main_facet);
+        for (uint32_t j = 0; j < geo_poly_facet_size(p, o.main_facet); j++)
+            if (k.side[vs[j]] < 0) {
+                r = geo_err_set(err, -EINVAL,
+                                "facets[%u].vertices[%u]: the main facet has "
+                                "a vertex on the kept side of the plane",
+                                o.main_facet, j);
+                goto done;
+            }
+    }
+    rp.volume_before = geo_poly_volume(p);
+    if ((r = geo_ctx_progress(ctx, 0.1)) < 0)
+        goto canceled;
+    if (npos == 0) {
+        rp.unchanged = true;
+        if (geo_poly_assign(out, p) < 0)
+            goto oom;
+        rp.volume_after = rp.volume_before;
+        goto done;
+    }
+    if (nneg == 0) {
+        rp.empty = true;
+        rp.removed_vertices = p->nverts;
+        rp.removed_facets = p->nfacets;
+        if (o.main_facet != GEO_NONE) {
+            r = geo_err_set(err, -EINVAL, "main facet: the whole model lies "
+                            "on the removed side, no section to merge into");
+            goto done;
+        }
+        goto done;
+    }
+
+    uint32_t nc = geo_poly_ncorners(p);
+    k.xv = malloc(((size_t)nc + 1) * sizeof *k.xv);
+    k.kept_inplane = calloc((size_t)nc + 1, 1);
+    if (!k.xv || !k.kept_inplane)
+        goto oom;
+    if (geo_poly_reserve(out, p->nverts, p->nfacets, nc) < 0)
+        goto oom;
+    memcpy(out->verts, p->verts, (size_t)p->nverts * sizeof *p->verts);
+    out->nverts = p->nverts;
+
+    /* one vertex per crossed edge, shared with the mate corner */
+    for (uint32_t c = 0; c < nc; c++)
+        k.xv[c] = GEO_NONE;
+    for (uint32_t c = 0; c < nc; c++) {
+        uint32_t a = p->fidx[c], b = p->fidx[geo_topo_next(p, k.t, c)];
+        if (k.side[a] * k.side[b] >= 0 || k.xv[c] != GEO_NONE)
+            continue;
+        double x[3];
+        crossing_point(k.unit, p->verts[a], p->verts[b], x);
+        int64_t id = geo_poly_add_vertex(out, x);
+        if (id < 0)
+            goto oom;
+        k.xv[c] = (uint32_t)id;
+        k.xv[k.t->mate[c]] = (uint32_t)id;
+        k.new_vertices++;
+    }
+    if ((r = geo_ctx_progress(ctx, 0.3)) < 0)
+        goto canceled;
+
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        if ((f & 4095) == 4095 &&
+            (r = geo_ctx_progress(ctx, 0.3 + 0.4 * f / p->nfacets)) < 0)
+            goto canceled;
+        uint32_t n = geo_poly_facet_size(p, f), c0 = p->fstart[f];
+        const uint32_t *vs = geo_poly_facet(p, f);
+        bool neg = false, pos = false;
+        for (uint32_t j = 0; j < n; j++) {
+            neg |= k.side[vs[j]] < 0;
+            pos |= k.side[vs[j]] > 0;
+        }
+        if (neg && pos) {
+            if ((r = cut_facet(&k, f)) < 0)
+                goto done;
+        } else if (neg) {
+            int64_t g = geo_poly_add_facet(out, vs, n);
+            if (g < 0)
+                goto oom;
+            memcpy(out->planes[g], p->planes[f], sizeof p->planes[f]);
+            for (uint32_t j = 0; j < n; j++)
+                if (k.side[vs[j]] == 0 && k.side[vs[j + 1 < n ? j + 1 : 0]] == 0 &&
+                    push_kin(&k, c0 + j) < 0)
+                    goto oom;
+        } else {
+            /* on the removed side or in the plane: the new facets cover
+             * an in-plane facet facing along the normal, and one facing
+             * against it bounds only the removed part */
+            k.removed_facets++;
+        }
+    }
+    if ((r = inplane_edges(&k)) < 0)
+        goto done;
+    if ((r = geo_ctx_progress(ctx, 0.75)) < 0)
+        goto canceled;
+
+    uint32_t first_new = out->nfacets;
+    if ((r = build_section(&k, &rp.components)) < 0)
+        goto done;
+    rp.new_facets = out->nfacets - first_new;
+    if ((r = check_cavity_apexes(&k, first_new)) < 0)
+        goto done;
+    if (o.main_facet != GEO_NONE && rp.components != 1) {
+        r = geo_err_set(err, -EINVAL,
+                        "main facet: the section has %u components, the "
+                        "merge needs exactly one", rp.components);
+        goto done;
+    }
+    if (o.drop_hanging) {
+        int64_t d = drop_hanging(&k);
+        if (d < 0) {
+            r = (int)d;
+            goto done;
+        }
+        rp.hanging_dropped = (uint32_t)d;
+    }
+    if ((r = check_plane_fans(&k)) < 0)
+        goto done;
+    uint32_t *vmap = malloc(((size_t)out->nverts + 1) * sizeof *vmap);
+    if (!vmap || geo_poly_compact(out, NULL, vmap, NULL) < 0) {
+        free(vmap);
+        goto oom;
+    }
+    for (uint32_t v = 0; v < p->nverts; v++)
+        rp.removed_vertices += vmap[v] == GEO_NONE;
+    free(vmap);
+    rp.first_new_facet = rp.new_facets ? first_new : GEO_NONE;
+    rp.split_facets = k.split_facets;
+    rp.pieces = k.pieces;
+    rp.removed_facets = k.removed_facets;
+    rp.new_vertices = k.new_vertices;
+    rp.volume_after = geo_poly_volume(out);
+    r = geo_ctx_progress(ctx, 1.0);
+    if (r < 0)
+        goto canceled;
+    goto done;
+
+canceled:
+    r = geo_err_set(err, -ECANCELED, "cut canceled");
+    goto done;
+oom:
+    r = geo_err_set(err, -ENOMEM, "out of memory");
+done:
+    if (r < 0) {
+        geo_poly_clear(out);
+    } else if (rep) {
+        *rep = rp;
+    }
+    free(k.side), free(k.xv), free(k.kept_inplane), free(k.cap), free(k.kin);
+    free(k.nodes), free(k.ev), free(k.piece), free(k.used);
+    geo_topo_free(own);
+    return r;
+}
