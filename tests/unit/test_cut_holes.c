@@ -239,6 +239,24 @@ static void test_hole_touching_outer_boundary_at_a_vertex(void **state)
     geo_poly_free(p);
 }
 
+static void test_straight_runs_of_the_section_stay_straight(void **state)
+{
+    (void)state;
+    /* The plate's holes are unit cells: the plane meets the walls x = 7 of
+     * two holes in points of one line, each rounded a hair off it. A
+     * diagonal from one hole's corner to the other's along that line would
+     * graze the corner between them (found as a contact by the
+     * inspection); the split keeps every diagonal clear of the points by
+     * more than their rounding bounds. */
+    static const char *const plate[] = {"#########", "#.##.##.#", "#########",
+                                        "##.###.##", "#########"};
+    geo_poly *p = hs_grid_prism(plate, 5, 2);
+    geo_cut_report rep = both_ok(p, 0.74198471331035853, -0.039341021863811054,
+                                 -0.54685690047647206, -4.8433004635939971, NULL);
+    assert_true(rep.new_facets >= 2);
+    geo_poly_free(p);
+}
+
 /* ---- pinches: refused, with the way out that works ------------------- */
 
 /* A prism over a polygon with a notch rising from the bottom edge to a
@@ -592,6 +610,7 @@ int main(void)
         cmocka_unit_test(test_cavity_cross_section_is_a_hole),
         cmocka_unit_test(test_notch_cube_inner_corner_clipped),
         cmocka_unit_test(test_hole_touching_outer_boundary_at_a_vertex),
+        cmocka_unit_test(test_straight_runs_of_the_section_stay_straight),
         cmocka_unit_test(test_pinches_are_refused_and_moving_the_plane_works),
         cmocka_unit_test(test_main_facet_variant_refuses_a_section_with_a_hole),
         cmocka_unit_test(test_random_planes_refuse_nothing),

@@ -138,10 +138,11 @@ static int cmp_dedge(const void *x, const void *y)
 
 /* Splits g and checks everything in the header; returns the pieces
  * (caller clears) and fails the test on any problem. */
-static void split_checked(const region *g, geo_region_pieces *rp)
+static void split_checked_with(const region *g, const double *perr,
+                               geo_region_pieces *rp)
 {
     geo_err err = {{0}};
-    int r = geo_region_split((const double(*)[2])g->pts, NULL, g->npts, g->start,
+    int r = geo_region_split((const double(*)[2])g->pts, perr, g->npts, g->start,
                              g->idx, g->nloops, rp, &err);
     if (r != 0)
         fail_msg("geo_region_split = %d: %s", r, err.msg);
@@ -202,6 +203,11 @@ static void split_checked(const region *g, geo_region_pieces *rp)
         i = k;
     }
     free(e);
+}
+
+static void split_checked(const region *g, geo_region_pieces *rp)
+{
+    split_checked_with(g, NULL, rp);
 }
 
 static uint32_t pieces_of_part(const geo_region_pieces *rp, uint32_t part)
@@ -470,6 +476,111 @@ static void test_random_holes_and_islands(void **state)
     print_message("# %u holes, %u pieces\n", total_holes, total_pieces);
 }
 
+/* Smallest distance from a point to a piece edge that is not an input
+ * edge and does not end at that point (floating point). */
+static double nearest_pass(const region *g, const geo_region_pieces *rp,
+                           uint32_t *ret_point)
+{
+    double best = INFINITY;
+    for (uint32_t q = 0; q < rp->npieces; q++) {
+        const uint32_t *v = rp->idx + rp->start[q];
+        uint32_t n = rp->start[q + 1] - rp->start[q];
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t a = v[i], b = v[(i + 1) % n];
+            bool input = false;
+            for (uint32_t l = 0; l < g->nloops && !input; l++)
+                for (uint32_t c = g->start[l]; c < g->start[l + 1]; c++) {
+                    uint32_t d = c + 1 < g->start[l + 1] ? c + 1 : g->start[l];
+                    input |= g->idx[c] == a && g->idx[d] == b;
+                }
+            if (input)
+                continue;
+            const double *A = g->pts[a], *B = g->pts[b];
+            for (uint32_t x = 0; x < g->npts; x++) {
+                if (x == a || x == b)
+                    continue;
+                const double *X = g->pts[x];
+                double dx = B[0] - A[0], dy = B[1] - A[1];
+                double t = ((X[0] - A[0]) * dx + (X[1] - A[1]) * dy) /
+                           (dx * dx + dy * dy);
+                t = t < 0 ? 0 : t > 1 ? 1 : t;
+                double d = hypot(X[0] - A[0] - t * dx, X[1] - A[1] - t * dy);
+                if (d < best) {
+                    best = d;
+                    *ret_point = x;
+                }
+            }
+        }
+    }
+    return best;
+}
+
+/* A hair of rounding: a random offset below 2e-15. */
+static double hair(uint64_t *seed)
+{
+    return (geo_rand_unit(seed) - 0.5) * 4e-15;
+}
+
+static void test_bounds_keep_diagonals_off_straight_runs(void **state)
+{
+    (void)state;
+    /* A 9 × 5 rectangle with a point at every unit of its sides and
+     * unit-square holes on a grid: sides and holes' edges lie on common
+     * lines, each point a random hair off them, as the crossings of a
+     * plane with facets meeting in one plane are. On the positions alone
+     * a diagonal may run along such a line a hair from a point (and a
+     * piece may be a sliver); with the bounds, none comes closer to a
+     * point than its bound. */
+    uint64_t seed = 5;
+    static region g;
+    double perr[MAXP];
+    int near_without = 0;
+    for (int trial = 0; trial < 300; trial++) {
+        memset(&g, 0, sizeof g);
+        const int w = 9, h = 5;
+        begin_loop(&g);
+        for (int x = 0; x < w; x++)
+            loop_pt(&g, add_pt(&g, x ? x + hair(&seed) : 0, x ? hair(&seed) : 0));
+        for (int y = 0; y < h; y++)
+            loop_pt(&g, add_pt(&g, w + hair(&seed), y));
+        for (int x = w; x > 0; x--)
+            loop_pt(&g, add_pt(&g, x, h + hair(&seed)));
+        for (int y = h; y > 0; y--)
+            loop_pt(&g, add_pt(&g, hair(&seed), y));
+        end_loop(&g);
+        for (int cx = 1; cx < w - 1; cx += 2)
+            for (int cy = 1; cy < h - 1; cy += 2) {
+                if (geo_rand_unit(&seed) < 0.3)
+                    continue;
+                const double hx[4] = {cx, cx, cx + 1, cx + 1};
+                const double hy[4] = {cy, cy + 1, cy + 1, cy};
+                begin_loop(&g);
+                for (int k = 0; k < 4; k++)
+                    loop_pt(&g, add_pt(&g, hx[k] + hair(&seed), hy[k] + hair(&seed)));
+                end_loop(&g);
+            }
+        for (uint32_t i = 0; i < g.npts; i++)
+            perr[i] = 1e-14;
+        geo_region_pieces rp;
+        split_checked_with(&g, perr, &rp);
+        assert_int_equal(rp.nfallback, 0);
+        uint32_t x = 0;
+        double d = nearest_pass(&g, &rp, &x);
+        if (!(d > 1e-14))
+            fail_msg("trial %d: a diagonal passes %g from point %u", trial, d, x);
+        geo_region_pieces_clear(&rp);
+        geo_err err = {{0}};
+        assert_int_equal(geo_region_split((const double(*)[2])g.pts, NULL, g.npts,
+                                          g.start, g.idx, g.nloops, &rp, &err), 0);
+        near_without += !(nearest_pass(&g, &rp, &x) > 1e-14);
+        geo_region_pieces_clear(&rp);
+    }
+    /* what the bounds are for (and why the check above is not vacuous) */
+    print_message("# on the positions alone, %d of 300 splits had a diagonal "
+                  "a hair from a point\n", near_without);
+    assert_true(near_without > 0);
+}
+
 static void test_rejects_bad_input(void **state)
 {
     (void)state;
@@ -522,6 +633,7 @@ int main(void)
         cmocka_unit_test(test_holes_touching_each_other),
         cmocka_unit_test(test_collinear_points_and_bridge_along_edges),
         cmocka_unit_test(test_random_holes_and_islands),
+        cmocka_unit_test(test_bounds_keep_diagonals_off_straight_runs),
         cmocka_unit_test(test_rejects_bad_input),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
