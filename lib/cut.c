@@ -22,7 +22,10 @@
  *     facets of that edge, so following the chain is the paper's transition
  *     F(facet, edge) = (next facet, next edge); edges of the model lying in
  *     the plane join the chain when only one of their two facets is kept
- *     there;
+ *     there; a component with holes, or passing a vertex twice, is split
+ *     into simple coplanar facets (lib/region_split.h) with every
+ *     crossing's rounding bound, so the split holds for the exact
+ *     section too;
  *  6. dropping the removed side, the hanging on-plane vertices, and
  *     renumbering (geo_poly_compact).
  *
