@@ -30,6 +30,7 @@ void geo_collapse_report_clear(geo_collapse_report *r)
     free(r->cstart);
     free(r->cverts);
     free(r->cnew);
+    free(r->vmap);
     memset(r, 0, sizeof *r);
 }
 
@@ -389,6 +390,11 @@ int geo_collapse_clusters(geo_poly *p, const geo_collapse_opts *opts,
     rep->radius = o.radius > 0 ? o.radius : o.rel_radius * geo_poly_size(p);
     rep->vertices_before = rep->vertices_after = p->nverts;
     rep->facets_before = rep->facets_after = p->nfacets;
+    rep->vmap = malloc(((size_t)p->nverts + 1) * sizeof *rep->vmap);
+    if (!rep->vmap)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    for (uint32_t v = 0; v < p->nverts; v++)
+        rep->vmap[v] = v;
     geo_topo *t = geo_topo_build(p, err);
     if (!t)
         return -ENOMEM;
@@ -511,6 +517,7 @@ int geo_collapse_clusters(geo_poly *p, const geo_collapse_opts *opts,
         rep->rolled_back += crep[c] == GEO_NONE;
     }
     rep->max_displacement = maxd;
+    memcpy(rep->vmap, vmap, (size_t)p->nverts * sizeof *vmap);
     rep->vertices_after = q->nverts;
     rep->facets_after = q->nfacets;
     if (geo_poly_assign(p, q) < 0)

@@ -61,6 +61,10 @@ typedef struct geo_collapse_report {
      * cverts[cstart[c] .. cstart[c+1]) and became output vertex cnew[c]
      * (GEO_NONE when rolled back). */
     uint32_t *cstart, *cverts, *cnew;
+    /* vertices_before entries: each input vertex's index in the result
+     * (a collapsed cluster's vertices all map to its new vertex), or
+     * GEO_NONE when it is gone */
+    uint32_t *vmap;
 } geo_collapse_report;
 
 /* Releases the report's arrays and zeroes it; accepts NULL. */

@@ -17,12 +17,12 @@
 
 void geo_merge_opts_default(geo_merge_opts *o)
 {
-    o->plane = GEO_MERGE_PLANE_CONTOUR_WEIGHTED;
+    o->plane = GEO_MERGE_PLANE_AREA;
     o->lift_order = GEO_LIFT_EVENT_HEIGHT;
     o->check = true;
-    o->max_angle_deg = 4.0;
+    o->max_angle_deg = 60.0;
     o->max_deviation = 0;
-    o->rel_deviation = 1e-3;
+    o->rel_deviation = 5e-4;
     o->max_rounds = 16;
 }
 
@@ -33,6 +33,7 @@ void geo_merge_report_clear(geo_merge_report *r)
     free(r->groups);
     free(r->facets);
     free(r->moved);
+    free(r->vmap);
     memset(r, 0, sizeof *r);
 }
 
@@ -361,6 +362,14 @@ int geo_merge_report_finish(geo_merge_report *rep, const geo_edit *e,
             geo_vsub(e->verts[v], in_verts[v], m->by);
         }
     }
+    free(rep->vmap);
+    rep->vmap = malloc(((size_t)nin + 1) * sizeof *rep->vmap);
+    if (!rep->vmap) {
+        free(vmap), free(fmap);
+        return -ENOMEM;
+    }
+    for (uint32_t v = 0; v < nin; v++)
+        rep->vmap[v] = v < e->nverts ? vmap[v] : GEO_NONE;
     rep->vertices_after = out->nverts;
     rep->facets_after = out->nfacets;
     rep->volume_after = geo_poly_volume(out);
@@ -442,6 +451,11 @@ static int session_finish(session *s, geo_poly *p, geo_merge_report *rep,
     rep->statement_violations = s->w->statement_violations;
     if (!any) {
         /* nothing merged: p stays exactly as it was (not even renumbered) */
+        for (uint32_t v = 0; v < s->nin; v++)
+            rep->vmap[v] = v;
+        free(rep->moved);
+        rep->moved = NULL;
+        rep->nmoved = 0;
         rep->vertices_after = p->nverts;
         rep->facets_after = p->nfacets;
         rep->volume_after = rep->volume_before;

@@ -131,6 +131,9 @@ typedef struct geo_merge_report {
     uint32_t nfacets_listed;
     geo_moved_vertex *moved;
     uint32_t nmoved;
+    /* vertices_before entries: each input vertex's index in the output, or
+     * GEO_NONE (UINT32_MAX) when it is gone */
+    uint32_t *vmap;
     uint32_t statement_violations; /* §2.7 statements 1–3 found false
                                       (groups rolled back); 0 expected */
     uint32_t vertices_before, facets_before, vertices_after, facets_after;

@@ -241,6 +241,8 @@ int geo_mw_check(geo_mw *w, geo_err *err)
     geo_poly *mini = NULL;
     geo_facet_shape *shapes = NULL;
     uint32_t *vid = NULL;
+    geo_bbox *cbox = NULL;
+    uint8_t *shaped = NULL;
 
     /* touched facets: changed or new, or holding a touched vertex */
     uint32_t nt = geo_edit_ntouched_facets(e), nv = geo_edit_ntouched_verts(e);
@@ -275,23 +277,27 @@ int geo_mw_check(geo_mw *w, geo_err *err)
         }
     }
 
-    /* neighbours by box */
+    /* neighbours by box: one query with the union of the touched boxes,
+     * then the pairs whose own boxes overlap */
     c.tbox = malloc(((size_t)c.ntf + 1) * sizeof *c.tbox);
     if (!c.tbox)
         goto oom;
+    geo_bbox all;
+    geo_bbox_empty(&all);
     for (uint32_t i = 0; i < c.ntf; i++) {
         edit_facet_box(e, c.cand[i], &c.tbox[i]);
-        if (w->bvh && !geo_bvh_query_box(w->bvh, &c.tbox[i], cand_visit, &c))
+        geo_bbox_union(&all, &c.tbox[i]);
+    }
+    if (w->bvh && !geo_bvh_query_box(w->bvh, &all, cand_visit, &c))
+        goto oom;
+    for (uint32_t j = 0; j < w->nextra; j++) {
+        uint32_t g = w->extra[j];
+        geo_bbox b;
+        if (!e->falive[g] || w->fmark[g] == w->gen)
+            continue;
+        edit_facet_box(e, g, &b);
+        if (geo_bbox_overlap(&b, &all) && add_cand(&c, g) < 0)
             goto oom;
-        for (uint32_t j = 0; j < w->nextra; j++) {
-            uint32_t g = w->extra[j];
-            geo_bbox b;
-            if (!e->falive[g])
-                continue;
-            edit_facet_box(e, g, &b);
-            if (geo_bbox_overlap(&b, &c.tbox[i]) && add_cand(&c, g) < 0)
-                goto oom;
-        }
     }
 
     /* the small model: the candidates with their vertices renumbered */
@@ -331,8 +337,13 @@ int geo_mw_check(geo_mw *w, geo_err *err)
     shapes = malloc(((size_t)c.ncand + 1) * sizeof *shapes);
     if (!shapes)
         goto oom;
-    for (uint32_t i = 0; i < c.ncand; i++)
+    shaped = calloc((size_t)c.ncand + 1, 1);
+    if (!shaped)
+        goto oom;
+    for (uint32_t i = 0; i < c.ntf; i++) {
         geo_facet_shape_of(mini, i, &shapes[i]);
+        shaped[i] = 1;
+    }
     for (uint32_t i = 0; i < c.ntf; i++) {
         if (shapes[i].degenerate) {
             r = geo_err_set(err, -EINVAL, "facets[%u]: degenerate", c.cand[i]);
@@ -344,14 +355,24 @@ int geo_mw_check(geo_mw *w, geo_err *err)
             goto done;
         }
     }
+    cbox = malloc(((size_t)c.ncand + 1) * sizeof *cbox);
+    if (!cbox)
+        goto oom;
+    for (uint32_t j = 0; j < c.ncand; j++)
+        if (j < c.ntf)
+            cbox[j] = c.tbox[j];
+        else
+            geo_poly_facet_bbox(mini, j, &cbox[j]);
     for (uint32_t i = 0; i < c.ntf; i++) {
         for (uint32_t j = 0; j < c.ncand; j++) {
             if (j == i || (j < c.ntf && j < i))
                 continue;
-            geo_bbox bj;
-            geo_poly_facet_bbox(mini, j, &bj);
-            if (!geo_bbox_overlap(&c.tbox[i], &bj))
+            if (!geo_bbox_overlap(&c.tbox[i], &cbox[j]))
                 continue;
+            if (!shaped[j]) {
+                geo_facet_shape_of(mini, j, &shapes[j]);
+                shaped[j] = 1;
+            }
             int x = geo_facets_intersect(mini, i, j, &shapes[i], &shapes[j]);
             if (x < 0)
                 goto oom;
@@ -368,6 +389,6 @@ oom:
     r = geo_err_set(err, -ENOMEM, "out of memory");
 done:
     geo_poly_free(mini);
-    free(shapes), free(vid), free(c.cand), free(c.tbox);
+    free(shapes), free(vid), free(c.cand), free(c.tbox), free(cbox), free(shaped);
     return r;
 }

@@ -9,11 +9,13 @@
  * members' distinct vertices, kept as running moments (about the seed's
  * first vertex, so the sums do not cancel) and solved with the 3×3 eigen
  * solver for every candidate. A candidate that fails is not tried again
- * for that group. The angle alone cannot tell a scanner's slivers from
- * true facets (a K-contour scan tilts its silhouette planes by up to about
- * 180°/K, more than the smallest true dihedral angles of some cuts), the
- * deviation can (the scan's error is a few µm, true facets a few degrees
- * apart part by tens of µm within a facet's width): both are required.
+ * for that group. The deviation decides, the angle only keeps steep
+ * facets apart: a K-contour scan tilts its silhouette planes by up to
+ * about 180°/K, and along every true edge it leaves bevels, narrow strips
+ * whose normals lie anywhere between the two facets that meet there, so
+ * no angle separates slivers from true facets (README "Automatic
+ * correction" has the measurements), while the vertices of one true
+ * facet's slivers stay within the scan's error, a few µm, of one plane.
  * Cost per group O(c · (m + v)) for c candidates, m members, v vertices;
  * groups are small. */
 #include "merge_impl.h"
