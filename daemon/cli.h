@@ -40,5 +40,7 @@ int cmd_run(int argc, char **argv);
 int cmd_inside(int argc, char **argv);
 int cmd_move(int argc, char **argv);
 int cmd_inversion_stats(int argc, char **argv);
+int cmd_merge(int argc, char **argv);
+int cmd_correct(int argc, char **argv);
 
 #endif

@@ -24,6 +24,9 @@ static const cli_command commands[] = {
     {"move", "move a vertex and re-planarise the facets", cmd_move},
     {"inversion-stats", "how often vertex moves break the model",
      cmd_inversion_stats},
+    {"merge", "merge groups of nearly coplanar facets (seed 000 §2)",
+     cmd_merge},
+    {"correct", "the automatic post-scan correction", cmd_correct},
 };
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
 

@@ -19,6 +19,7 @@ void geo_collapse_opts_default(geo_collapse_opts *o)
 {
     o->radius = 0;
     o->rel_radius = 2e-4;
+    o->max_move = 0;
     o->max_attempts = 4;
     o->max_steps = 400;
 }
@@ -462,7 +463,19 @@ int geo_collapse_clusters(geo_poly *p, const geo_collapse_opts *opts,
         geo_stats_clear(&st);
         if (geo_inspect(q, NULL, ctx, &st, err) < 0)
             goto oom;
-        if (rr == 0 && res.converged && st.valid) {
+        double max_move = o.max_move > 0 ? o.max_move : 2 * rep->radius;
+        uint8_t *far = calloc((size_t)q->nverts + 1, 1);
+        if (!far)
+            goto oom;
+        bool any_far = false;
+        for (uint32_t v = 0; v < p->nverts; v++)
+            if (vmap[v] != GEO_NONE &&
+                geo_vdist(p->verts[v], q->verts[vmap[v]]) > max_move) {
+                far[vmap[v]] = 1;
+                any_far = true;
+            }
+        if (rr == 0 && res.converged && st.valid && !any_far) {
+            free(far);
             rep->replanar_steps = res.steps;
             break;
         }
@@ -479,11 +492,14 @@ int geo_collapse_clusters(geo_poly *p, const geo_collapse_opts *opts,
                        (st.selfint.facet_flags[f] &
                         (GEO_SI_PAIR | GEO_SI_SELF | GEO_SI_DEGENERATE));
             bad |= geo_vdot(an, q->planes[f]) <= 0;
-            for (uint32_t i = 0; i < geo_poly_facet_size(q, f) && !bad; i++)
-                bad = fabs(geo_plane_eval(q->planes[f],
-                                          q->verts[geo_poly_facet(q, f)[i]])) > eps;
+            for (uint32_t i = 0; i < geo_poly_facet_size(q, f) && !bad; i++) {
+                uint32_t v = geo_poly_facet(q, f)[i];
+                bad = fabs(geo_plane_eval(q->planes[f], q->verts[v])) > eps ||
+                      far[v];
+            }
             badf[f] = bad;
         }
+        free(far);
         geo_topo *qt = geo_topo_build(q, err);
         if (!qt)
             goto oom;

@@ -18,7 +18,8 @@
  * re-planarization's moves at the size of the planes' residuals there.
  * The result is inspected (geo_inspect); a cluster whose collapse leaves
  * the model invalid (not manifold, a facet intersecting another, not
- * planar, inverted) is rolled back and the rest redone, so nothing
+ * planar, inverted) or moves a vertex farther than max_move is rolled
+ * back and the rest redone, so nothing
  * invalid is ever returned: in the worst case the model comes back
  * unchanged with every cluster reported rolled back.
  *
@@ -40,6 +41,12 @@ typedef struct geo_collapse_opts {
      * the model's size (bounding-box diagonal). */
     double radius;
     double rel_radius;     /* [see geo_collapse_opts_default] */
+    /* Largest move of any vertex the collapse and re-planarization may
+     * cause, mm; 0 means 2 × the radius. A vertex between facets at a
+     * small angle moves by the planes' residual divided by that angle
+     * (lib/replanar.h), so holding a collapsed vertex can push it far;
+     * the clusters near such a vertex are rolled back. */
+    double max_move;
     uint32_t max_attempts; /* collapse + check rounds [4] */
     uint32_t max_steps;    /* re-planarization step budget [400] */
 } geo_collapse_opts;

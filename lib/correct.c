@@ -53,6 +53,14 @@ static int append_pass(geo_merge_report *all, const geo_merge_report *pass)
         *x = *g;
         x->first = first;
     }
+    if (all->vertices_before == 0 && all->facets_before == 0) {
+        all->vertices_before = pass->vertices_before;
+        all->facets_before = pass->facets_before;
+        all->volume_before = pass->volume_before;
+    }
+    all->vertices_after = pass->vertices_after;
+    all->facets_after = pass->facets_after;
+    all->volume_after = pass->volume_after;
     all->merged += pass->merged;
     all->failed += pass->failed;
     all->rounds += pass->rounds;
