@@ -41,5 +41,6 @@ int cmd_triangulate(int argc, char **argv);
 int cmd_run(int argc, char **argv);
 int cmd_move(int argc, char **argv);
 int cmd_inversion_stats(int argc, char **argv);
+int cmd_fill(int argc, char **argv);
 
 #endif

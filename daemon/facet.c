@@ -26,6 +26,7 @@ static const cli_command commands[] = {
     {"move", "move a vertex and re-planarise the facets", cmd_move},
     {"inversion-stats", "how often vertex moves break the model",
      cmd_inversion_stats},
+    {"fill", "close the holes of a mesh (seeds 001, 004)", cmd_fill},
 };
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
 
