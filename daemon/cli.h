@@ -42,5 +42,6 @@ int cmd_run(int argc, char **argv);
 int cmd_move(int argc, char **argv);
 int cmd_inversion_stats(int argc, char **argv);
 int cmd_fill(int argc, char **argv);
+int cmd_stitch(int argc, char **argv);
 
 #endif

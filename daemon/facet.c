@@ -27,6 +27,8 @@ static const cli_command commands[] = {
     {"inversion-stats", "how often vertex moves break the model",
      cmd_inversion_stats},
     {"fill", "close the holes of a mesh (seeds 001, 004)", cmd_fill},
+    {"stitch", "join two open meshes into one closed mesh (seed 004)",
+     cmd_stitch},
 };
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
 

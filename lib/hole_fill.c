@@ -1425,6 +1425,29 @@ int geo_refine_region(geo_poly *p, const uint8_t *region,
     return rc;
 }
 
+int geo_fair_vertices(geo_poly *p, uint32_t first_free,
+                      const geo_fill_opts *opts, const geo_ctx *ctx,
+                      geo_fill_stats *stats, geo_err *err)
+{
+    geo_fill_opts o;
+    int rc = check_opts(opts, &o, err);
+    if (rc < 0)
+        return rc;
+    if ((rc = geo_poly_validate_indices(p, err)) < 0)
+        return rc;
+    if (first_free > p->nverts)
+        return geo_err_set(err, -EINVAL, "first free vertex %u beyond the "
+                           "%u vertices", first_free, p->nverts);
+    geo_fill_stats st = {0};
+    rc = fair(p, first_free, &o, &st, ctx);
+    if (rc < 0)
+        return geo_err_set(err, rc, rc == -ECANCELED ? "canceled"
+                                                     : "out of memory");
+    if (stats)
+        *stats = st;
+    return 0;
+}
+
 int geo_fill_holes(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
                    geo_fill_stats *stats, geo_err *err)
 {

@@ -192,6 +192,17 @@ int geo_refine_region(geo_poly *p, const uint8_t *region,
                       const geo_fill_opts *opts, const geo_ctx *ctx,
                       geo_fill_stats *stats, geo_err *err);
 
+/* Step 4 alone: fairs vertices first_free … p->nverts − 1 of p with
+ * opts->fair (every other vertex fixed: the fixed ring of the U²
+ * operator), with the same rules as geo_fill_holes; the facets touching
+ * them get new least-squares planes. Only nfair_sweeps of *stats is set
+ * (stats may be NULL). 0, -EINVAL (invalid indices, first_free beyond
+ * the vertices), -ENOMEM (p unchanged) or -ECANCELED (the free vertices
+ * may be partly moved). */
+int geo_fair_vertices(geo_poly *p, uint32_t first_free,
+                      const geo_fill_opts *opts, const geo_ctx *ctx,
+                      geo_fill_stats *stats, geo_err *err);
+
 /* Frees stats->holes and zeroes *stats; accepts NULL. */
 void geo_fill_stats_clear(geo_fill_stats *stats);
 
