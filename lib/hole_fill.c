@@ -1020,7 +1020,9 @@ static void solve_length(const geo_poly *p, const adjacency *A, uint32_t v,
  * preconditioner (the seed's per-vertex closed form is one Jacobi step of
  * this system; sweeping it needs O(patch diameter²) sweeps to carry the
  * fixed boundary's shape inside, CG about O(diameter)). Starts from the
- * current positions; stops at a residual of 1e-6 of the first, or after
+ * current positions; stops at a residual of 1e-4 of the first (the shape no longer changes
+ * visibly: on a 1,000-vertex hole in a sphere the mean distance to the
+ * sphere is the same as at 1e-6), or after
  * GEO_FAIR_CG_MAX_ITER iterations. Writes the solution into p; returns 0,
  * -ENOMEM or -ECANCELED (p unchanged then). */
 #define GEO_FAIR_CG_MAX_ITER 5000
@@ -1157,7 +1159,7 @@ static int fair_cg(geo_poly *p, const adjacency *A, uint32_t first_free,
         for (int c = 0; c < 3; c++) {
             if (!active[c])
                 continue;
-            if (!(rr[c] > 1e-12 * r0[c])) {
+            if (!(rr[c] > 1e-8 * r0[c])) {
                 active[c] = false;
                 continue;
             }

@@ -59,7 +59,7 @@
  *    for all free vertices at once: the conditions form the symmetric
  *    positive definite system (L·D⁻¹·L)_ff·x_f = −(L·D⁻¹·L)_fb·x_b
  *    (L = D − Adj the graph Laplacian, D the neighbour counts), solved
- *    by conjugate gradients to a residual of 1e-6 of the first (at most
+ *    by conjugate gradients to a residual of 1e-4 of the first (at most
  *    5,000 iterations; a solution that folds the surface, a dihedral
  *    angle above 120° or a collapsed facet, falls back to the sweeps
  *    below); for w = |p − p_i|
