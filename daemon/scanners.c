@@ -43,6 +43,8 @@ typedef struct attached {
     struct attached *next;
     char serial[PROTO_FSP_TEXT_MAX + 1];
     scan_device_info info;
+    int64_t scan_t0_us;  /* the first PROGRESS of the scan under way, 0
+                            when none (for the intake's throughput) */
 } attached;
 
 /* One pipeline as run and as shown. */
@@ -455,12 +457,33 @@ static void on_device(void *user, const scan_device_info *d)
     if (a) {
         snprintf(a->serial, sizeof a->serial, "%s", d->serial);
         a->info = *d;
+        a->scan_t0_us = 0;
     }
     pthread_mutex_unlock(&sc->mu);
     log_msg(LOG_NOTICE, NULL, "scanner %s connected: %s %s, firmware %s, "
             "%u contours, %04x:%04x over %s at %s", d->serial, d->vendor,
             d->model, d->firmware, d->contours, d->vid, d->pid,
             scan_kind_name(d->kind), d->path);
+}
+
+static attached *attached_find(scanners *sc, const char *serial)
+{
+    for (attached *a = sc->attached; a; a = a->next)
+        if (strcmp(a->serial, serial) == 0)
+            return a;
+    return NULL;
+}
+
+static void on_progress(void *user, const char *serial, uint32_t done,
+                        uint32_t total)
+{
+    (void)total;
+    scanners *sc = user;
+    pthread_mutex_lock(&sc->mu);
+    attached *a = attached_find(sc, serial);
+    if (a && (done == 0 || !a->scan_t0_us))
+        a->scan_t0_us = mono_us();
+    pthread_mutex_unlock(&sc->mu);
 }
 
 static void on_device_gone(void *user, const char *serial)
@@ -494,11 +517,16 @@ static int on_scan_complete(void *user, const char *serial,
     }
     scan_device_info info;
     memset(&info, 0, sizeof info);
+    int64_t began = 0;
     pthread_mutex_lock(&sc->mu);
-    for (attached *a = sc->attached; a; a = a->next)
-        if (strcmp(a->serial, serial) == 0)
-            info = a->info;
+    attached *a = attached_find(sc, serial);
+    if (a) {
+        info = a->info;
+        began = a->scan_t0_us;
+        a->scan_t0_us = 0;
+    }
     pthread_mutex_unlock(&sc->mu);
+    int64_t t_parsed = mono_us();
     char source[JOB_SOURCE_MAX];
     snprintf(source, sizeof source, SOURCE_PREFIX "%s", serial);
     job_rec job;
@@ -528,9 +556,16 @@ static int on_scan_complete(void *user, const char *serial,
         return r;
     }
     snprintf(ret_job, job_cap, "%s", job.id);
+    char rate[96] = "";
+    if (began && t0 > began)
+        snprintf(rate, sizeof rate, "received in %.1f ms (%.2f MB/s), ",
+                 (double)(t0 - began) / 1e3,
+                 (double)len / (double)(t0 - began));
     log_msg(LOG_INFO, job.id, "queued from scanner %s (%zu bytes of %s, %u "
-            "vertices, %u facets, stored in %.1f ms)", serial, len,
-            proto_format_name(fmt), nv, nf, (double)(mono_us() - t0) / 1e3);
+            "vertices, %u facets; %sparsed in %.1f ms, stored in %.1f ms)",
+            serial, len, proto_format_name(fmt), nv, nf, rate,
+            (double)(t_parsed - t0) / 1e3,
+            (double)(mono_us() - t_parsed) / 1e3);
     owe(sc, serial, job.id, t0);
     job_rec_clear(&job);
     return 0;
@@ -617,6 +652,7 @@ int scanners_start(scanners *sc, store *s, job_pool *pool, metrics *m,
         .on_device = on_device,
         .on_device_gone = on_device_gone,
         .on_scan_complete = on_scan_complete,
+        .on_progress = on_progress,
         .on_notice = on_notice,
     };
     scan_options opt;
