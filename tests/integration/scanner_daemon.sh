@@ -5,7 +5,8 @@
 # usb:SERIAL whose model and statistics equal what `facet run` gives
 # offline with the same pipeline, and the scanner gets a RESULT frame with
 # that job's id — over bulk and over hidraw; a corrupted frame is NAKed
-# and sent again; unplugging mid-scan makes no job and moves the dropped
+# and sent again; a model that does not parse is refused with ABORT;
+# unplugging mid-scan makes no job and moves the dropped
 # counter while the daemon keeps serving; a re-plugged scanner scans
 # again; two scanners scan at once; POST /v1/scanners/{serial}/scan
 # starts a scan (404 unknown, 409 busy or offline); SIGHUP applies a new
@@ -137,6 +138,18 @@ check "... with the whole model" cmp -s "$T/b2.json" "$T/served.json"
 grep -qE '^event SN-B1 nak [0-9]+' "$MLOG"
 check "the device saw the NAK" test $? -eq 0
 result_for SN-B1 "$ID" >/dev/null
+
+# --- a model that does not parse --------------------------------------------
+echo 'not a model' >"$T/bad.json"
+ref0=$(metric 'facetd_scanner_scans_refused_total{reason="invalid_model"}')
+ab0=$(count_lines "$MLOG" '^event SN-B1 aborted')
+n0=$(njobs SN-B1)
+mock_cmd model SN-B1 "$T/bad.json" >/dev/null && mock_cmd scan SN-B1 >/dev/null
+wait_count "$MLOG" '^event SN-B1 aborted' $((ab0 + 1)) $((10 * SLOW))
+check "a scan whose model does not parse is refused: ABORT instead of the ACK, no job" \
+    test $? -eq 0 -a "$(njobs SN-B1)" -eq "$n0" -a \
+         "$(metric 'facetd_scanner_scans_refused_total{reason="invalid_model"}')" -gt "$ref0"
+mock_cmd model SN-B1 "$K400" >/dev/null
 
 # --- unplugged mid-scan ----------------------------------------------------
 drop0=$(metric 'facetd_scanner_scans_total{outcome="dropped"}')
