@@ -3,10 +3,11 @@
  * Invariants: owed holds one entry per job a RESULT is owed for, in the
  * order the jobs were made; an entry leaves it once its RESULT was handed
  * to the intake. Pipelines are read under plk (a reader per scan, the
- * writer on reload); owed and the sender's state under mu; pool under
- * pool_mu, which on_scan_complete holds while it submits, so the pool is
- * never used after scanners_detach_pool returns. Lock order: plk, then
- * pool_mu; mu is never held while calling the store or the intake. */
+ * writer on reload); owed, attached and the sender's state under mu;
+ * pool under pool_mu, which on_scan_complete holds while it submits, so
+ * the pool is never used after scanners_detach_pool returns. Lock order:
+ * plk, then pool_mu; mu is never held while calling the store or the
+ * intake. */
 #include "scanners.h"
 
 #include <errno.h>
@@ -47,12 +48,12 @@ typedef struct attached {
                             when none (for the intake's throughput) */
 } attached;
 
-/* One pipeline as run and as shown. */
-typedef struct pipe {
+/* One configured pipeline, as run and as shown. */
+typedef struct plslot {
     bool set;
     proto_pipeline pl;
     json_t *json;      /* canonical form */
-} pipe;
+} plslot;
 
 struct scanners {
     bool enabled;
@@ -62,8 +63,8 @@ struct scanners {
     size_t nlist;
 
     pthread_rwlock_t plk;
-    pipe model_pipe[SCAN_MATCH_MAX];
-    pipe global;
+    plslot model_pipe[SCAN_MATCH_MAX];
+    plslot global;
 
     pthread_mutex_t pool_mu;
     job_pool *pool;
@@ -91,7 +92,7 @@ static int64_t mono_us(void)
 
 /* --- pipelines ------------------------------------------------------------ */
 
-static void pipe_clear(pipe *p)
+static void pipe_clear(plslot *p)
 {
     if (p->set)
         proto_pipeline_free(&p->pl);
@@ -100,7 +101,7 @@ static void pipe_clear(pipe *p)
 }
 
 /* Loads spec into p and checks it against this build. */
-static int pipe_load(pipe *p, const char *spec, geo_err *err)
+static int pipe_load(plslot *p, const char *spec, geo_err *err)
 {
     memset(p, 0, sizeof *p);
     json_t *pj = cfg_pipeline_json(spec, err);
@@ -125,8 +126,8 @@ static int pipe_load(pipe *p, const char *spec, geo_err *err)
 /* Loads every pipeline of c into the new set (model[0 .. n), global).
  * *global_failed says whether the error, if any, is Pipeline='s. */
 static int pipes_load(const cfg *c, const char spec[][CFG_SCANNER_LEN],
-                      size_t n, pipe *model, pipe *global, bool *global_failed,
-                      geo_err *err)
+                      size_t n, plslot *model, plslot *global,
+                      bool *global_failed, geo_err *err)
 {
     bool used_global = false;
     *global_failed = false;
@@ -224,7 +225,7 @@ int scanners_reload(scanners *sc, const cfg *c, geo_err *err)
 {
     if (!sc->enabled)
         return 0;
-    pipe model[SCAN_MATCH_MAX], global;
+    plslot model[SCAN_MATCH_MAX], global;
     memset(model, 0, sizeof model);
     memset(&global, 0, sizeof global);
     bool global_failed;
@@ -245,17 +246,17 @@ int scanners_reload(scanners *sc, const cfg *c, geo_err *err)
 
 /* The pipeline for a scanner attached as vid:pid/kind (plk held), or
  * NULL for a device that is none of the configured models. */
-static pipe *pipe_for(scanners *sc, const scan_device_info *info)
+static plslot *pipe_for(scanners *sc, const scan_device_info *info)
 {
     const scan_match *m =
         scan_match_find(sc->list, sc->nlist, info->vid, info->pid, info->kind);
     if (!m)
         return NULL;
-    pipe *p = &sc->model_pipe[m - sc->list];
+    plslot *p = &sc->model_pipe[m - sc->list];
     return p->set ? p : &sc->global;
 }
 
-/* --- owed RESULTs ----------------------------------------------------------- */
+/* --- owed RESULTs --------------------------------------------------------- */
 
 static void owe(scanners *sc, const char *serial, const char *job,
                 int64_t t0_us)
@@ -423,7 +424,7 @@ static void *sender_main(void *arg)
     return NULL;
 }
 
-/* --- intake callbacks ------------------------------------------------------- */
+/* --- intake callbacks ----------------------------------------------------- */
 
 static void on_device(void *user, const scan_device_info *d)
 {
@@ -533,7 +534,7 @@ static int on_scan_complete(void *user, const char *serial,
     bool replayed = false;
     int r;
     pthread_rwlock_rdlock(&sc->plk);
-    pipe *pp = pipe_for(sc, &info);
+    plslot *pp = pipe_for(sc, &info);
     if (!pp) {
         r = geo_err_set(&err, -ENODEV, "not a configured scanner model");
     } else {
@@ -571,7 +572,7 @@ static int on_scan_complete(void *user, const char *serial,
     return 0;
 }
 
-/* --- start and stop --------------------------------------------------------- */
+/* --- start and stop ------------------------------------------------------- */
 
 /* The store's unfinished usb: jobs, oldest first, into *ret. */
 static int unfinished_scan_jobs(store *s, job_rec **ret, size_t *ret_n,
@@ -737,7 +738,7 @@ scanners *scanners_free(scanners *sc)
     return NULL;
 }
 
-/* --- status ----------------------------------------------------------------- */
+/* --- status --------------------------------------------------------------- */
 
 static json_t *text_or_null(bool seen, const char *s)
 {
@@ -793,7 +794,7 @@ static json_t *status_to_json(scanners *sc, const scan_device_status *st)
     json_t *pj = json_null();
     if (st->seen) {
         pthread_rwlock_rdlock(&sc->plk);
-        pipe *cur = pipe_for(sc, d);
+        plslot *cur = pipe_for(sc, d);
         if (cur && cur->json)
             pj = json_deep_copy(cur->json);
         pthread_rwlock_unlock(&sc->plk);
