@@ -90,7 +90,7 @@ static int64_t mono_us(void)
     return (int64_t)ts.tv_sec * 1000000 + ts.tv_nsec / 1000;
 }
 
-/* --- pipelines ------------------------------------------------------------ */
+/* --- pipelines ----------------------------------------------------------- */
 
 static void pipe_clear(plslot *p)
 {
@@ -256,7 +256,7 @@ static plslot *pipe_for(scanners *sc, const scan_device_info *info)
     return p->set ? p : &sc->global;
 }
 
-/* --- owed RESULTs --------------------------------------------------------- */
+/* --- owed RESULTs -------------------------------------------------------- */
 
 static void owe(scanners *sc, const char *serial, const char *job,
                 int64_t t0_us)
@@ -424,7 +424,7 @@ static void *sender_main(void *arg)
     return NULL;
 }
 
-/* --- intake callbacks ----------------------------------------------------- */
+/* --- intake callbacks ---------------------------------------------------- */
 
 static void on_device(void *user, const scan_device_info *d)
 {
@@ -572,7 +572,7 @@ static int on_scan_complete(void *user, const char *serial,
     return 0;
 }
 
-/* --- start and stop ------------------------------------------------------- */
+/* --- start and stop ------------------------------------------------------ */
 
 /* The store's unfinished usb: jobs, oldest first, into *ret. */
 static int unfinished_scan_jobs(store *s, job_rec **ret, size_t *ret_n,
@@ -738,7 +738,7 @@ scanners *scanners_free(scanners *sc)
     return NULL;
 }
 
-/* --- status --------------------------------------------------------------- */
+/* --- status -------------------------------------------------------------- */
 
 static json_t *text_or_null(bool seen, const char *s)
 {
