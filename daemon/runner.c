@@ -12,9 +12,12 @@
 #include "clusters.h"
 #include "correct.h"
 #include "correct_json.h"
+#include "fill.h"
+#include "fill_json.h"
 #include "merge.h"
 #include "stats.h"
 #include "stats_json.h"
+#include "stitch.h"
 
 /* Runs one operation on *model (may replace it, freeing the old one).
  * Adds its report to *ret_report (a new object it creates) and summary
@@ -130,10 +133,71 @@ static int run_auto(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
     return give_report(j, ret_report, err);
 }
 
+/* fill_holes (lib/fill.h): every hole closed and checked, or reported. */
+static int run_fill_holes(const proto_op *op, geo_poly **model,
+                          const geo_ctx *ctx, json_t **ret_report,
+                          json_t *summary, geo_err *err)
+{
+    geo_mesh_fill_opts o;
+    geo_mesh_fill_opts_default(&o);
+    o.fill.weight =
+        op->u.fill_holes.weight_length ? GEO_FILL_EDGES : GEO_FILL_AREA;
+    o.fill.refine = op->u.fill_holes.refine;
+    o.fill.fair = op->u.fill_holes.fair ? GEO_FAIR_UNIFORM : GEO_FAIR_NONE;
+    geo_mesh_fill_report rep;
+    int r = geo_fill_mesh(*model, &o, ctx, &rep, err);
+    if (r < 0)
+        return r;
+    json_t *j = proto_fill_report_to_json(&rep);
+    int e = !j;
+    e |= json_object_set_new(summary, "holes_filled", json_integer(rep.nfilled));
+    e |= json_object_set_new(summary, "holes_left_open",
+                             json_integer(rep.nopen));
+    geo_mesh_fill_report_clear(&rep);
+    if (e) {
+        json_decref(j);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    *ret_report = j;
+    return 0;
+}
+
+/* stitch (lib/stitch.h): the model's two pieces joined into one. */
+static int run_stitch(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
+                      json_t **ret_report, json_t *summary, geo_err *err)
+{
+    (void)op;
+    geo_poly *out = geo_poly_new();
+    if (!out)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    geo_stitch_report rep;
+    int r = geo_stitch_pieces(*model, NULL, ctx, out, &rep, err);
+    if (r < 0) {
+        geo_poly_free(out);
+        return r;
+    }
+    json_t *j = proto_stitch_report_to_json(&rep);
+    int e = !j;
+    e |= json_object_set_new(summary, "stitch_openings_left",
+                             json_integer(rep.fill.nopen));
+    geo_stitch_report_clear(&rep);
+    if (e) {
+        json_decref(j);
+        geo_poly_free(out);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    geo_poly_free(*model);
+    *model = out;
+    *ret_report = j;
+    return 0;
+}
+
 static const op_entry ops[PROTO_OP_COUNT] = {
     [PROTO_OP_INSPECT] = {run_inspect, false},
     [PROTO_OP_COLLAPSE_CLUSTERS] = {run_collapse, true},
     [PROTO_OP_MERGE_FACETS] = {run_merge, true},
+    [PROTO_OP_FILL_HOLES] = {run_fill_holes, true},
+    [PROTO_OP_STITCH] = {run_stitch, true},
     [PROTO_OP_AUTO] = {run_auto, true},
 };
 

@@ -1,0 +1,53 @@
+/* frep_sharpen.h — recovering the hard edges of an F-rep object in a
+ * triangle mesh of its surface.
+ *
+ * Where a union or an intersection switches from one smooth piece of F to
+ * another (lib/frep.h, geo_frep_run_piece) the surface has a crease. A
+ * mesh whose vertices all lie on the surface but never on a crease cuts
+ * every crease off with a chamfer about one edge wide. Here every edge
+ * whose two ends lie on different pieces G₁, G₂ (a hard edge of the
+ * mesh in seed 001's sense: it spans a crease) gets a point X on the
+ * crease {G₁ = 0, G₂ = 0} — the least-norm Gauss–Newton solution from the
+ * point S = (s(P)·Q + s(Q)·P)/(s(P)+s(Q)) of the paper, s being the mean
+ * length of the edges at P and Q — which must also lie on the surface
+ * (F(X) = 0: no third piece cuts the crease there) and near the edge. The
+ * edge is then split at X, each of its triangles into two (fig. 12), or,
+ * when X is within a quarter of the edge from an end that lies on one
+ * piece only, that end is moved onto X if none of its triangles turns over.
+ * A triangle whose corners lie on three pieces pairwise sharing a crease
+ * spans a corner of the object: it is split at the point where the three
+ * pieces meet (Newton on three equations), under the same checks. Rounds
+ * repeat (at most 4) until no edge spans two pieces. Edges along a
+ * recovered crease join points on it, so the crease is represented by
+ * mesh edges lying on it exactly (to rounding) instead of a chamfer.
+ *
+ * Ownership: m is modified in place (vertices appended or moved, facets
+ * rewritten as triangles in a new order); it must be a triangle mesh. 0,
+ * -EINVAL (a non-triangle facet), -ENOMEM or -ECANCELED (m unchanged on
+ * error). Not thread-safe for one m. */
+#ifndef GEO_FREP_SHARPEN_H
+#define GEO_FREP_SHARPEN_H
+
+#include <stdint.h>
+
+#include "ctx.h"
+#include "frep.h"
+#include "poly.h"
+
+typedef struct geo_sharpen_stats {
+    uint32_t nedge_splits;  /* edges split at a crease point */
+    uint32_t nsnaps;        /* vertices moved onto a crease */
+    uint32_t ncorners;      /* triangles split at a corner point */
+    uint32_t nrejected;     /* crease points refused by the checks */
+    uint32_t nrounds;
+} geo_sharpen_stats;
+
+/* Recovers the creases of f in mesh m (see above). tags, when not NULL
+ * and *tags not NULL, is a malloc'd array of one byte per facet that is
+ * carried along: on success it is replaced by a new malloc'd array for
+ * the new facets (a split facet's pieces keep its byte). st may be
+ * NULL. */
+int geo_frep_sharpen(const geo_frep *f, geo_poly *m, uint8_t **tags,
+                     const geo_ctx *ctx, geo_sharpen_stats *st, geo_err *err);
+
+#endif
