@@ -5,10 +5,12 @@
  * One group is merged by the paper's four steps:
  *  1. the contour enclosing the group (§2.4), the group replaced by one
  *     facet on it, and the hanging vertices (left in two facets) removed;
- *  2. the least-squares plane of the contour (§2.5.1), by default weighted
- *     by incident edge length (§2.5.2) so that heaps of close points do not
- *     pull it;
- *  3. the contour points below the plane lifted, smallest lift first, along
+ *  2. the least-squares plane (§2.5): by default of the group's whole
+ *     surface (area centroid, axis of least inertia: §2.5.2's area and
+ *     inertia ways), so that heaps of close points do not pull it; the
+ *     contour's points, plain (§2.5.1) or weighted by incident edge length
+ *     (§2.5.2), are options;
+ *  3. the contour points below the plane lifted, lowest event first, along
  *     the intersection of their neighbour facets, joining with a neighbour
  *     where their paths meet first, creating vertices where a point lies in
  *     more than three facets (§2.6, all eight cases of §2.6.4);

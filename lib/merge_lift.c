@@ -12,11 +12,17 @@
  * If they meet below π the points join there; otherwise A_i goes to
  * π ∩ π_{−1} ∩ π_{+1} and A_{i−1} to v_{−2} = π ∩ π_{−2} ∩ π_{−1} (no join).
  * The right side is the mirror image. The lift d is the displacement's
- * component along n (the paper's (v − A_i, n)); each step lifts the point
- * with the smallest d (§2.6.2), which is what keeps the facets from
- * crossing (§2.7).
+ * component along n (the paper's (v − A_i, n)); the paper lifts the point
+ * with the smallest d first (§2.6.2), to keep facets from crossing (§2.7).
  *
  * Departures from the paper's text, each marked where it is made:
+ *  - the order (geo_lift_order): by default the event lowest along n goes
+ *    first — a join at the height n·v of its meeting point, an arrival at
+ *    the plane's height — instead of the smallest d; with the smallest d a
+ *    point can pass the place where its neighbour's path meets the next
+ *    neighbour's, and the facet between turns non-convex (statement 1
+ *    fails; README counts the groups), while lowest-first processes that
+ *    meeting before any move reaches it;
  *  - the main loop runs while any point is below π (the text says
  *    n_down > 1, which would leave one point below and make the cut fail);
  *  - "below" and "on" use the model's planarity tolerance: a point within

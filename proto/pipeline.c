@@ -474,7 +474,8 @@ int proto_pipeline_from_json(const json_t *v, const char *where,
             return FAIL(&whole, NULL, "expected an array of operations or "
                         "\"auto\"");
         expanded = json_array();
-        for (size_t i = 0; expanded && i < sizeof auto_ops / sizeof *auto_ops; i++)
+        size_t nauto = sizeof auto_ops / sizeof *auto_ops;
+        for (size_t i = 0; expanded && i < nauto; i++)
             if (json_array_append_new(expanded, json_string(auto_ops[i])) < 0)
                 expanded = (json_decref(expanded), NULL);
         if (!expanded)
