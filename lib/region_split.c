@@ -34,6 +34,14 @@
  * n points would need about n pieces, while a simple-polygon merge gives
  * two for an annulus.
  *
+ * Certainty: with per-point bounds (perr), every sign that makes geometry
+ * comes from turn(), which answers only when the sign holds for every
+ * position within the bounds and is UNSURE otherwise; ears, bridges and
+ * wedges are accepted only on sure answers, a point leaves a triangle
+ * only surely. A part for which this finds no bridge or ear is done again
+ * on the positions alone (exact geo_orient2d), so the bounds never make a
+ * split fail that the positions allow.
+ *
  * Invariants: a ring occurrence's out-edge carries its slot (the
  * diagonal or bridge it is, or NONE for an edge of the input loops); each
  * slot ends with exactly two triangles, one on each side; points are
