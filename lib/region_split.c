@@ -18,7 +18,8 @@
  *     allowed when neither of its edges enters the triangle. Only
  *     non-convex corners and repeated points can spoil an ear of a weakly
  *     simple polygon (the point of the triangle farthest from the
- *     diagonal would otherwise be reflex), so only those are tested;
+ *     diagonal would otherwise be reflex), so only those are tested,
+ *     found through a grid over the part;
  *  3. triangles are merged across diagonals and bridges: first by growing
  *     a piece from a triangle across its edges while the triangle added
  *     brings a point the piece does not have yet, then by joining two
@@ -146,7 +147,9 @@ typedef struct splitter {
     size_t capidx, capstart, cappart;
     uint32_t *stamp, epoch; /* per point marks */
     uint32_t *nxt;          /* per point: next point on a piece's boundary */
-    uint32_t *cnt;          /* per point: occurrences in a ring */
+    uint32_t *cnt;          /* per point: occurrences in the ring */
+    uint32_t *occ_at;       /* per point: an occurrence of it in the ring */
+    double maxerr;          /* largest perr (0 without bounds) */
     loopinfo *info;
 } splitter;
 
@@ -339,6 +342,13 @@ static int ring_alloc(ring *r, uint32_t n)
     return 0;
 }
 
+/* Records occurrence o of point q (the ring's per-point counts). */
+static void note_occ(splitter *s, uint32_t o, uint32_t q)
+{
+    s->cnt[q]++;
+    s->occ_at[q] = o;
+}
+
 static uint32_t new_slot(ring *r)
 {
     return r->nslot++;
@@ -360,10 +370,42 @@ typedef struct cand {
     uint32_t occ;
 } cand;
 
-static int cmp_cand(const void *a, const void *b)
+/* Candidates come out nearest first from a binary min-heap: the first
+ * one or two nearly always make the bridge, so the whole is not sorted. */
+static void sift_down(cand *h, uint32_t n, uint32_t i)
 {
-    double x = ((const cand *)a)->d2, y = ((const cand *)b)->d2;
-    return (x > y) - (x < y);
+    for (;;) {
+        uint32_t l = 2 * i + 1, m = i;
+        if (l < n && h[l].d2 < h[m].d2)
+            m = l;
+        if (l + 1 < n && h[l + 1].d2 < h[m].d2)
+            m = l + 1;
+        if (m == i)
+            return;
+        cand t = h[i];
+        h[i] = h[m];
+        h[m] = t;
+        i = m;
+    }
+}
+
+static cand heap_pop(cand *h, uint32_t *n)
+{
+    cand top = h[0];
+    h[0] = h[--*n];
+    sift_down(h, *n, 0);
+    return top;
+}
+
+/* Segment xy's box misses the box lo–hi. */
+static bool apart(const splitter *s, const double lo[2], const double hi[2],
+                  uint32_t x, uint32_t y)
+{
+    const double *X = s->P[x], *Y = s->P[y];
+    for (int c = 0; c < 2; c++)
+        if (fmax(X[c], Y[c]) < lo[c] || fmin(X[c], Y[c]) > hi[c])
+            return true;
+    return false;
 }
 
 /* Is the bridge from ring occurrence j to point lp[k] of hole lp (n
@@ -378,14 +420,25 @@ static bool bridge_ok(const splitter *s, const ring *r, uint32_t j,
     if (!in_wedge(s, r->pt[r->prev[j]], p, r->pt[r->next[j]], m) ||
         !in_wedge(s, lp[k ? k - 1 : n - 1], m, lp[k + 1 < n ? k + 1 : 0], p))
         return false;
-    for (uint32_t i = 0; i < r->n; i++)
-        if (blocks(s, m, p, r->pt[i], r->pt[r->next[i]]))
+    /* edges whose boxes stay apart from the bridge's, by more than the
+     * bounds allow, cannot meet it */
+    double lo[2], hi[2], e = 2 * s->maxerr;
+    for (int c = 0; c < 2; c++) {
+        lo[c] = fmin(s->P[m][c], s->P[p][c]) - e;
+        hi[c] = fmax(s->P[m][c], s->P[p][c]) + e;
+    }
+    for (uint32_t i = 0; i < r->n; i++) {
+        uint32_t x = r->pt[i], y = r->pt[r->next[i]];
+        if (!apart(s, lo, hi, x, y) && blocks(s, m, p, x, y))
             return false;
+    }
     for (uint32_t h = first; h < nholes; h++) {
-        uint32_t l = holes[h], b = s->ls[l], e = s->ls[l + 1];
-        for (uint32_t c = b; c < e; c++)
-            if (blocks(s, m, p, s->li[c], s->li[c + 1 < e ? c + 1 : b]))
+        uint32_t l = holes[h], b = s->ls[l], en = s->ls[l + 1];
+        for (uint32_t c = b; c < en; c++) {
+            uint32_t x = s->li[c], y = s->li[c + 1 < en ? c + 1 : b];
+            if (!apart(s, lo, hi, x, y) && blocks(s, m, p, x, y))
                 return false;
+        }
     }
     return true;
 }
@@ -415,11 +468,15 @@ static int join_at_shared_point(splitter *s, ring *r, uint32_t l,
                                 const uint32_t *lp, uint32_t n)
 {
     uint32_t ep = new_epoch(s), shared = 0, j = 0;
-    for (uint32_t k = 0; k < n; k++)
-        s->stamp[lp[k]] = ep;
-    for (uint32_t i = 0; i < r->n; i++)
-        if (s->stamp[r->pt[i]] == ep)
-            shared++, j = i;
+    for (uint32_t k = 0; k < n; k++) {
+        uint32_t q = lp[k];
+        if (s->stamp[q] == ep)
+            continue;
+        s->stamp[q] = ep;
+        shared += s->cnt[q];
+        if (s->cnt[q])
+            j = s->occ_at[q];
+    }
     if (shared == 0)
         return 0;
     if (shared > 1)
@@ -444,6 +501,8 @@ static int join_at_shared_point(splitter *s, ring *r, uint32_t l,
         }
         uint32_t j2 = o + n - 1;
         r->pt[j2] = lp[k];
+        for (uint32_t i = 0; i < n; i++)
+            note_occ(s, o + i, r->pt[o + i]);
         r->prev[j2] = o + n - 2;
         r->eslot[j2] = r->eslot[j];
         r->eslot[j] = NONE;
@@ -484,9 +543,10 @@ static int bridge_hole(splitter *s, ring *r, const uint32_t *holes,
             nc++;
         }
     }
-    qsort(cands, nc, sizeof *cands, cmp_cand);
-    for (uint32_t c = 0; c < nc; c++) {
-        uint32_t j = cands[c].occ;
+    for (uint32_t i = nc / 2; i-- > 0;)
+        sift_down(cands, nc, i);
+    while (nc > 0) {
+        uint32_t j = heap_pop(cands, &nc).occ;
         for (uint32_t k = 0; k < n; k++) {
             if (lp[k] != lp[top] ||
                 !bridge_ok(s, r, j, lp, n, k, holes, nholes, h))
@@ -512,6 +572,8 @@ static int bridge_hole(splitter *s, ring *r, const uint32_t *holes,
             r->prev[after] = p2;
             r->next[j] = o;
             r->prev[o] = j;
+            for (uint32_t i = 0; i < n + 2; i++)
+                note_occ(s, o + i, r->pt[o + i]);
             r->n += n + 2;
             return 0;
         }
@@ -521,8 +583,93 @@ static int bridge_hole(splitter *s, ring *r, const uint32_t *holes,
                        "boundary (the boundary crosses itself)", l);
 }
 
+/* The occurrences that can spoil an ear (non-convex or repeated points),
+ * bucketed in a uniform grid over the ring's box so that an ear test
+ * visits only those near its triangle. */
+typedef struct grid {
+    double x0, y0, cw, ch;
+    uint32_t nx, ny;
+    uint32_t *start; /* nx·ny + 1 */
+    uint32_t *occ;
+} grid;
+
+static uint32_t cell_of(double v, double v0, double w, uint32_t n)
+{
+    double c = floor((v - v0) / w);
+    if (!(c >= 0))
+        return 0;
+    return c >= n ? n - 1 : (uint32_t)c;
+}
+
+static int grid_build(const splitter *s, const ring *r, const uint32_t *susp,
+                      uint32_t nsusp, grid *g)
+{
+    memset(g, 0, sizeof *g);
+    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    for (uint32_t i = 0; i < r->n; i++)
+        for (int k = 0; k < 2; k++) {
+            double v = s->P[r->pt[i]][k];
+            lo[k] = v < lo[k] ? v : lo[k];
+            hi[k] = v > hi[k] ? v : hi[k];
+        }
+    double side = sqrt((double)nsusp / 2.0) + 1;
+    g->nx = g->ny = side > 1024 ? 1024 : (uint32_t)side;
+    g->x0 = lo[0];
+    g->y0 = lo[1];
+    g->cw = (hi[0] - lo[0]) / g->nx;
+    g->ch = (hi[1] - lo[1]) / g->ny;
+    if (!(g->cw > 0))
+        g->cw = 1;
+    if (!(g->ch > 0))
+        g->ch = 1;
+    size_t nc = (size_t)g->nx * g->ny;
+    g->start = calloc(nc + 1, sizeof *g->start);
+    g->occ = malloc(((size_t)nsusp + 1) * sizeof *g->occ);
+    if (!g->start || !g->occ)
+        return -ENOMEM;
+    uint32_t *cellid = malloc(((size_t)nsusp + 1) * sizeof *cellid);
+    if (!cellid)
+        return -ENOMEM;
+    for (uint32_t x = 0; x < nsusp; x++) {
+        const double *q = s->P[r->pt[susp[x]]];
+        cellid[x] = cell_of(q[1], g->y0, g->ch, g->ny) * g->nx +
+                    cell_of(q[0], g->x0, g->cw, g->nx);
+        g->start[cellid[x] + 1]++;
+    }
+    for (size_t c = 0; c < nc; c++)
+        g->start[c + 1] += g->start[c];
+    for (uint32_t x = 0; x < nsusp; x++)
+        g->occ[g->start[cellid[x]]++] = susp[x];
+    for (size_t c = nc; c-- > 0;)
+        g->start[c + 1] = g->start[c];
+    g->start[0] = 0;
+    free(cellid);
+    return 0;
+}
+
+static void grid_free(grid *g)
+{
+    free(g->start), free(g->occ);
+}
+
+/* Could occurrence j spoil the ear a, i, c (corner points pa, pb, pc)? */
+static bool spoils(const splitter *s, const ring *r, uint32_t j, uint32_t pa,
+                   uint32_t pb, uint32_t pc)
+{
+    uint32_t q = r->pt[j];
+    if (q == pa || q == pb || q == pc) {
+        /* another pass through a corner: its edges must not enter */
+        uint32_t from = q == pa ? pb : q == pb ? pc : pa;
+        uint32_t to = q == pa ? pc : q == pb ? pa : pb;
+        return maybe_in_angle(s, q, from, to, r->pt[r->prev[j]]) ||
+               maybe_in_angle(s, q, from, to, r->pt[r->next[j]]);
+    }
+    return turn(s, pa, pb, q) != -1 && turn(s, pb, pc, q) != -1 &&
+           turn(s, pc, pa, q) != -1;
+}
+
 static bool is_ear(const splitter *s, const ring *r, uint32_t i,
-                   const uint32_t *susp, uint32_t nsusp)
+                   const grid *g)
 {
     if (r->kind[i] != 1)
         return false;
@@ -542,30 +689,28 @@ static bool is_ear(const splitter *s, const ring *r, uint32_t i,
         if (s->sure && s->perr && s->perr[corner[q]] > slack)
             slack = s->perr[corner[q]];
     }
-    for (uint32_t x = 0; x < nsusp; x++) {
-        uint32_t j = susp[x];
-        if (r->dead[j] || j == a || j == i || j == c ||
-            (r->kind[j] == 1 && !r->dup[j]))
-            continue;
-        uint32_t q = r->pt[j];
-        const double *Q = P[q];
-        double e = slack + (s->sure && s->perr ? s->perr[q] : 0);
-        if (Q[0] < lo[0] - e || Q[0] > hi[0] + e || Q[1] < lo[1] - e ||
-            Q[1] > hi[1] + e)
-            continue;
-        if (q == pa || q == pb || q == pc) {
-            /* another pass through a corner: its edges must not enter */
-            uint32_t from = q == pa ? pb : q == pb ? pc : pa;
-            uint32_t to = q == pa ? pc : q == pb ? pa : pb;
-            if (maybe_in_angle(s, q, from, to, r->pt[r->prev[j]]) ||
-                maybe_in_angle(s, q, from, to, r->pt[r->next[j]]))
-                return false;
-            continue;
+    double big = slack + (s->sure ? s->maxerr : 0);
+    uint32_t cx0 = cell_of(lo[0] - big, g->x0, g->cw, g->nx);
+    uint32_t cx1 = cell_of(hi[0] + big, g->x0, g->cw, g->nx);
+    uint32_t cy0 = cell_of(lo[1] - big, g->y0, g->ch, g->ny);
+    uint32_t cy1 = cell_of(hi[1] + big, g->y0, g->ch, g->ny);
+    for (uint32_t cy = cy0; cy <= cy1; cy++)
+        for (uint32_t cx = cx0; cx <= cx1; cx++) {
+            uint32_t cell = cy * g->nx + cx;
+            for (uint32_t x = g->start[cell]; x < g->start[cell + 1]; x++) {
+                uint32_t j = g->occ[x];
+                if (r->dead[j] || j == a || j == i || j == c ||
+                    (r->kind[j] == 1 && !r->dup[j]))
+                    continue;
+                const double *Q = P[r->pt[j]];
+                double e = slack + (s->sure && s->perr ? s->perr[r->pt[j]] : 0);
+                if (Q[0] < lo[0] - e || Q[0] > hi[0] + e ||
+                    Q[1] < lo[1] - e || Q[1] > hi[1] + e)
+                    continue;
+                if (spoils(s, r, j, pa, pb, pc))
+                    return false;
+            }
         }
-        if (turn(s, pa, pb, q) != -1 && turn(s, pb, pc, q) != -1 &&
-            turn(s, pc, pa, q) != -1)
-            return false;
-    }
     return true;
 }
 
@@ -605,33 +750,93 @@ static int clip_ears(splitter *s, ring *r, uint32_t loop)
         if (r->kind[i] != 1 || r->dup[i])
             susp[nsusp++] = i;
     }
-    uint32_t remaining = r->n, i = 0, miss = 0;
+    grid g;
+    if (grid_build(s, r, susp, nsusp, &g) < 0) {
+        grid_free(&g);
+        free(susp);
+        return geo_err_set(s->err, -ENOMEM, "out of memory");
+    }
+    free(susp);
+    /* Candidates in a FIFO of convex corners, first in ring order. After
+     * a clip, its two neighbours go to the back, and a neighbour still
+     * waiting in this pass is put back once: clipping every other corner
+     * of a run keeps triangles small (a fan from one corner would cross
+     * the part with ever longer diagonals), and the corners next to the
+     * last clip, where a part closes up like a zip, are retried without a
+     * sweep over the reflex corners. An empty queue is refilled from the
+     * ring; a refill after which nothing is clipped means no ear. */
+    size_t qcap = (size_t)r->n + 1;
+    uint32_t *q = malloc(qcap * sizeof *q);
+    uint8_t *inq = calloc(qcap, 1), *skip = calloc(qcap, 1);
+    uint32_t remaining = r->n, i = 0, qh = 0, qn = 0;
+    int rc = 0;
+    if (!q || !inq || !skip) {
+        rc = geo_err_set(s->err, -ENOMEM, "out of memory");
+        goto out;
+    }
+    bool clipped = true;
     while (remaining > 3) {
-        if (is_ear(s, r, i, susp, nsusp)) {
-            uint32_t a = r->prev[i], c = r->next[i];
-            uint32_t sl = new_slot(r);
-            add_triangle(r, a, i, c, sl);
-            r->eslot[a] = sl;
-            r->next[a] = c;
-            r->prev[c] = a;
-            r->dead[i] = 1;
-            remaining--;
-            r->kind[a] = turn_at(s, r, a);
-            r->kind[c] = turn_at(s, r, c);
-            i = a;
-            miss = 0;
-        } else {
-            i = r->next[i];
-            if (++miss > remaining) {
-                free(susp);
-                return geo_err_set(s->err, -EINVAL,
-                                   "loop %u: no ear left with %u corners (the "
-                                   "boundary crosses or touches itself)",
-                                   loop, remaining);
+        if (qn == 0) {
+            if (!clipped) {
+                rc = geo_err_set(s->err, -EINVAL,
+                                 "loop %u: no ear left with %u corners (the "
+                                 "boundary crosses or touches itself)",
+                                 loop, remaining);
+                goto out;
+            }
+            clipped = false;
+            uint32_t j = i;
+            do {
+                if (r->kind[j] == 1) {
+                    inq[j] = 1, skip[j] = 0;
+                    q[(qh + qn++) % qcap] = j;
+                }
+                j = r->next[j];
+            } while (j != i);
+            continue;
+        }
+        uint32_t x = q[qh];
+        qh = (qh + 1) % qcap, qn--;
+        inq[x] = 0;
+        if (r->dead[x] || r->kind[x] != 1)
+            continue;
+        if (skip[x]) {
+            skip[x] = 0;
+            inq[x] = 1;
+            q[(qh + qn++) % qcap] = x;
+            continue;
+        }
+        if (!is_ear(s, r, x, &g))
+            continue;
+        uint32_t a = r->prev[x], c = r->next[x];
+        uint32_t sl = new_slot(r);
+        add_triangle(r, a, x, c, sl);
+        r->eslot[a] = sl;
+        r->next[a] = c;
+        r->prev[c] = a;
+        r->dead[x] = 1;
+        remaining--;
+        clipped = true;
+        i = a;
+        r->kind[a] = turn_at(s, r, a);
+        r->kind[c] = turn_at(s, r, c);
+        const uint32_t nb[2] = {c, a};
+        for (int k = 0; k < 2; k++) {
+            if (inq[nb[k]]) {
+                skip[nb[k]] = k == 0;
+            } else if (r->kind[nb[k]] == 1) {
+                inq[nb[k]] = 1, skip[nb[k]] = 0;
+                q[(qh + qn++) % qcap] = nb[k];
             }
         }
     }
-    free(susp);
+out:
+    free(q), free(inq), free(skip);
+    if (rc < 0) {
+        grid_free(&g);
+        return rc;
+    }
+    grid_free(&g);
     uint32_t a = r->prev[i], c = r->next[i];
     if (turn_at(s, r, i) != 1)
         return geo_err_set(s->err, -EINVAL,
@@ -809,11 +1014,17 @@ static int split_once(splitter *s, uint32_t outer, uint32_t *holes,
         rc = geo_err_set(s->err, -ENOMEM, "out of memory");
         goto done;
     }
+    for (uint32_t h = 0; h < nholes; h++)
+        for (uint32_t c = s->ls[holes[h]]; c < s->ls[holes[h] + 1]; c++)
+            s->cnt[s->li[c]] = 0;
+    for (uint32_t i = 0; i < n; i++)
+        s->cnt[s->li[b + i]] = 0;
     for (uint32_t i = 0; i < n; i++) {
         r.pt[i] = s->li[b + i];
         r.next[i] = i + 1 < n ? i + 1 : 0;
         r.prev[i] = i ? i - 1 : n - 1;
         r.eslot[i] = NONE;
+        note_occ(s, i, r.pt[i]);
     }
     r.n = n;
     /* Eberly's order: by greatest point, decreasing */
@@ -957,16 +1168,20 @@ int geo_region_split(const double (*pts)[2], const double *perr,
     s.stamp = calloc(m, sizeof *s.stamp);
     s.nxt = malloc(m * sizeof *s.nxt);
     s.cnt = malloc(m * sizeof *s.cnt);
+    s.occ_at = malloc(m * sizeof *s.occ_at);
     s.info = malloc(((size_t)nloops + 1) * sizeof *s.info);
     uint32_t *holes = malloc(((size_t)nloops + 1) * sizeof *holes);
     uint32_t *hstart = calloc((size_t)nloops + 2, sizeof *hstart);
     int rc = 0;
-    if (!s.stamp || !s.nxt || !s.cnt || !s.info || !holes || !hstart) {
+    if (!s.stamp || !s.nxt || !s.cnt || !s.occ_at || !s.info || !holes ||
+        !hstart) {
         rc = geo_err_set(err, -ENOMEM, "out of memory");
         goto done;
     }
     if ((rc = check_loops(&s)) < 0)
         goto done;
+    for (uint32_t i = 0; perr && i < npts; i++)
+        s.maxerr = perr[i] > s.maxerr ? perr[i] : s.maxerr;
     for (uint32_t l = 0; l < nloops; l++) {
         loopinfo *li = &s.info[l];
         const uint32_t *lp = loop_idx + loop_start[l];
@@ -1042,7 +1257,7 @@ int geo_region_split(const double (*pts)[2], const double *perr,
             goto done;
     }
 done:
-    free(s.stamp), free(s.nxt), free(s.cnt), free(s.info);
+    free(s.stamp), free(s.nxt), free(s.cnt), free(s.occ_at), free(s.info);
     free(holes), free(hstart);
     if (rc < 0)
         geo_region_pieces_clear(ret);

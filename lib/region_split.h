@@ -24,11 +24,13 @@
  * region_split.c for the method and why).
  *
  * Exactness: every decision is a sign of geo_orient2d or a comparison of
- * the given coordinates; no tolerance. Complexity: O(m log m) for the m
- * points plus, per split part of n points and r non-convex corners,
- * O(n·r) ear tests in the usual case and O(n²·r) at worst, and
- * O(n·(h + tries)) for the bridges of its h holes; classification of the
- * holes O(Σ hole × part) over the pairs whose boxes nest.
+ * the given coordinates; no tolerance (with bounds, see geo_region_split).
+ * Complexity: O(m log m) for the m points plus, per split part of n
+ * points, O(n) ear tests in the usual case, each visiting the non-convex
+ * corners in its triangle's box through a grid (O(n²) visits at worst,
+ * for long thin fans), O(n) per hole for its bridge, O(n) for the merge;
+ * classification of the holes O(Σ hole × part) over the pairs whose
+ * boxes nest.
  *
  * Thread safety: reentrant; allocates its own scratch. */
 #ifndef GEO_REGION_SPLIT_H
