@@ -2,6 +2,7 @@
  * prisms over cell maps, a hollow box, a ring with a saddle. */
 #include "hole_shapes.h"
 
+#include <math.h>
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
@@ -146,4 +147,39 @@ geo_poly *hs_saddle_ring(void)
     }
     start[f] = c;
     return geo_poly_from_arrays(19, &v[0][0], f, start, idx, NULL, NULL);
+}
+
+geo_poly *hs_torus(uint32_t nu, uint32_t nv, double R, double r)
+{
+    size_t nvert = (size_t)nu * nv, nf = 2 * nvert;
+    double *v = malloc(nvert * 3 * sizeof *v);
+    uint32_t *idx = malloc(nf * 3 * sizeof *idx);
+    uint32_t *start = malloc((nf + 1) * sizeof *start);
+    geo_poly *p = NULL;
+    if (!v || !idx || !start)
+        goto done;
+    for (uint32_t i = 0; i < nu; i++)
+        for (uint32_t j = 0; j < nv; j++) {
+            double u = 2 * M_PI * i / nu, w = 2 * M_PI * (j + 0.5) / nv;
+            size_t k = 3 * ((size_t)i * nv + j);
+            v[k] = (R + r * cos(w)) * cos(u);
+            v[k + 1] = (R + r * cos(w)) * sin(u);
+            v[k + 2] = r * sin(w);
+        }
+    size_t c = 0, f = 0;
+    for (uint32_t i = 0; i < nu; i++)
+        for (uint32_t j = 0; j < nv; j++) {
+            uint32_t a = i * nv + j, b = ((i + 1) % nu) * nv + j;
+            uint32_t a1 = i * nv + (j + 1) % nv, b1 = ((i + 1) % nu) * nv + (j + 1) % nv;
+            start[f++] = (uint32_t)c;
+            idx[c++] = a, idx[c++] = b, idx[c++] = b1;
+            start[f++] = (uint32_t)c;
+            idx[c++] = a, idx[c++] = b1, idx[c++] = a1;
+        }
+    start[f] = (uint32_t)c;
+    p = geo_poly_from_arrays((uint32_t)nvert, v, (uint32_t)nf, start, idx, NULL,
+                             NULL);
+done:
+    free(v), free(idx), free(start);
+    return p;
 }

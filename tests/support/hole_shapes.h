@@ -32,4 +32,9 @@ geo_poly *hs_hollow_box(const double lo[3], const double hi[3],
 geo_poly *hs_saddle_ring(void);
 #define HS_SADDLE 16u
 
+/* A torus around the z axis (radii R > r > 0) triangulated on an nu × nv
+ * grid (2·nu·nv triangles; nu ≥ 3, nv ≥ 3), outward. Its section by the
+ * plane z = c, |c| < r, is an annulus. */
+geo_poly *hs_torus(uint32_t nu, uint32_t nv, double R, double r);
+
 #endif

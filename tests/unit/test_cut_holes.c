@@ -2,9 +2,10 @@
  * holes (lib/cut.h with lib/region_split.h): a ring cut along its plane,
  * a block with two and three holes, an island in a hole, a cavity's cross
  * section, the notch cube's inner corner clipped, a hole touching the
- * outer boundary at a vertex; the pinches that no valid polyhedron can
- * represent are refused with a message naming the way out, and moving the
- * plane that way works; the §3.4 variant keeps its one-facet rule; random
+ * outer boundary at a vertex, a torus along its plane; the pinches that
+ * no valid polyhedron can represent are refused with a message naming the
+ * way out, and moving the plane that way works; the §3.4 variant keeps
+ * its one-facet rule; random
  * planes, and planes through vertices, on non-convex models: every result
  * valid by geo_inspect, halves adding up, no refusal but true pinches. */
 #include "testutil.h"
@@ -99,6 +100,12 @@ static void test_ring_cut_along_its_plane_gives_an_annulus_of_facets(void **stat
     geo_poly_free(o);
     /* tilted through the ring: still one annulus */
     rep = both_ok(p, 0.1, -0.05, 1, -2, NULL);
+    assert_int_equal(rep.components, 1);
+    assert_true(rep.new_facets >= 2);
+    geo_poly_free(p);
+    /* a triangulated torus along its plane: an annulus of crossings */
+    p = hs_torus(48, 24, 2, 1);
+    rep = both_ok(p, 0, 0, 1, -0.01, NULL);
     assert_int_equal(rep.components, 1);
     assert_true(rep.new_facets >= 2);
     geo_poly_free(p);
@@ -436,6 +443,7 @@ static uint32_t make_models(model *m)
     m[n++] = (model){"saddle ring", hs_saddle_ring(), true};
     m[n++] = (model){"dented box", dented_box(), true};
     m[n++] = (model){"bumpy sphere", cs_sphere(24, 32, 0.25), false};
+    m[n++] = (model){"torus", hs_torus(24, 12, 2, 1), false};
     for (uint32_t i = 0; i < n; i++) {
         assert_non_null(m[i].p);
         const char *bad = cc_inspect_problem(m[i].p);
@@ -495,7 +503,8 @@ static void test_random_planes_refuse_nothing(void **state)
         assert_int_equal(refused, 0);
         /* the models with holes in most sections really exercise them */
         if (strstr(m[i].name, "notch") || strstr(m[i].name, "ring") ||
-            strstr(m[i].name, "plate") || strstr(m[i].name, "hollow"))
+            strstr(m[i].name, "plate") || strstr(m[i].name, "hollow") ||
+            strstr(m[i].name, "torus"))
             assert_true(holed >= 5);
         geo_poly_free(m[i].p);
     }
