@@ -153,6 +153,103 @@ static void test_local_exp_log_doubles_k_and_halves_eps_per_round(
     geo_poly_free(p);
 }
 
+/* The last S2 of each local-exp round of a run of vertex 100 of the clean
+ * stone (m = 0.01) with plane fit fit; rounds[] receives the step counts. */
+static geo_replanar_result local_exp_rounds(enum geo_replanar_fit fit,
+                                            uint32_t rounds[10],
+                                            double last_s2[10])
+{
+    geo_poly *p = tu_load_model("brilliant.truth.json");
+    assert_non_null(p);
+    double t[3];
+    move_target(p, 100, 0.01, t);
+    geo_replanar_opts o;
+    geo_replanar_opts_default(&o, GEO_REPLANAR_LOCAL_EXP);
+    o.fit = fit;
+    geo_replanar_log log = {0};
+    geo_replanar_result res;
+    assert_int_equal(geo_move_vertex(p, 100, t, GEO_REPLANAR_LOCAL_EXP, &o,
+                                     NULL, &log, &res, NULL),
+                     0);
+    assert_true(res.converged);
+    memset(rounds, 0, 10 * sizeof *rounds);
+    for (size_t i = 0; i < log.n; i++) {
+        assert_true(log.rows[i].outer < 10);
+        rounds[log.rows[i].outer]++;
+        last_s2[log.rows[i].outer] = log.rows[i].s2;
+    }
+    assert_memory_equal(p->verts[100], t, sizeof t);
+    geo_replanar_log_clear(&log);
+    geo_poly_free(p);
+    return res;
+}
+
+/* The paper's §4.3.1 table falls by a steady ×0.33–0.38 per round (one
+ * step each) to 4.4e-12: a decay that does not speed up as K doubles.
+ * Plain least-squares planes (the moved vertex pulls them only part of
+ * the way each step) give that; planes through the moved vertex converge
+ * ever faster (×~0.1 per round, to rounding) and leave no residual. */
+static void test_paper_fit_gives_the_steady_decay_of_the_paper_table(
+    void **state)
+{
+    (void)state;
+    uint32_t rounds[10];
+    double s2[10];
+    geo_replanar_result all = local_exp_rounds(GEO_REPLANAR_FIT_ALL, rounds,
+                                               s2);
+    assert_true(rounds[0] >= 20 && rounds[0] <= 45);
+    for (int k = 1; k < 10; k++) {
+        assert_int_equal(rounds[k], 1);
+        if (k >= 2) {
+            double q = s2[k] / s2[k - 1];
+            assert_true(q > 0.3 && q < 0.5);
+        }
+    }
+    assert_true(s2[9] > 1e-12);
+    /* the moved vertex is left off its planes, and that is reported */
+    assert_true(all.fixed_resid > 1e-9 && all.fixed_resid < 1e-6);
+
+    geo_replanar_result fixed = local_exp_rounds(
+        GEO_REPLANAR_FIT_THROUGH_FIXED, rounds, s2);
+    for (int k = 1; k < 10; k++)
+        assert_int_equal(rounds[k], 1);
+    assert_true(pow(s2[9] / s2[5], 0.25) < 0.2);
+    assert_true(fixed.fixed_resid < 1e-14);
+}
+
+/* Scaled schedule: each step's K is the previous step's S1/S2sum, or with
+ * GEO_REPLANAR_SCALED_K_S2 its S1/S2 (as every row of the paper's §4.3.2
+ * and §4.3.5 tables). */
+static void test_scaled_k_follows_the_chosen_rule(void **state)
+{
+    (void)state;
+    for (int rule = 0; rule < 2; rule++) {
+        geo_poly *p = tu_load_model("brilliant.truth.json");
+        assert_non_null(p);
+        double t[3];
+        move_target(p, 100, 0.01, t);
+        geo_replanar_opts o;
+        geo_replanar_opts_default(&o, GEO_REPLANAR_SCALED);
+        o.scaled_k = (enum geo_replanar_scaled_k)rule;
+        geo_replanar_log log = {0};
+        geo_replanar_result res;
+        assert_int_equal(geo_move_vertex(p, 100, t, GEO_REPLANAR_SCALED, &o,
+                                         NULL, &log, &res, NULL),
+                         0);
+        assert_true(res.converged);
+        assert_true(log.n > 2);
+        assert_true(log.rows[0].k == o.k0);
+        for (size_t i = 1; i < log.n; i++) {
+            const geo_replanar_step *a = &log.rows[i - 1];
+            double want = rule == GEO_REPLANAR_SCALED_K_S2 ? a->s1 / a->s2
+                                                            : a->s1 / a->s2sum;
+            assert_true(log.rows[i].k == want);
+        }
+        geo_replanar_log_clear(&log);
+        geo_poly_free(p);
+    }
+}
+
 static void test_global_exp_multiplies_k_each_step_and_keeps_s1_total(
     void **state)
 {
@@ -308,6 +405,33 @@ static void test_bad_input_rejected_naming_the_place(void **state)
                          0);
         assert_int_equal(s, k);
     }
+    o.k0 = 100;
+    o.fit = (enum geo_replanar_fit)7;
+    assert_int_equal(geo_replanarize(p, twice, 1, GEO_REPLANAR_LOCAL_EXP, &o,
+                                     NULL, NULL, &res, &err),
+                     -EINVAL);
+    o.fit = GEO_REPLANAR_FIT_ALL;
+    o.scaled_k = (enum geo_replanar_scaled_k)7;
+    assert_int_equal(geo_replanarize(p, twice, 1, GEO_REPLANAR_SCALED, &o,
+                                     NULL, NULL, &res, &err),
+                     -EINVAL);
+    enum geo_replanar_fit f;
+    enum geo_replanar_scaled_k sk;
+    assert_int_equal(geo_replanar_fit_parse("loose", &f), -EINVAL);
+    assert_int_equal(geo_replanar_scaled_k_parse("s3", &sk), -EINVAL);
+    for (int k = 0; k < 2; k++) {
+        assert_int_equal(geo_replanar_fit_parse(
+                             geo_replanar_fit_name((enum geo_replanar_fit)k),
+                             &f),
+                         0);
+        assert_int_equal(f, k);
+        assert_int_equal(geo_replanar_scaled_k_parse(
+                             geo_replanar_scaled_k_name(
+                                 (enum geo_replanar_scaled_k)k),
+                             &sk),
+                         0);
+        assert_int_equal(sk, k);
+    }
     geo_poly_free(p);
 }
 
@@ -404,6 +528,9 @@ int main(void)
         cmocka_unit_test(
             test_global_exp_multiplies_k_each_step_and_keeps_s1_total),
         cmocka_unit_test(test_active_region_run_matches_global_run),
+        cmocka_unit_test(
+            test_paper_fit_gives_the_steady_decay_of_the_paper_table),
+        cmocka_unit_test(test_scaled_k_follows_the_chosen_rule),
         cmocka_unit_test(
             test_two_fixed_vertices_of_one_facet_stay_on_its_plane),
         cmocka_unit_test(
