@@ -9,8 +9,12 @@
 #include <string.h>
 #include <time.h>
 
+#include "clusters.h"
+#include "correct.h"
+#include "correct_json.h"
 #include "fill.h"
 #include "fill_json.h"
+#include "merge.h"
 #include "stats.h"
 #include "stats_json.h"
 #include "stitch.h"
@@ -51,6 +55,82 @@ static int run_inspect(const proto_op *op, geo_poly **model,
     }
     *ret_report = rep;
     return 0;
+}
+
+/* Hands a kernel's JSON report over, or fails with -ENOMEM. */
+static int give_report(json_t *rep, json_t **ret_report, geo_err *err)
+{
+    if (!rep)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    *ret_report = rep;
+    return 0;
+}
+
+/* collapse_clusters (lib/clusters.h): radius 0 means the kernel's
+ * default relative to the model's size. */
+static int run_collapse(const proto_op *op, geo_poly **model,
+                        const geo_ctx *ctx, json_t **ret_report,
+                        json_t *summary, geo_err *err)
+{
+    (void)summary;
+    geo_collapse_opts o;
+    geo_collapse_opts_default(&o);
+    o.radius = op->u.collapse.radius;
+    geo_collapse_report rep;
+    int r = geo_collapse_clusters(*model, &o, ctx, &rep, err);
+    if (r < 0)
+        return r;
+    json_t *j = proto_collapse_report_to_json(&rep);
+    geo_collapse_report_clear(&rep);
+    return give_report(j, ret_report, err);
+}
+
+/* merge_facets (lib/merge.h): the given groups, or automatic ones. */
+static int run_merge(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
+                     json_t **ret_report, json_t *summary, geo_err *err)
+{
+    (void)summary;
+    geo_merge_opts o;
+    geo_merge_opts_default(&o);
+    o.max_angle_deg = op->u.merge.max_angle_deg;
+    o.max_deviation = op->u.merge.max_deviation;
+    geo_merge_report rep = {0};
+    int r = op->u.merge.ngroups
+                ? geo_merge_groups(*model, op->u.merge.ngroups,
+                                   op->u.merge.gstart, op->u.merge.gfacets,
+                                   &o, ctx, &rep, err)
+                : geo_merge_auto(*model, &o, ctx, &rep, err);
+    if (r < 0)
+        return r;
+    json_t *j = proto_merge_report_to_json(&rep);
+    geo_merge_report_clear(&rep);
+    return give_report(j, ret_report, err);
+}
+
+/* auto (lib/correct.h): the whole post-scan correction, the same call as
+ * `facet correct`, so the daemon serves the same model. */
+static int run_auto(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
+                    json_t **ret_report, json_t *summary, geo_err *err)
+{
+    geo_correct_opts o;
+    geo_correct_opts_default(&o);
+    o.collapse.radius = op->u.correct.radius;
+    o.merge.max_angle_deg = op->u.correct.max_angle_deg;
+    o.merge.max_deviation = op->u.correct.max_deviation;
+    geo_correct_report rep;
+    int r = geo_correct_auto(*model, &o, ctx, &rep, err);
+    if (r < 0)
+        return r;
+    json_t *j = proto_correct_report_to_json(&rep);
+    int e = json_object_set_new(summary, "hausdorff", json_real(rep.hausdorff));
+    e |= json_object_set_new(summary, "groups_merged",
+                             json_integer(rep.merge.merged));
+    geo_correct_report_clear(&rep);
+    if (e) {
+        json_decref(j);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    return give_report(j, ret_report, err);
 }
 
 /* fill_holes (lib/fill.h): every hole closed and checked, or reported. */
@@ -114,8 +194,11 @@ static int run_stitch(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
 
 static const op_entry ops[PROTO_OP_COUNT] = {
     [PROTO_OP_INSPECT] = {run_inspect, false},
+    [PROTO_OP_COLLAPSE_CLUSTERS] = {run_collapse, true},
+    [PROTO_OP_MERGE_FACETS] = {run_merge, true},
     [PROTO_OP_FILL_HOLES] = {run_fill_holes, true},
     [PROTO_OP_STITCH] = {run_stitch, true},
+    [PROTO_OP_AUTO] = {run_auto, true},
 };
 
 bool runner_op_available(proto_op_kind op)

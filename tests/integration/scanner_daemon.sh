@@ -22,9 +22,8 @@ root=$(pwd)
 . "$root/tests/support/mock_facetd.sh"
 
 # The pipeline of the scanner jobs, as `facet run` and facetd's
-# Pipeline= (a file) both take it. Once the build has the correction,
-# '"auto"' here tests the post-scan correction end to end.
-PIPELINE_JSON='["inspect"]'
+# Pipeline= (a file) both take it: the post-scan correction, end to end.
+PIPELINE_JSON='"auto"'
 
 K400=$root/$MODELS/brilliant.scan-k400.json
 K100=$root/$MODELS/brilliant.scan-k100.json
