@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "correct.h"
 #include "replanar.h"
 #include "tu_load.h"
 #include "vec.h"
@@ -248,6 +249,72 @@ static void test_scaled_k_follows_the_chosen_rule(void **state)
         geo_replanar_log_clear(&log);
         geo_poly_free(p);
     }
+}
+
+static int cmp_u32(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* local-exp on 20 vertices of p (m = 0.01): the median of the round-0
+ * step counts and the most steps any later round took. */
+static void local_exp_profile(const geo_poly *p, uint32_t *ret_median0,
+                              uint32_t *ret_max_later)
+{
+    uint32_t r0[20];
+    *ret_max_later = 0;
+    for (uint32_t i = 0; i < 20; i++) {
+        uint32_t v = 5 + (uint32_t)((uint64_t)i * (p->nverts - 10) / 20);
+        geo_poly *q = geo_poly_copy(p);
+        double t[3];
+        move_target(q, v, 0.01, t);
+        geo_replanar_opts o;
+        geo_replanar_opts_default(&o, GEO_REPLANAR_LOCAL_EXP);
+        o.max_steps = 5000;
+        geo_replanar_log log = {0};
+        geo_replanar_result res;
+        assert_int_equal(geo_move_vertex(q, v, t, GEO_REPLANAR_LOCAL_EXP, &o,
+                                         NULL, &log, &res, NULL),
+                         0);
+        assert_true(res.converged);
+        uint32_t rounds[10] = {0};
+        for (size_t j = 0; j < log.n; j++)
+            rounds[log.rows[j].outer]++;
+        r0[i] = rounds[0];
+        for (int k = 1; k < 10; k++)
+            if (rounds[k] > *ret_max_later)
+                *ret_max_later = rounds[k];
+        geo_replanar_log_clear(&log);
+        geo_poly_free(q);
+    }
+    qsort(r0, 20, sizeof r0[0], cmp_u32);
+    *ret_median0 = r0[10];
+}
+
+/* The scanner's slivers (facets at hundredths of a degree) are what slows
+ * local-exp on a raw scan: once the correction merges them, the scan
+ * behaves as the paper's stones (a dozen steps, then about one per
+ * round), the raw scan needs several times more in round 0 and many in
+ * later rounds. */
+static void test_corrected_scan_converges_like_the_paper_raw_scan_does_not(
+    void **state)
+{
+    (void)state;
+    geo_poly *raw = tu_load_model("brilliant.scan-k100.json");
+    assert_non_null(raw);
+    geo_poly *fixed = geo_poly_copy(raw);
+    assert_int_equal(geo_correct_auto(fixed, NULL, NULL, NULL, NULL), 0);
+    assert_true(fixed->nverts < raw->nverts / 4);
+    uint32_t raw0, raw_later, fix0, fix_later;
+    local_exp_profile(raw, &raw0, &raw_later);
+    local_exp_profile(fixed, &fix0, &fix_later);
+    assert_true(fix0 <= 20);
+    assert_true(fix_later <= 2);
+    assert_true(raw0 >= 3 * fix0);
+    assert_true(raw_later >= 10);
+    geo_poly_free(fixed);
+    geo_poly_free(raw);
 }
 
 static void test_global_exp_multiplies_k_each_step_and_keeps_s1_total(
@@ -531,6 +598,8 @@ int main(void)
         cmocka_unit_test(
             test_paper_fit_gives_the_steady_decay_of_the_paper_table),
         cmocka_unit_test(test_scaled_k_follows_the_chosen_rule),
+        cmocka_unit_test(
+            test_corrected_scan_converges_like_the_paper_raw_scan_does_not),
         cmocka_unit_test(
             test_two_fixed_vertices_of_one_facet_stay_on_its_plane),
         cmocka_unit_test(
