@@ -83,6 +83,42 @@ static void project_cb(void *user, double p[3])
     geo_frep_project(s->f, p, s->tol, s->max_step);
 }
 
+/* Keeps a point made from vertices on the surface on what they share: the
+ * smooth piece all of them lie on, or the crease (corner) when they share
+ * two (three); refuses it when they share nothing — a triangle across a
+ * crease is not split, since its centroid would land on either side and
+ * fold the mesh — or when that part of the piece is not on the surface
+ * there. */
+static bool place_cb(void *user, double p[3], const double *const *from,
+                     uint32_t n)
+{
+    const surface *s = user;
+    uint32_t common[4], nc = 0;
+    for (uint32_t k = 0; k < n; k++) {
+        uint32_t pc[4];
+        uint32_t np = geo_frep_pieces_at(s->f, from[k], s->crease_tol, pc, 4);
+        if (np > 4)
+            np = 4;
+        if (k == 0) {
+            memcpy(common, pc, np * sizeof *pc);
+            nc = np;
+            continue;
+        }
+        uint32_t keep = 0;
+        for (uint32_t i = 0; i < nc; i++)
+            for (uint32_t j = 0; j < np; j++)
+                if (common[i] == pc[j]) {
+                    common[keep++] = common[i];
+                    break;
+                }
+        nc = keep;
+    }
+    if (nc == 0)
+        return false;
+    return geo_frep_project_pieces(s->f, common, nc < 3 ? nc : 3, p, s->tol,
+                                   s->max_step);
+}
+
 /* How many smooth pieces of F the points p and q have in common (pieces
  * through a point: lib/frep.h); UINT32_MAX when neither lies on any
  * piece within the tolerance. */
@@ -226,6 +262,11 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
     fo.project = project_cb;
     fo.hard_edge = hard_cb;
     fo.crosses_feature = crosses_cb;
+    uint32_t nprog;
+    const geo_frep_op *prog = geo_frep_program(f, &nprog);
+    for (uint32_t i = 0; i < nprog; i++)
+        if (prog[i].code == GEO_FREP_OP_MIN || prog[i].code == GEO_FREP_OP_MAX)
+            fo.place = place_cb;
     fo.project_user = &surf;
     /* holes first, refinement after the creases are recovered: a
      * centroid of a triangle lying on one smooth piece then stays on it */
@@ -262,23 +303,13 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
     rep.fill.nflips = rs.nflips;
     rep.fill.nhard_splits = rs.nhard_splits;
     rep.fill.nfair_sweeps = rs.nfair_sweeps;
+    geo_poly_compute_planes(mesh, GEO_PLANE_UNWEIGHTED);
     rep.t_fill += now() - t;
     t = now();
-    /* refinement may split a curved crease off itself: recover again */
-    geo_sharpen_stats s2;
-    if (o.sharpen && (rc = geo_frep_sharpen(f, mesh, NULL, ctx, &s2, err)) < 0)
-        goto fail;
-    rep.sharpen.nedge_splits += s2.nedge_splits;
-    rep.sharpen.nsnaps += s2.nsnaps;
-    rep.sharpen.ncorners += s2.ncorners;
-    rep.sharpen.nrejected = s2.nrejected;
-    geo_poly_compute_planes(mesh, GEO_PLANE_UNWEIGHTED);
     if ((rc = geo_ctx_progress(ctx, 0.92)) < 0) {
         geo_err_set(err, rc, "canceled");
         goto fail;
     }
-    rep.t_sharpen += now() - t;
-    t = now();
 
     if ((rc = geo_frep_mesh_metrics(f, mesh, &rep.quality, err)) < 0)
         goto fail;
