@@ -339,10 +339,12 @@ static int move_to(sharpener *S, uint32_t v, uint32_t b, const double x[3])
     return 1;
 }
 
-static int edge_pass(sharpener *S, uint32_t *changed)
+static int edge_pass(sharpener *S, uint32_t *changed, const geo_ctx *ctx)
 {
     uint32_t nt = S->m.nt;
-    for (uint32_t t = 0; t < nt; t++)
+    for (uint32_t t = 0; t < nt; t++) {
+        if ((t & 4095) == 0 && geo_ctx_canceled(ctx))
+            return -ECANCELED;
         for (int k = 0; k < 3 && !S->m.dead[t]; k++) {
             uint32_t a = S->m.t[t][k], b = S->m.t[t][(k + 1) % 3];
             if (a > b || share(S->ps[a], S->ps[b]) ||
@@ -393,6 +395,7 @@ static int edge_pass(sharpener *S, uint32_t *changed)
                 S->st.nrejected++;
             }
         }
+    }
     return 0;
 }
 
@@ -460,10 +463,12 @@ static int flip_to_corner(sharpener *S, uint32_t t, uint32_t cx)
     return 0;
 }
 
-static int corner_pass(sharpener *S, uint32_t *changed)
+static int corner_pass(sharpener *S, uint32_t *changed, const geo_ctx *ctx)
 {
     uint32_t nt = S->m.nt;
     for (uint32_t t = 0; t < nt; t++) {
+        if ((t & 4095) == 0 && geo_ctx_canceled(ctx))
+            return -ECANCELED;
         if (S->m.dead[t])
             continue;
         const uint32_t *tv = S->m.t[t];
@@ -586,11 +591,19 @@ int geo_frep_sharpen(const geo_frep *f, geo_poly *m, uint8_t **tags,
         geo_tmesh_init(&S.m, &m->verts[0][0], m->nverts) < 0)
         goto oom;
     for (uint32_t v = 0; v < m->nverts; v++) {
+        if ((v & 65535) == 0 && geo_ctx_canceled(ctx)) {
+            rc = geo_err_set(err, -ECANCELED, "canceled");
+            goto done;
+        }
         S.ps[v][1] = S.ps[v][2] = NOPIECE;
         geo_frep_run_piece(f, S.prog, S.nprog, m->verts[v], NULL,
                            &S.ps[v][0]);
     }
     for (uint32_t fc = 0; fc < m->nfacets; fc++) {
+        if ((fc & 65535) == 0 && geo_ctx_canceled(ctx)) {
+            rc = geo_err_set(err, -ECANCELED, "canceled");
+            goto done;
+        }
         const uint32_t *fv = geo_poly_facet(m, fc);
         for (int k = 0; k < 3; k++) {
             double l = geo_vdist(m->verts[fv[k]], m->verts[fv[(k + 1) % 3]]);
@@ -610,14 +623,19 @@ int geo_frep_sharpen(const geo_frep *f, geo_poly *m, uint8_t **tags,
         if (cnt[v])
             S.s[v] /= cnt[v];
     for (int round = 0; round < 4; round++) {
-        if (geo_ctx_canceled(ctx)) {
-            rc = geo_err_set(err, -ECANCELED, "canceled");
+        if ((rc = geo_ctx_progress(ctx, round / 4.0)) < 0) {
+            geo_err_set(err, rc, "canceled");
             goto done;
         }
         uint32_t changed = 0;
-        if ((rc = edge_pass(&S, &changed)) < 0 ||
-            (rc = corner_pass(&S, &changed)) < 0)
+        if ((rc = edge_pass(&S, &changed, ctx)) < 0 ||
+            (rc = corner_pass(&S, &changed, ctx)) < 0) {
+            if (rc == -ECANCELED) {
+                geo_err_set(err, rc, "canceled");
+                goto done;
+            }
             goto oom;
+        }
         S.st.nrounds++;
         if (changed == 0)
             break;
@@ -642,7 +660,13 @@ int geo_frep_sharpen(const geo_frep *f, geo_poly *m, uint8_t **tags,
         if (ntags)
             ntags[nf] = S.m.tag[t];
     }
-    geo_poly_compute_planes(q, GEO_PLANE_UNWEIGHTED);
+    for (uint32_t fc = 0; fc < q->nfacets; fc++) {
+        if ((fc & 65535) == 0 && geo_ctx_canceled(ctx)) {
+            rc = geo_err_set(err, -ECANCELED, "canceled");
+            goto done;
+        }
+        geo_poly_facet_fit_plane(q, fc, GEO_PLANE_UNWEIGHTED, q->planes[fc]);
+    }
     if (ntags) {
         free(*tags);
         *tags = ntags;

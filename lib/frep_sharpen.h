@@ -37,7 +37,8 @@
  * Ownership: m is modified in place (vertices appended or moved, facets
  * rewritten as triangles in a new order); it must be a triangle mesh. 0,
  * -EINVAL (a non-triangle facet), -ENOMEM or -ECANCELED (m unchanged on
- * error). Not thread-safe for one m. */
+ * error). Progress runs 0 → 1 over the rounds; cancellation is checked
+ * every few thousand triangles. Not thread-safe for one m. */
 #ifndef GEO_FREP_SHARPEN_H
 #define GEO_FREP_SHARPEN_H
 

@@ -650,7 +650,7 @@ static int refine(geo_poly *p, uint8_t *in_region, const geo_fill_opts *o,
     uint64_t nreg = 0;
     uint8_t *near = NULL;
     if (geo_tmesh_init(&R.m, &p->verts[0][0], p->nverts) < 0 ||
-        geo_edgemap_init(&R.outside, geo_poly_ncorners(p)) < 0)
+        geo_edgemap_init(&R.outside, 64) < 0)
         goto out;
     for (uint32_t f = 0; f < p->nfacets; f++) {
         if (!in_region[f])
@@ -693,15 +693,21 @@ static int refine(geo_poly *p, uint8_t *in_region, const geo_fill_opts *o,
         const uint32_t *fv = geo_poly_facet(p, f);
         uint32_t k = geo_poly_facet_size(p, f);
         bool touches = false;
-        for (uint32_t i = 0; i < k; i++) {
+        for (uint32_t i = 0; i < k; i++)
             touches |= near[fv[i]] != 0;
+        if (!touches)
+            continue;
+        /* an edge between region vertices belongs to such a facet */
+        for (uint32_t i = 0; i < k; i++)
             if (geo_edgemap_put(&R.outside,
                                 geo_edge_ukey(fv[i], fv[(i + 1) % k]), 1) < 0)
                 goto out;
-        }
-        if (k == 3 && touches &&
-            geo_tmesh_add(&R.m, fv[0], fv[1], fv[2], 0) == -ENOMEM)
+        if (k == 3 && geo_tmesh_add(&R.m, fv[0], fv[1], fv[2], 0) == -ENOMEM)
             goto out;
+    }
+    if (geo_ctx_canceled(ctx)) {
+        rc = -ECANCELED;
+        goto out;
     }
     st->nregion_facets = (uint32_t)nreg;
     R.cap_s = (size_t)p->nverts + 64;
@@ -1173,6 +1179,10 @@ int geo_fill_holes(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
         geo_edgemap_init(&F.edges, geo_poly_ncorners(p)) < 0)
         goto oom;
     for (uint32_t f = 0; f < p->nfacets; f++) {
+        if ((f & 65535) == 0 && geo_ctx_canceled(ctx)) {
+            rc = -ECANCELED;
+            goto fail;
+        }
         const uint32_t *fv = geo_poly_facet(p, f);
         uint32_t k = geo_poly_facet_size(p, f);
         for (uint32_t i = 0; i < k; i++)

@@ -158,11 +158,13 @@ static bool crosses_cb(void *user, const double p[3], const double q[3])
  * the holes around it into one, which the filler then closes as a disk
  * without the point. Repeats while pinches remain (a few rounds at most;
  * they are rare and isolated). flat is kept aligned with the facets. */
-static int unpinch(geo_poly *m, uint8_t **flat, uint32_t *ret_n,
-                   geo_err *err)
+static int unpinch(geo_poly *m, uint8_t **flat, const geo_ctx *ctx,
+                   uint32_t *ret_n, geo_err *err)
 {
     *ret_n = 0;
     for (int round = 0; round < 8; round++) {
+        if (geo_ctx_canceled(ctx))
+            return geo_err_set(err, -ECANCELED, "canceled");
         geo_topo *t = geo_topo_build(m, err);
         if (!t)
             return -ENOMEM;
@@ -238,11 +240,15 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
 
     if ((rc = geo_frep_connect(g, ctx, &mesh, &flat, &rep.connect, err)) < 0)
         goto fail;
+    if (geo_ctx_canceled(ctx)) {
+        rc = geo_err_set(err, -ECANCELED, "canceled");
+        goto fail;
+    }
     if ((rc = geo_poly_compact(mesh, NULL, NULL, NULL)) < 0) {
         geo_err_set(err, rc, "out of memory");
         goto fail;
     }
-    if ((rc = unpinch(mesh, &flat, &rep.npinched, err)) < 0)
+    if ((rc = unpinch(mesh, &flat, ctx, &rep.npinched, err)) < 0)
         goto fail;
     if ((rc = geo_ctx_progress(ctx, 0.55)) < 0) {
         geo_err_set(err, rc, "canceled");
@@ -273,7 +279,7 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
     geo_fill_opts lo = fo;
     lo.refine = false;
     lo.fair = GEO_FAIR_NONE;
-    sc = sub_ctx(ctx, &sr, 0.55, 0.65);
+    sc = sub_ctx(ctx, &sr, 0.55, 0.6);
     uint32_t nf0 = mesh->nfacets;
     if ((rc = geo_fill_holes(mesh, &lo, &sc, &rep.fill, err)) < 0)
         goto fail;
@@ -287,13 +293,14 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
         flat[fc] = 1;
     rep.t_fill = now() - t;
     t = now();
+    sc = sub_ctx(ctx, &sr, 0.6, 0.7);
     if (o.sharpen &&
-        (rc = geo_frep_sharpen(f, mesh, &flat, ctx, &rep.sharpen, err)) < 0)
+        (rc = geo_frep_sharpen(f, mesh, &flat, &sc, &rep.sharpen, err)) < 0)
         goto fail;
     rep.t_sharpen = now() - t;
     t = now();
     geo_fill_stats rs = {0};
-    sc = sub_ctx(ctx, &sr, 0.65, 0.9);
+    sc = sub_ctx(ctx, &sr, 0.7, 0.9);
     if ((o.refine || o.fair != GEO_FAIR_NONE) &&
         (rc = geo_refine_region(mesh, flat, &fo, &sc, &rs, err)) < 0)
         goto fail;
@@ -303,7 +310,14 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
     rep.fill.nflips = rs.nflips;
     rep.fill.nhard_splits = rs.nhard_splits;
     rep.fill.nfair_sweeps = rs.nfair_sweeps;
-    geo_poly_compute_planes(mesh, GEO_PLANE_UNWEIGHTED);
+    for (uint32_t fc = 0; fc < mesh->nfacets; fc++) {
+        if ((fc & 65535) == 0 && geo_ctx_canceled(ctx)) {
+            rc = geo_err_set(err, -ECANCELED, "canceled");
+            goto fail;
+        }
+        geo_poly_facet_fit_plane(mesh, fc, GEO_PLANE_UNWEIGHTED,
+                                 mesh->planes[fc]);
+    }
     rep.t_fill += now() - t;
     t = now();
     if ((rc = geo_ctx_progress(ctx, 0.92)) < 0) {
@@ -311,7 +325,7 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
         goto fail;
     }
 
-    if ((rc = geo_frep_mesh_metrics(f, mesh, &rep.quality, err)) < 0)
+    if ((rc = geo_frep_mesh_metrics(f, mesh, ctx, &rep.quality, err)) < 0)
         goto fail;
     geo_selfint si;
     sc = sub_ctx(ctx, &sr, 0.94, 1.0);
