@@ -418,9 +418,10 @@ static int relax(refiner *R, uint32_t a, uint32_t b)
     geo_vcross(e1, e2, t2);
     if (!(geo_vdot(t1, ns) > 0 && geo_vdot(t2, ns) > 0))
         return 0;
-    /* nor bend more than a hard edge would */
+    /* nor bend more than a hard edge would, unless the pair bent even
+     * more before (slivers along a silhouette) */
     if (geo_vnormalize(t1) == 0 || geo_vnormalize(t2) == 0 ||
-        geo_vdot(t1, t2) < R->cos_hard)
+        geo_vdot(t1, t2) < fmin(R->cos_hard, geo_vdot(n1, n2)))
         return 0;
     if (geo_tmesh_find(m, c, d) != UINT32_MAX ||
         geo_tmesh_find(m, d, c) != UINT32_MAX)

@@ -202,6 +202,30 @@ static int unpinch(geo_poly *m, uint8_t **flat, const geo_ctx *ctx,
     return 0;
 }
 
+/* Adds to the refinement region every triangle sharing a vertex with it:
+ * a wall (a triangle parallel to the rays) at a silhouette is a long
+ * sliver between the last points of its columns, and only flips across
+ * its edges, into the triangles beside it, can replace it by fair ones. */
+static int grow_region(const geo_poly *m, uint8_t *region, geo_err *err)
+{
+    uint8_t *mark = calloc((size_t)m->nverts + 1, 1);
+    if (!mark)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    for (uint32_t f = 0; f < m->nfacets; f++)
+        if (region[f]) {
+            const uint32_t *fv = geo_poly_facet(m, f);
+            for (uint32_t k = 0; k < geo_poly_facet_size(m, f); k++)
+                mark[fv[k]] = 1;
+        }
+    for (uint32_t f = 0; f < m->nfacets; f++) {
+        const uint32_t *fv = geo_poly_facet(m, f);
+        for (uint32_t k = 0; k < geo_poly_facet_size(m, f) && !region[f]; k++)
+            region[f] = mark[fv[k]];
+    }
+    free(mark);
+    return 0;
+}
+
 int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
                          const geo_ctx *ctx, geo_poly **ret_mesh,
                          geo_tri_report *report, geo_err *err)
@@ -299,6 +323,8 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
         goto fail;
     rep.t_sharpen = now() - t;
     t = now();
+    if ((rc = grow_region(mesh, flat, err)) < 0)
+        goto fail;
     geo_fill_stats rs = {0};
     sc = sub_ctx(ctx, &sr, 0.7, 0.9);
     if ((o.refine || o.fair != GEO_FAIR_NONE) &&
