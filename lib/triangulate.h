@@ -15,7 +15,9 @@
  *              (lib/frep_sharpen.h), when the object has any, including
  *              those of faces parallel to the rays (walls);
  *  5. refine   the patches together with the triangles that project with
- *              zero area: centroid splits, hard-edge splits, fairing
+ *              zero area (walls) and every triangle sharing a vertex with
+ *              them, so that flips can turn a wall's slivers into fair
+ *              triangles: centroid splits, hard-edge splits, fairing
  *              (lib/hole_fill.h, geo_refine_region; its time is counted
  *              in t_fill). A new or moved vertex stays on what its sources
  *              share: Newton steps along ∇F for a smooth object; on an
