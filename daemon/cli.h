@@ -41,5 +41,9 @@ int cmd_triangulate(int argc, char **argv);
 int cmd_run(int argc, char **argv);
 int cmd_move(int argc, char **argv);
 int cmd_inversion_stats(int argc, char **argv);
+int cmd_merge(int argc, char **argv);
+int cmd_correct(int argc, char **argv);
+int cmd_fill(int argc, char **argv);
+int cmd_stitch(int argc, char **argv);
 
 #endif

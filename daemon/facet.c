@@ -26,6 +26,12 @@ static const cli_command commands[] = {
     {"move", "move a vertex and re-planarise the facets", cmd_move},
     {"inversion-stats", "how often vertex moves break the model",
      cmd_inversion_stats},
+    {"merge", "merge groups of nearly coplanar facets (seed 000 §2)",
+     cmd_merge},
+    {"correct", "the automatic post-scan correction", cmd_correct},
+    {"fill", "close the holes of a mesh (seeds 001, 004)", cmd_fill},
+    {"stitch", "join two open meshes into one closed mesh (seed 004)",
+     cmd_stitch},
 };
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
 

@@ -1,5 +1,5 @@
 /* job_submit.h — turning a validated request into a queued job: the one
- * path every source (HTTP now, the scanner intake later) takes into the
+ * path every source (HTTP, the scanner intake) takes into the
  * store, so the checks (operations available, queue bound, idempotency)
  * and the stored form are the same for all.
  *
@@ -30,7 +30,7 @@ typedef struct job_request {
                                        (borrowed); exactly one is set */
     const proto_pipeline *pipeline; /* parsed pipeline (borrowed) */
     job_priority priority;
-    const char *source;             /* "http", "scanner:SERIAL" */
+    const char *source;             /* "http", "usb:SERIAL" */
     const char *label;              /* may be NULL */
     const char *idem_key;           /* Idempotency-Key, may be NULL */
     uint64_t idem_hash;             /* hash of the request's bytes */

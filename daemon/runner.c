@@ -9,8 +9,15 @@
 #include <string.h>
 #include <time.h>
 
+#include "clusters.h"
+#include "correct.h"
+#include "correct_json.h"
+#include "fill.h"
+#include "fill_json.h"
+#include "merge.h"
 #include "stats.h"
 #include "stats_json.h"
+#include "stitch.h"
 #include "tri_report_json.h"
 #include "triangulate.h"
 
@@ -100,9 +107,149 @@ static int run_triangulate(const proto_op *op, const geo_frep *f,
     return 0;
 }
 
+/* Hands a kernel's JSON report over, or fails with -ENOMEM. */
+static int give_report(json_t *rep, json_t **ret_report, geo_err *err)
+{
+    if (!rep)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    *ret_report = rep;
+    return 0;
+}
+
+/* collapse_clusters (lib/clusters.h): radius 0 means the kernel's
+ * default relative to the model's size. */
+static int run_collapse(const proto_op *op, geo_poly **model,
+                        const geo_ctx *ctx, json_t **ret_report,
+                        json_t *summary, geo_err *err)
+{
+    (void)summary;
+    geo_collapse_opts o;
+    geo_collapse_opts_default(&o);
+    o.radius = op->u.collapse.radius;
+    geo_collapse_report rep;
+    int r = geo_collapse_clusters(*model, &o, ctx, &rep, err);
+    if (r < 0)
+        return r;
+    json_t *j = proto_collapse_report_to_json(&rep);
+    geo_collapse_report_clear(&rep);
+    return give_report(j, ret_report, err);
+}
+
+/* merge_facets (lib/merge.h): the given groups, or automatic ones. */
+static int run_merge(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
+                     json_t **ret_report, json_t *summary, geo_err *err)
+{
+    (void)summary;
+    geo_merge_opts o;
+    geo_merge_opts_default(&o);
+    o.max_angle_deg = op->u.merge.max_angle_deg;
+    o.max_deviation = op->u.merge.max_deviation;
+    geo_merge_report rep = {0};
+    int r = op->u.merge.ngroups
+                ? geo_merge_groups(*model, op->u.merge.ngroups,
+                                   op->u.merge.gstart, op->u.merge.gfacets,
+                                   &o, ctx, &rep, err)
+                : geo_merge_auto(*model, &o, ctx, &rep, err);
+    if (r < 0)
+        return r;
+    json_t *j = proto_merge_report_to_json(&rep);
+    geo_merge_report_clear(&rep);
+    return give_report(j, ret_report, err);
+}
+
+/* auto (lib/correct.h): the whole post-scan correction, the same call as
+ * `facet correct`, so the daemon serves the same model. */
+static int run_auto(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
+                    json_t **ret_report, json_t *summary, geo_err *err)
+{
+    geo_correct_opts o;
+    geo_correct_opts_default(&o);
+    o.collapse.radius = op->u.correct.radius;
+    o.merge.max_angle_deg = op->u.correct.max_angle_deg;
+    o.merge.max_deviation = op->u.correct.max_deviation;
+    geo_correct_report rep;
+    int r = geo_correct_auto(*model, &o, ctx, &rep, err);
+    if (r < 0)
+        return r;
+    json_t *j = proto_correct_report_to_json(&rep);
+    int e = json_object_set_new(summary, "hausdorff", json_real(rep.hausdorff));
+    e |= json_object_set_new(summary, "groups_merged",
+                             json_integer(rep.merge.merged));
+    geo_correct_report_clear(&rep);
+    if (e) {
+        json_decref(j);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    return give_report(j, ret_report, err);
+}
+
+/* fill_holes (lib/fill.h): every hole closed and checked, or reported. */
+static int run_fill_holes(const proto_op *op, geo_poly **model,
+                          const geo_ctx *ctx, json_t **ret_report,
+                          json_t *summary, geo_err *err)
+{
+    geo_mesh_fill_opts o;
+    geo_mesh_fill_opts_default(&o);
+    o.fill.weight =
+        op->u.fill_holes.weight_length ? GEO_FILL_EDGES : GEO_FILL_AREA;
+    o.fill.refine = op->u.fill_holes.refine;
+    o.fill.fair = op->u.fill_holes.fair ? GEO_FAIR_UNIFORM : GEO_FAIR_NONE;
+    geo_mesh_fill_report rep;
+    int r = geo_fill_mesh(*model, &o, ctx, &rep, err);
+    if (r < 0)
+        return r;
+    json_t *j = proto_fill_report_to_json(&rep);
+    int e = !j;
+    e |= json_object_set_new(summary, "holes_filled", json_integer(rep.nfilled));
+    e |= json_object_set_new(summary, "holes_left_open",
+                             json_integer(rep.nopen));
+    geo_mesh_fill_report_clear(&rep);
+    if (e) {
+        json_decref(j);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    *ret_report = j;
+    return 0;
+}
+
+/* stitch (lib/stitch.h): the model's two pieces joined into one. */
+static int run_stitch(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
+                      json_t **ret_report, json_t *summary, geo_err *err)
+{
+    (void)op;
+    geo_poly *out = geo_poly_new();
+    if (!out)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    geo_stitch_report rep;
+    int r = geo_stitch_pieces(*model, NULL, ctx, out, &rep, err);
+    if (r < 0) {
+        geo_poly_free(out);
+        return r;
+    }
+    json_t *j = proto_stitch_report_to_json(&rep);
+    int e = !j;
+    e |= json_object_set_new(summary, "stitch_openings_left",
+                             json_integer(rep.fill.nopen));
+    geo_stitch_report_clear(&rep);
+    if (e) {
+        json_decref(j);
+        geo_poly_free(out);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    geo_poly_free(*model);
+    *model = out;
+    *ret_report = j;
+    return 0;
+}
+
 static const op_entry ops[PROTO_OP_COUNT] = {
     [PROTO_OP_INSPECT] = {run_inspect, false},
+    [PROTO_OP_COLLAPSE_CLUSTERS] = {run_collapse, true},
+    [PROTO_OP_MERGE_FACETS] = {run_merge, true},
     [PROTO_OP_TRIANGULATE] = {NULL, true, run_triangulate},
+    [PROTO_OP_FILL_HOLES] = {run_fill_holes, true},
+    [PROTO_OP_STITCH] = {run_stitch, true},
+    [PROTO_OP_AUTO] = {run_auto, true},
 };
 
 bool runner_op_available(proto_op_kind op)

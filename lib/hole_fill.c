@@ -32,6 +32,10 @@ const char *geo_hole_status_name(enum geo_hole_status s)
         return "no_triangulation";
     case GEO_HOLE_DEGENERATE:
         return "degenerate";
+    case GEO_HOLE_INTERSECTS:
+        return "intersects_mesh";
+    case GEO_HOLE_FILLED_PLANAR:
+        return "filled_planar";
     }
     return "unknown";
 }
@@ -126,18 +130,59 @@ static double tri_weight(const filler *F, uint32_t a, uint32_t b, uint32_t c)
     return F->o.weight == GEO_FILL_EDGES ? per : area;
 }
 
-/* Liepa's dynamic programme on polygon w[0..n). Returns 0, 1 when no
+/* Unit normal of triangle (a, b, c) as listed; zero when degenerate. */
+static void tri_normal(const filler *F, uint32_t a, uint32_t b, uint32_t c,
+                       double ret[3])
+{
+    double e1[3], e2[3];
+    geo_vsub(F->p->verts[b], F->p->verts[a], e1);
+    geo_vsub(F->p->verts[c], F->p->verts[a], e2);
+    geo_vcross(e1, e2, ret);
+    if (geo_vnormalize(ret) == 0)
+        ret[0] = ret[1] = ret[2] = 0;
+}
+
+/* Angle between unit normals n1 and n2 (radians, 0 = the surface goes on
+ * flat); 0 when either is zero (nothing known across that edge). */
+static double normal_angle(const double n1[3], const double n2[3])
+{
+    if (geo_vdot(n1, n1) == 0 || geo_vdot(n2, n2) == 0)
+        return 0.0;
+    double x[3];
+    geo_vcross(n1, n2, x);
+    return atan2(geo_vlen(x), geo_vdot(n1, n2));
+}
+
+/* Liepa's order for GEO_FILL_ANGLE: the larger dihedral angle loses, area
+ * breaks ties (angles within 1e-9 rad count as equal, so rounding noise
+ * on a flat loop leaves the choice to the area). */
+static bool angle_less(double a1, double w1, double a2, double w2)
+{
+    if (a1 < a2 - 1e-9)
+        return true;
+    if (a1 > a2 + 1e-9)
+        return false;
+    return w1 < w2;
+}
+
+/* Liepa's dynamic programme on polygon w[0..n). en, when not NULL, holds
+ * for each polygon edge w[i] → w[i+1 mod n] the unit normal of the facet
+ * across it (zero: none); GEO_FILL_ANGLE uses it. Returns 0, 1 when no
  * admissible triangulation exists, or -ENOMEM. Commits its triangles and
  * chords on success. */
-static int dp(filler *F, const uint32_t *w, uint32_t n, geo_hole_report *rep)
+static int dp(filler *F, const uint32_t *w, uint32_t n,
+              double (*en)[3], geo_hole_report *rep)
 {
     size_t nn = (size_t)n * n;
+    bool angle = F->o.weight == GEO_FILL_ANGLE;
     double *W = malloc(nn * sizeof *W);
+    double *A = angle ? malloc(nn * sizeof *A) : NULL;
+    double(*TN)[3] = angle ? malloc(nn * sizeof *TN) : NULL;
     uint32_t *M = malloc(nn * sizeof *M);
     uint8_t *ok = malloc(nn);
     uint32_t(*stack)[2] = malloc((size_t)n * sizeof *stack);
     int rc = 0;
-    if (!W || !M || !ok || !stack) {
+    if (!W || !M || !ok || !stack || (angle && (!A || !TN))) {
         rc = -ENOMEM;
         goto out;
     }
@@ -147,15 +192,54 @@ static int dp(filler *F, const uint32_t *w, uint32_t n, geo_hole_report *rep)
             ok[(size_t)i * n + k] =
                 side || (w[i] != w[k] && !has_edge(F, w[i], w[k]));
         }
-    for (uint32_t i = 0; i + 1 < n; i++)
-        W[(size_t)i * n + i + 1] = 0.0;
+    for (uint32_t i = 0; i + 1 < n; i++) {
+        size_t ik = (size_t)i * n + i + 1;
+        W[ik] = 0.0;
+        if (angle) {
+            A[ik] = 0.0;
+            /* the facet across a loop edge, seen from the patch */
+            static const double zero[3] = {0, 0, 0};
+            memcpy(TN[ik], en ? en[i] : zero, sizeof TN[ik]);
+        }
+    }
     for (uint32_t gap = 2; gap < n; gap++)
         for (uint32_t i = 0; i + gap < n; i++) {
             uint32_t k = i + gap;
             size_t ik = (size_t)i * n + k;
-            double best = INFINITY;
+            double best = INFINITY, besta = INFINITY;
             uint32_t bm = i + 1;
-            if (ok[ik])
+            if (angle)
+                A[ik] = INFINITY;
+            if (ok[ik] && angle) {
+                for (uint32_t m = i + 1; m < k; m++) {
+                    size_t im = (size_t)i * n + m, mk = (size_t)m * n + k;
+                    double a = A[im] > A[mk] ? A[im] : A[mk];
+                    double ws = W[im] + W[mk];
+                    if (!angle_less(a, ws, besta, best))
+                        continue;
+                    double t = tri_weight(F, w[i], w[m], w[k]);
+                    if (!isfinite(t))
+                        continue;
+                    double nt[3];
+                    tri_normal(F, w[i], w[m], w[k], nt);
+                    double d1 = normal_angle(nt, TN[im]);
+                    double d2 = normal_angle(nt, TN[mk]);
+                    a = a > d1 ? a : d1;
+                    a = a > d2 ? a : d2;
+                    if (i == 0 && k == n - 1 && en) {
+                        double d3 = normal_angle(nt, en[n - 1]);
+                        a = a > d3 ? a : d3;
+                    }
+                    if (angle_less(a, ws + t, besta, best)) {
+                        besta = a;
+                        best = ws + t;
+                        bm = m;
+                    }
+                }
+                A[ik] = besta;
+                if (isfinite(best))
+                    tri_normal(F, w[i], w[bm], w[k], TN[ik]);
+            } else if (ok[ik]) {
                 for (uint32_t m = i + 1; m < k; m++) {
                     double a = W[(size_t)i * n + m], b = W[(size_t)m * n + k];
                     if (a + b >= best)
@@ -166,6 +250,7 @@ static int dp(filler *F, const uint32_t *w, uint32_t n, geo_hole_report *rep)
                         bm = m;
                     }
                 }
+            }
             W[ik] = best;
             M[ik] = bm;
         }
@@ -198,19 +283,32 @@ static int dp(filler *F, const uint32_t *w, uint32_t n, geo_hole_report *rep)
                 goto out;
     rep->ntriangles += (uint32_t)(F->ntris - first);
     rep->weight += W[n - 1];
+    if (angle && A[n - 1] > rep->max_angle)
+        rep->max_angle = A[n - 1];
 out:
-    free(W), free(M), free(ok), free(stack);
+    free(W), free(A), free(TN), free(M), free(ok), free(stack);
     return rc;
 }
 
-/* Triangulates polygon w[0..n), cutting it by bridges while it is longer
- * than max_dp_vertices. 0, 1 (no admissible triangulation) or -ENOMEM.
- * Recursion depth is O(log n): each cut leaves at most 2n/3 + 1. */
+/* Triangulates polygon w[0..n) (edge normals en as in dp, may be NULL),
+ * cutting it by bridges while it is longer than max_dp_vertices. 0, 1 (no
+ * admissible triangulation) or -ENOMEM. Recursion depth is O(log n): each
+ * cut leaves at most 2n/3 + 1. */
 static int fill_poly(filler *F, const uint32_t *w, uint32_t n,
-                     geo_hole_report *rep)
+                     double (*en)[3], geo_hole_report *rep)
 {
     if (n <= F->o.max_dp_vertices)
-        return dp(F, w, n, rep);
+        return dp(F, w, n, en, rep);
+    /* the bridge: the chord shortest relative to the loop length it cuts
+     * off (the smaller side's arc), which on a round loop is a diameter
+     * meeting the loop squarely, not a chord leaving thin wedges */
+    double *arc = malloc(((size_t)n + 1) * sizeof *arc);
+    if (!arc)
+        return -ENOMEM;
+    arc[0] = 0;
+    for (uint32_t i = 0; i < n; i++)
+        arc[i + 1] = arc[i] + geo_vdist(F->p->verts[w[i]],
+                                        F->p->verts[w[(i + 1) % n]]);
     uint32_t nstarts = n < 256 ? n : 256, ba = 0, bb = 0;
     double best = INFINITY;
     for (uint32_t si = 0; si < nstarts; si++) {
@@ -220,36 +318,78 @@ static int fill_poly(filler *F, const uint32_t *w, uint32_t n,
             if (w[lo] == w[hi] || has_edge(F, w[lo], w[hi]))
                 continue;
             double len = geo_vdist(F->p->verts[w[lo]], F->p->verts[w[hi]]);
-            if (len < best) {
-                best = len;
+            double cut = arc[hi] - arc[lo];
+            if (arc[n] - cut < cut)
+                cut = arc[n] - cut;
+            double score = cut > 0 ? len / cut : INFINITY;
+            if (score < best) {
+                best = score;
                 ba = lo;
                 bb = hi;
             }
         }
     }
+    free(arc);
     if (!isfinite(best))
         return 1;
     int rc = add_edge(F, w[ba], w[bb]);
     if (rc < 0)
         return rc;
     rep->nbridges++;
-    uint32_t n2 = n - bb + ba + 1;
+    uint32_t n1 = bb - ba + 1, n2 = n - bb + ba + 1;
     uint32_t *w2 = malloc((size_t)n2 * sizeof *w2);
-    if (!w2)
+    double(*en1)[3] = en ? malloc((size_t)n1 * sizeof *en1) : NULL;
+    double(*en2)[3] = en ? malloc((size_t)n2 * sizeof *en2) : NULL;
+    if (!w2 || (en && (!en1 || !en2))) {
+        free(w2), free(en1), free(en2);
         return -ENOMEM;
+    }
     memcpy(w2, w + bb, (size_t)(n - bb) * sizeof *w2);
     memcpy(w2 + (n - bb), w, (size_t)(ba + 1) * sizeof *w2);
-    rc = fill_poly(F, w + ba, bb - ba + 1, rep);
+    if (en) {
+        /* the bridge's side: until the first half is in, the surface
+         * across it is taken as the loop's mean plane (its Newell normal,
+         * oriented like the patch), so the first half does not tilt
+         * freely at the bridge and leave the second half a fold */
+        memcpy(en1, en + ba, (size_t)(n1 - 1) * sizeof *en1);
+        double nw[3] = {0, 0, 0};
+        for (uint32_t i = 0; i < n; i++) {
+            const double *a = F->p->verts[w[i]], *b = F->p->verts[w[(i + 1) % n]];
+            nw[0] += (a[1] - b[1]) * (a[2] + b[2]);
+            nw[1] += (a[2] - b[2]) * (a[0] + b[0]);
+            nw[2] += (a[0] - b[0]) * (a[1] + b[1]);
+        }
+        if (geo_vnormalize(nw) == 0)
+            nw[0] = nw[1] = nw[2] = 0;
+        memcpy(en1[n1 - 1], nw, sizeof nw);
+        memcpy(en2, en + bb, (size_t)(n - bb) * sizeof *en2);
+        memcpy(en2 + (n - bb), en, (size_t)ba * sizeof *en2);
+        memset(en2[n2 - 1], 0, sizeof en2[0]);
+    }
+    size_t first = F->ntris;
+    rc = fill_poly(F, w + ba, n1, en1, rep);
+    if (rc == 0 && en) {
+        /* the second half sees the first half's triangle on the bridge */
+        for (size_t t = first; t < F->ntris; t++) {
+            const uint32_t *tv = F->tris[t];
+            int hits = (tv[0] == w[ba] || tv[1] == w[ba] || tv[2] == w[ba]) +
+                       (tv[0] == w[bb] || tv[1] == w[bb] || tv[2] == w[bb]);
+            if (hits == 2) {
+                tri_normal(F, tv[0], tv[1], tv[2], en2[n2 - 1]);
+                break;
+            }
+        }
+    }
     if (rc == 0)
-        rc = fill_poly(F, w2, n2, rep);
-    free(w2);
+        rc = fill_poly(F, w2, n2, en2, rep);
+    free(w2), free(en1), free(en2);
     return rc;
 }
 
 /* Fills one loop; on failure the loop's triangles and chords are taken
  * back. Returns 0 or -ENOMEM; the outcome is in rep->status. */
 static int fill_loop(filler *F, const uint32_t *w, uint32_t n,
-                     geo_hole_report *rep)
+                     double (*en)[3], geo_hole_report *rep)
 {
     if (n < 3) {
         rep->status = GEO_HOLE_DEGENERATE;
@@ -261,7 +401,7 @@ static int fill_loop(filler *F, const uint32_t *w, uint32_t n,
     }
     size_t first = F->ntris;
     F->nlog = 0;
-    int rc = fill_poly(F, w, n, rep);
+    int rc = fill_poly(F, w, n, en, rep);
     if (rc < 0)
         return rc;
     if (rc == 1) {
@@ -270,6 +410,7 @@ static int fill_loop(filler *F, const uint32_t *w, uint32_t n,
         F->ntris = first;
         rep->ntriangles = 0;
         rep->weight = 0;
+        rep->max_angle = 0;
         rep->status = GEO_HOLE_NO_TRIANGULATION;
         return 0;
     }
@@ -965,6 +1106,214 @@ static void solve_length(const geo_poly *p, const adjacency *A, uint32_t v,
     memcpy(ret, x, sizeof x);
 }
 
+/* U²(p) = 0 at every free vertex at once, for w = 1. With L = D − Adj
+ * (D the neighbour counts), U¹ = −D⁻¹L·x and U² = D⁻¹L·D⁻¹L·x, so the
+ * conditions are K_ff·x_f = −K_fb·x_b with K = L·D⁻¹·L symmetric and,
+ * restricted to the free vertices of a patch attached to fixed ones,
+ * positive definite: solved by conjugate gradients with K's diagonal as
+ * preconditioner (the seed's per-vertex closed form is one Jacobi step of
+ * this system; sweeping it needs O(patch diameter²) sweeps to carry the
+ * fixed boundary's shape inside, CG about O(diameter)). Starts from the
+ * current positions; stops at a residual of 1e-4 of the first (the shape no longer changes
+ * visibly: on a 1,000-vertex hole in a sphere the mean distance to the
+ * sphere is the same as at 1e-6), or after
+ * GEO_FAIR_CG_MAX_ITER iterations. Writes the solution into p; returns 0,
+ * -ENOMEM or -ECANCELED (p unchanged then). */
+#define GEO_FAIR_CG_MAX_ITER 5000
+static int fair_cg(geo_poly *p, const adjacency *A, uint32_t first_free,
+                   const uint8_t *pinned, geo_fill_stats *st,
+                   const geo_ctx *ctx)
+{
+    uint32_t nv = p->nverts, nfree = nv - first_free, nu = 0, m = 0;
+    size_t ring = 0;
+    for (uint32_t k = 0; k < nfree; k++)
+        ring += A->start[first_free + k + 1] - A->start[first_free + k];
+    uint32_t *loc = malloc((size_t)nv * sizeof *loc);
+    uint32_t *S = malloc((nfree + ring + 1) * sizeof *S);
+    int rc = -ENOMEM;
+    double(*buf)[3] = NULL, *diag = NULL;
+    if (!loc || !S)
+        goto out;
+    memset(loc, 0xff, (size_t)nv * sizeof *loc);
+    for (uint32_t k = 0; k < nfree; k++) {
+        uint32_t v = first_free + k;
+        if (!pinned[k] && A->start[v + 1] > A->start[v]) {
+            loc[v] = m;
+            S[m++] = v;
+        }
+    }
+    nu = m;
+    for (uint32_t u = 0; u < nu; u++)
+        for (uint32_t q = A->start[S[u]]; q < A->start[S[u] + 1]; q++)
+            if (loc[A->nb[q]] == UINT32_MAX) {
+                loc[A->nb[q]] = m;
+                S[m++] = A->nb[q];
+            }
+    rc = 0;
+    if (nu == 0)
+        goto out;
+    /* z over S; x, b, r, d, Kd, h over the unknowns */
+    buf = malloc(((size_t)m + 6 * (size_t)nu) * sizeof *buf);
+    diag = malloc((size_t)nu * sizeof *diag);
+    if (!buf || !diag) {
+        rc = -ENOMEM;
+        goto out;
+    }
+    double(*z)[3] = buf, (*x)[3] = buf + m, (*b)[3] = x + nu, (*r)[3] = b + nu,
+          (*d)[3] = r + nu, (*Kd)[3] = d + nu, (*h)[3] = Kd + nu;
+#define DEG(v) ((double)(A->start[(v) + 1] - A->start[(v)]))
+    for (uint32_t u = 0; u < nu; u++) {
+        uint32_t v = S[u];
+        double sum = DEG(v);
+        for (uint32_t q = A->start[v]; q < A->start[v + 1]; q++)
+            sum += 1.0 / DEG(A->nb[q]);
+        diag[u] = sum;
+        memcpy(x[u], p->verts[v], sizeof x[u]);
+    }
+    /* b = −K·x̃, x̃ the fixed positions with the unknowns at zero */
+    for (uint32_t s2 = 0; s2 < m; s2++) {
+        uint32_t v = S[s2];
+        double acc[3] = {0, 0, 0};
+        if (s2 >= nu)
+            geo_vscale(p->verts[v], DEG(v), acc);
+        for (uint32_t q = A->start[v]; q < A->start[v + 1]; q++)
+            if (loc[A->nb[q]] >= nu)
+                geo_vsub(acc, p->verts[A->nb[q]], acc);
+        geo_vscale(acc, 1.0 / DEG(v), z[s2]);
+    }
+    for (uint32_t u = 0; u < nu; u++) {
+        uint32_t v = S[u];
+        double acc[3];
+        geo_vscale(z[u], DEG(v), acc);
+        for (uint32_t q = A->start[v]; q < A->start[v + 1]; q++)
+            geo_vsub(acc, z[loc[A->nb[q]]], acc);
+        geo_vscale(acc, -1.0, b[u]);
+    }
+    /* Kd = K·d over the unknowns (d zero on everything fixed) */
+#define APPLY_K(in, out)                                                      \
+    do {                                                                      \
+        for (uint32_t s2 = 0; s2 < m; s2++) {                                 \
+            uint32_t v = S[s2];                                               \
+            double acc[3] = {0, 0, 0};                                        \
+            if (s2 < nu)                                                      \
+                geo_vscale(in[s2], DEG(v), acc);                              \
+            for (uint32_t q = A->start[v]; q < A->start[v + 1]; q++)          \
+                if (loc[A->nb[q]] < nu)                                       \
+                    geo_vsub(acc, in[loc[A->nb[q]]], acc);                    \
+            geo_vscale(acc, 1.0 / DEG(v), z[s2]);                             \
+        }                                                                     \
+        for (uint32_t u = 0; u < nu; u++) {                                   \
+            uint32_t v = S[u];                                                \
+            double acc[3];                                                    \
+            geo_vscale(z[u], DEG(v), acc);                                    \
+            for (uint32_t q = A->start[v]; q < A->start[v + 1]; q++)          \
+                geo_vsub(acc, z[loc[A->nb[q]]], acc);                         \
+            memcpy(out[u], acc, sizeof acc);                                  \
+        }                                                                     \
+    } while (0)
+    APPLY_K(x, Kd);
+    double rz[3] = {0, 0, 0}, r0[3] = {0, 0, 0};
+    for (uint32_t u = 0; u < nu; u++)
+        for (int c = 0; c < 3; c++) {
+            r[u][c] = b[u][c] - Kd[u][c];
+            h[u][c] = r[u][c] / diag[u];
+            d[u][c] = h[u][c];
+            rz[c] += r[u][c] * h[u][c];
+            r0[c] += r[u][c] * r[u][c];
+        }
+    bool active[3];
+    for (int c = 0; c < 3; c++)
+        active[c] = r0[c] > 0;
+    uint32_t it = 0;
+    for (; it < GEO_FAIR_CG_MAX_ITER && (active[0] || active[1] || active[2]);
+         it++) {
+        if ((it & 63) == 63 && geo_ctx_canceled(ctx)) {
+            rc = -ECANCELED;
+            goto out;
+        }
+        APPLY_K(d, Kd);
+        double dKd[3] = {0, 0, 0}, rr[3] = {0, 0, 0}, rz1[3] = {0, 0, 0};
+        for (uint32_t u = 0; u < nu; u++)
+            for (int c = 0; c < 3; c++)
+                dKd[c] += d[u][c] * Kd[u][c];
+        double alpha[3];
+        for (int c = 0; c < 3; c++) {
+            alpha[c] = active[c] && dKd[c] > 0 ? rz[c] / dKd[c] : 0.0;
+            if (active[c] && !(dKd[c] > 0))
+                active[c] = false;
+        }
+        for (uint32_t u = 0; u < nu; u++)
+            for (int c = 0; c < 3; c++) {
+                x[u][c] += alpha[c] * d[u][c];
+                r[u][c] -= alpha[c] * Kd[u][c];
+                h[u][c] = r[u][c] / diag[u];
+                rr[c] += r[u][c] * r[u][c];
+                rz1[c] += r[u][c] * h[u][c];
+            }
+        for (int c = 0; c < 3; c++) {
+            if (!active[c])
+                continue;
+            if (!(rr[c] > 1e-8 * r0[c])) {
+                active[c] = false;
+                continue;
+            }
+            double beta = rz1[c] / rz[c];
+            rz[c] = rz1[c];
+            for (uint32_t u = 0; u < nu; u++)
+                d[u][c] = h[u][c] + beta * d[u][c];
+        }
+    }
+#undef APPLY_K
+#undef DEG
+    for (uint32_t u = 0; u < nu; u++)
+        memcpy(p->verts[S[u]], x[u], sizeof x[u]);
+    st->nfair_sweeps += it;
+out:
+    free(loc), free(S), free(buf), free(diag);
+    return rc;
+}
+
+/* 1 when a facet flagged in touched has no area or meets another flagged
+ * facet at an edge at a dihedral angle above 120° (the surface folds back
+ * on itself there), else 0; -ENOMEM. Bends are fine: a patch faired into
+ * a dome turns its rim triangles far from where the flat patch had them. */
+static int folds(const geo_poly *p, const uint8_t *touched)
+{
+    geo_edgemap he;
+    size_t n = 0;
+    for (uint32_t f = 0; f < p->nfacets; f++)
+        n += touched[f] ? geo_poly_facet_size(p, f) : 0;
+    if (geo_edgemap_init(&he, n) < 0)
+        return -ENOMEM;
+    int rc = 0;
+    for (uint32_t f = 0; f < p->nfacets && rc == 0; f++) {
+        if (!touched[f])
+            continue;
+        const uint32_t *fv = geo_poly_facet(p, f);
+        uint32_t k = geo_poly_facet_size(p, f);
+        double nf[3];
+        geo_poly_facet_area_vector(p, f, nf);
+        if (geo_vnormalize(nf) == 0) {
+            rc = 1;
+            break;
+        }
+        for (uint32_t i = 0; i < k && rc == 0; i++) {
+            uint32_t a = fv[i], b = fv[(i + 1) % k];
+            uint32_t g = geo_edgemap_get(&he, geo_edge_key(b, a));
+            if (g != UINT32_MAX) {
+                double ng[3];
+                geo_poly_facet_area_vector(p, g, ng);
+                geo_vnormalize(ng);
+                rc = geo_vdot(nf, ng) < -0.5;
+            } else if (geo_edgemap_put(&he, geo_edge_key(a, b), f) < 0) {
+                rc = -ENOMEM;
+            }
+        }
+    }
+    geo_edgemap_destroy(&he);
+    return rc;
+}
+
 static int fair(geo_poly *p, uint32_t first_free, const geo_fill_opts *o,
                 geo_fill_stats *st, const geo_ctx *ctx)
 {
@@ -1002,7 +1351,26 @@ static int fair(geo_poly *p, uint32_t first_free, const geo_fill_opts *o,
         if (touches_free[f])
             geo_poly_facet_area_vector(p, f, p->planes[f]);
     }
-    for (uint32_t sweep = 0; sweep < o->fair_iterations; sweep++) {
+    /* without a surface to project on, the uniform system is solved as a
+     * whole; a solution that turns a facet over (or collapses it) is
+     * dropped for the sweeps below, which undo folds vertex by vertex */
+    bool solved = false;
+    if (o->fair == GEO_FAIR_UNIFORM && !o->project) {
+        for (uint32_t k = 0; k < nfree; k++)
+            memcpy(nxt[k], p->verts[first_free + k], sizeof nxt[k]);
+        if ((rc = fair_cg(p, &A, first_free, pinned, st, ctx)) < 0)
+            goto out;
+        int folded = folds(p, touches_free);
+        if (folded < 0) {
+            rc = folded;
+            goto out;
+        }
+        solved = folded == 0;
+        if (!solved)
+            for (uint32_t k = 0; k < nfree; k++)
+                memcpy(p->verts[first_free + k], nxt[k], sizeof nxt[k]);
+    }
+    for (uint32_t sweep = 0; sweep < o->fair_iterations && !solved; sweep++) {
         if (geo_ctx_canceled(ctx)) {
             rc = -ECANCELED;
             goto out;
@@ -1158,6 +1526,29 @@ int geo_refine_region(geo_poly *p, const uint8_t *region,
     return rc;
 }
 
+int geo_fair_vertices(geo_poly *p, uint32_t first_free,
+                      const geo_fill_opts *opts, const geo_ctx *ctx,
+                      geo_fill_stats *stats, geo_err *err)
+{
+    geo_fill_opts o;
+    int rc = check_opts(opts, &o, err);
+    if (rc < 0)
+        return rc;
+    if ((rc = geo_poly_validate_indices(p, err)) < 0)
+        return rc;
+    if (first_free > p->nverts)
+        return geo_err_set(err, -EINVAL, "first free vertex %u beyond the "
+                           "%u vertices", first_free, p->nverts);
+    geo_fill_stats st = {0};
+    rc = fair(p, first_free, &o, &st, ctx);
+    if (rc < 0)
+        return geo_err_set(err, rc, rc == -ECANCELED ? "canceled"
+                                                     : "out of memory");
+    if (stats)
+        *stats = st;
+    return 0;
+}
+
 int geo_fill_holes(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
                    geo_fill_stats *stats, geo_err *err)
 {
@@ -1171,6 +1562,7 @@ int geo_fill_holes(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
     filler F = {.p = p, .o = o};
     geo_topo *t = NULL;
     uint32_t *lstart = NULL, *lcorn = NULL, nloops = 0, *w = NULL, *cs = NULL;
+    double(*en)[3] = NULL; /* per loop edge: the facet across it */
     geo_poly *q = NULL;
     uint8_t *in_region = NULL;
     t = geo_topo_build(p, err);
@@ -1192,6 +1584,9 @@ int geo_fill_holes(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
                 goto oom;
     }
     w = malloc(((size_t)t->nboundary_edges + 1) * sizeof *w);
+    if (o.weight == GEO_FILL_ANGLE &&
+        !(en = malloc(((size_t)t->nboundary_edges + 1) * sizeof *en)))
+        goto oom;
     cs = malloc(((size_t)nloops + 2) * sizeof *cs);
     st.holes = calloc((size_t)nloops + 1, sizeof *st.holes);
     if (!w || !cs || !st.holes)
@@ -1208,6 +1603,10 @@ int geo_fill_holes(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
             uint32_t end = p->fidx[geo_topo_next(p, t, lc[k])];
             closed = end == p->fidx[lc[(k + 1) % n]];
         }
+        for (uint32_t k = 0; k < n; k++)
+            w[nw + k] = p->fidx[lc[n - 1 - k]];
+        if (o.select_loop && !o.select_loop(o.select_user, w + nw, n))
+            continue;
         if (!closed) {
             geo_hole_report *rep = &st.holes[st.nholes++];
             rep->nverts = n;
@@ -1216,8 +1615,14 @@ int geo_fill_holes(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
             st.nopen++;
             continue;
         }
-        for (uint32_t k = 0; k < n; k++)
-            w[nw++] = p->fidx[lc[n - 1 - k]];
+        /* w's edge j runs against the loop corner lc[n − 2 − j mod n] */
+        for (uint32_t j = 0; en && j < n; j++) {
+            uint32_t f = t->corner_facet[lc[(2 * n - 2 - j) % n]];
+            geo_poly_facet_area_vector(p, f, en[nw + j]);
+            if (geo_vnormalize(en[nw + j]) == 0)
+                memset(en[nw + j], 0, sizeof en[0]);
+        }
+        nw += n;
         cs[++nclosed] = nw;
     }
     for (uint32_t l = 0; l < nclosed; l++) {
@@ -1228,7 +1633,8 @@ int geo_fill_holes(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
         uint32_t n = cs[l + 1] - cs[l];
         rep->nverts = n;
         rep->first_vertex = w[cs[l]];
-        if ((rc = fill_loop(&F, w + cs[l], n, rep)) < 0)
+        if ((rc = fill_loop(&F, w + cs[l], n, en ? en + cs[l] : NULL,
+                            rep)) < 0)
             goto fail;
         if (rep->status == GEO_HOLE_FILLED)
             st.nfilled++;
@@ -1269,7 +1675,7 @@ fail:
 done:
     geo_poly_free(q);
     geo_topo_free(t);
-    free(lstart), free(lcorn), free(w), free(cs), free(in_region);
+    free(lstart), free(lcorn), free(w), free(cs), free(in_region), free(en);
     free(F.tris), free(F.log);
     geo_edgemap_destroy(&F.edges);
     if (rc < 0 || !stats)

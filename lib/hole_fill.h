@@ -13,13 +13,23 @@
  *    W_{i,k} = min_{i<m<k} W_{i,m} + W_{m,k} + ω(v_i, v_m, v_k), with the
  *    minimising m kept in the index table M_{i,k}; the triangles are read
  *    back from M. ω is the triangle's area (GEO_FILL_AREA) or the sum of
- *    its edge lengths (GEO_FILL_EDGES). O(n³) time, O(n²) memory. A chord
+ *    its edge lengths (GEO_FILL_EDGES). GEO_FILL_ANGLE is Liepa's own
+ *    weight, a pair compared lexicographically: the largest dihedral
+ *    angle between a triangle and its neighbours (the two sub-patches'
+ *    triangles on (v_i, v_m) and (v_m, v_k), or the loop's facet where
+ *    that side is a loop edge) combined by max, then the area combined
+ *    by sum — a patch that folds back over the facets around a jagged
+ *    loop loses to one that carries the surface on. A bridge's side
+ *    sees the triangle the first half put on it. O(n³) time, O(n²)
+ *    memory. A chord
  *    that already is an edge of the mesh has infinite weight, so a patch
  *    never creates a non-manifold edge; a collinear triangle too.
  *    Bounded cost: a loop longer than max_dp_vertices is first cut by a
- *    bridge — the shortest admissible chord between a vertex and one in the
+ *    bridge — the admissible chord between a vertex and one in the
  *    opposite third of the loop (≤ 256 evenly spaced start vertices are
- *    tried) — into two loops, recursively, so a loop of n vertices costs
+ *    tried) that is shortest relative to the loop length it cuts off (on
+ *    a round loop a diameter, not a chord leaving thin wedges) — into two
+ *    loops, recursively, so a loop of n vertices costs
  *    O(n · max_dp_vertices²) instead of O(n³). Loops longer than
  *    max_hole_vertices are left open (GEO_HOLE_TOO_LARGE).
  * 3. Refinement (opts.refine). The region is every patch plus the facets
@@ -48,7 +58,14 @@
  * 4. Fairing (opts.fair) moves only the vertices refinement added. With
  *    U¹(p) = −p + Σ w(p,i)·p_i / Σ w(p,i) and U²(p) = −U¹(p) +
  *    Σ w(p,i)·U¹(p_i) / Σ w(p,i): for w = 1 (GEO_FAIR_UNIFORM) U²(p) = 0 is
- *    linear in p and solved in closed form; for w = |p − p_i|
+ *    linear in p and solved in closed form — and, without opts.project,
+ *    for all free vertices at once: the conditions form the symmetric
+ *    positive definite system (L·D⁻¹·L)_ff·x_f = −(L·D⁻¹·L)_fb·x_b
+ *    (L = D − Adj the graph Laplacian, D the neighbour counts), solved
+ *    by conjugate gradients to a residual of 1e-4 of the first (at most
+ *    5,000 iterations; a solution that folds the surface, a dihedral
+ *    angle above 120° or a collapsed facet, falls back to the sweeps
+ *    below); for w = |p − p_i|
  *    (GEO_FAIR_LENGTH) |U²(p)| is minimised by steepest descent with a
  *    line search by quadratic interpolation through three points. Both
  *    sweep over all free vertices (Jacobi) for fair_iterations sweeps or
@@ -79,6 +96,10 @@
 enum geo_fill_weight {
     GEO_FILL_AREA = 0,  /* minimum total area */
     GEO_FILL_EDGES = 1, /* minimum total edge length */
+    GEO_FILL_ANGLE = 2, /* Liepa's own weight: the least largest dihedral
+                           angle (between a patch triangle and its
+                           neighbours, the loop's facets included), ties
+                           broken by the least area */
 };
 
 enum geo_fill_fair {
@@ -94,6 +115,10 @@ enum geo_hole_status {
     GEO_HOLE_NO_TRIANGULATION = 3, /* every triangulation repeats an edge
                                       of the mesh or is degenerate */
     GEO_HOLE_DEGENERATE = 4,       /* fewer than three vertices */
+    GEO_HOLE_INTERSECTS = 5,       /* every patch tried would intersect
+                                      the mesh (lib/fill.h checks) */
+    GEO_HOLE_FILLED_PLANAR = 6,    /* closed by one planar facet
+                                      (lib/fill.h) */
 };
 
 /* A stable name for a status ("filled", "too_large", ...). */
@@ -135,6 +160,11 @@ typedef struct geo_fill_opts {
     /* user argument of the callbacks, which are called from the calling
      * thread only */
     void *project_user;
+    /* Which loops to fill: called once per loop with its vertex cycle
+     * (n vertices, in the patch's order: against the loop's facets); a
+     * loop it rejects is neither filled nor reported. NULL fills all. */
+    bool (*select_loop)(void *user, const uint32_t *cycle, uint32_t n);
+    void *select_user;
 } geo_fill_opts;
 
 /* Fills the defaults above. */
@@ -147,6 +177,8 @@ typedef struct geo_hole_report {
     uint32_t ntriangles;   /* triangles of its minimum-weight patch */
     uint32_t nbridges;     /* chords that cut it for the bounded search */
     double weight;         /* the patch's total weight (area or length) */
+    double max_angle;      /* GEO_FILL_ANGLE: the patch's largest dihedral
+                              angle, radians (0 for the other weights) */
 } geo_hole_report;
 
 typedef struct geo_fill_stats {
@@ -157,7 +189,7 @@ typedef struct geo_fill_stats {
     uint32_t nsplits;         /* centroid splits */
     uint32_t nflips;          /* edge restorations */
     uint32_t nhard_splits;    /* hard edges split */
-    uint32_t nfair_sweeps;    /* fairing sweeps run */
+    uint32_t nfair_sweeps;    /* fairing sweeps run (or CG iterations) */
 } geo_fill_stats;
 
 /* Fills every hole of p as described above. 0 or a negative errno (see
@@ -171,6 +203,17 @@ int geo_fill_holes(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
  * boundary, output order and error contract as geo_fill_holes; only the
  * refinement fields of *stats are set (stats may be NULL). */
 int geo_refine_region(geo_poly *p, const uint8_t *region,
+                      const geo_fill_opts *opts, const geo_ctx *ctx,
+                      geo_fill_stats *stats, geo_err *err);
+
+/* Step 4 alone: fairs vertices first_free … p->nverts − 1 of p with
+ * opts->fair (every other vertex fixed: the fixed ring of the U²
+ * operator), with the same rules as geo_fill_holes; the facets touching
+ * them get new least-squares planes. Only nfair_sweeps of *stats is set
+ * (stats may be NULL). 0, -EINVAL (invalid indices, first_free beyond
+ * the vertices), -ENOMEM (p unchanged) or -ECANCELED (the free vertices
+ * may be partly moved). */
+int geo_fair_vertices(geo_poly *p, uint32_t first_free,
                       const geo_fill_opts *opts, const geo_ctx *ctx,
                       geo_fill_stats *stats, geo_err *err);
 

@@ -24,6 +24,7 @@ static const char *const op_names[PROTO_OP_COUNT] = {
     [PROTO_OP_TRIANGULATE] = "triangulate",
     [PROTO_OP_FILL_HOLES] = "fill_holes",
     [PROTO_OP_STITCH] = "stitch",
+    [PROTO_OP_AUTO] = "auto",
 };
 
 /* Parameters each op accepts, "op" included, NULL-terminated. */
@@ -41,6 +42,7 @@ static const char *const op_keys[PROTO_OP_COUNT][8] = {
                               "refine", "fair", "sharpen"},
     [PROTO_OP_FILL_HOLES] = {"op", "weight", "refine", "fair"},
     [PROTO_OP_STITCH] = {"op"},
+    [PROTO_OP_AUTO] = {"op", "radius", "max_angle_deg", "max_deviation"},
 };
 
 static const char *const sched_names[] = {"local-exp", "scaled",
@@ -249,11 +251,16 @@ static void set_defaults(proto_op *op)
     memset(&op->u, 0, sizeof op->u);
     switch (op->kind) {
     case PROTO_OP_COLLAPSE_CLUSTERS:
-        op->u.collapse.radius = 0.002;
+        op->u.collapse.radius = 0;
         break;
     case PROTO_OP_MERGE_FACETS:
-        op->u.merge.max_angle_deg = 1.0;
-        op->u.merge.max_deviation = 0.005;
+        op->u.merge.max_angle_deg = 60.0;
+        op->u.merge.max_deviation = 0;
+        break;
+    case PROTO_OP_AUTO:
+        op->u.correct.radius = 0;
+        op->u.correct.max_angle_deg = 60.0;
+        op->u.correct.max_deviation = 0;
         break;
     case PROTO_OP_MOVE_VERTEX:
         op->u.move.schedule = PROTO_SCHED_LOCAL_EXP;
@@ -294,8 +301,20 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
     case PROTO_OP_COUNT:
         return 0;
     case PROTO_OP_COLLAPSE_CLUSTERS:
-        return get_number(o, "radius", pl, 0, 1e9, true,
+        return get_number(o, "radius", pl, 0, 1e9, false,
                           &op->u.collapse.radius, err);
+    case PROTO_OP_AUTO:
+        r = get_number(o, "radius", pl, 0, 1e9, false,
+                       &op->u.correct.radius, err);
+        if (r == 0)
+            r = get_number(o, "max_angle_deg", pl, 0, 90, true,
+                           &op->u.correct.max_angle_deg, err);
+        if (r == 0 && op->u.correct.max_angle_deg == 90)
+            r = FAIL(pl, "max_angle_deg", "must be below 90");
+        if (r == 0)
+            r = get_number(o, "max_deviation", pl, 0, 1e9, false,
+                           &op->u.correct.max_deviation, err);
+        return r;
     case PROTO_OP_MERGE_FACETS: {
         r = get_number(o, "max_angle_deg", pl, 0, 90, true,
                        &op->u.merge.max_angle_deg, err);
@@ -453,8 +472,7 @@ static int parse_op(const json_t *v, const place *pl, proto_op *op,
     return r;
 }
 
-static const char *const auto_ops[] = {"inspect", "collapse_clusters",
-                                       "merge_facets", "inspect"};
+static const char *const auto_ops[] = {"inspect", "auto", "inspect"};
 
 int proto_pipeline_from_json(const json_t *v, const char *where,
                              proto_pipeline *ret, geo_err *err)
@@ -466,7 +484,8 @@ int proto_pipeline_from_json(const json_t *v, const char *where,
             return FAIL(&whole, NULL, "expected an array of operations or "
                         "\"auto\"");
         expanded = json_array();
-        for (size_t i = 0; expanded && i < 4; i++)
+        size_t nauto = sizeof auto_ops / sizeof *auto_ops;
+        for (size_t i = 0; expanded && i < nauto; i++)
             if (json_array_append_new(expanded, json_string(auto_ops[i])) < 0)
                 expanded = (json_decref(expanded), NULL);
         if (!expanded)
@@ -556,6 +575,13 @@ static json_t *op_to_json(const proto_op *op)
         break;
     case PROTO_OP_CUT:
         e |= json_object_set_new(o, "plane", vec(op->u.cut.plane, 4));
+        break;
+    case PROTO_OP_AUTO:
+        e |= json_object_set_new(o, "radius", json_real(op->u.correct.radius));
+        e |= json_object_set_new(o, "max_angle_deg",
+                                 json_real(op->u.correct.max_angle_deg));
+        e |= json_object_set_new(o, "max_deviation",
+                                 json_real(op->u.correct.max_deviation));
         break;
     case PROTO_OP_MOVE_VERTEX:
         e |= json_object_set_new(o, "vertex", json_integer(op->u.move.vertex));

@@ -9,9 +9,12 @@
  *
  * Operations and parameters (lengths in the model's units, mm):
  *   inspect
- *   collapse_clusters {radius > 0 [0.002]}
- *   merge_facets {max_angle_deg in (0, 90) [1.0], max_deviation ≥ 0
- *                 [0.005], groups?: [[facet, facet, ...], ...]}
+ *   collapse_clusters {radius ≥ 0 [0: 2e-4 × the model's size]}
+ *   merge_facets {max_angle_deg in (0, 90) [60], max_deviation ≥ 0
+ *                 [0: 5e-4 × the model's size], groups?: [[facet, facet,
+ *                 ...], ...]}
+ *   auto {radius, max_angle_deg, max_deviation: as above} — the whole
+ *                 post-scan correction of lib/correct.h in one op
  *   cut {plane: [a, b, c, d]} — keeps plane(p) ≤ 0; (a,b,c) non-zero,
  *                 normalised to unit length (d scaled with it)
  *   move_vertex {vertex, to: [x,y,z] | by: [dx,dy,dz], schedule
@@ -29,8 +32,11 @@
  *   fill_holes {weight "area"|"length" ["area"], refine [true],
  *                 fair [true]}
  *   stitch
- * "auto" is the post-scan correction: inspect → collapse_clusters →
- * merge_facets (automatic groups) → inspect, with the defaults above.
+ * "auto" is the post-scan correction: inspect → auto → inspect, with the
+ * defaults above; the auto op merges (automatic groups) and collapses
+ * clusters, repeating both until nothing changes (formats.md's inspect →
+ * collapse_clusters → merge_facets → inspect, in the order and with the
+ * repeats that lib/correct.h explains).
  *
  * Ownership: a proto_pipeline owns its arrays; proto_pipeline_free
  * releases them. Functions are reentrant and thread-safe. */
@@ -55,6 +61,7 @@ typedef enum proto_op_kind {
     PROTO_OP_TRIANGULATE,
     PROTO_OP_FILL_HOLES,
     PROTO_OP_STITCH,
+    PROTO_OP_AUTO,
     PROTO_OP_COUNT
 } proto_op_kind;
 
@@ -87,6 +94,9 @@ typedef struct proto_op {
         struct {
             double plane[4];     /* unit normal, offset */
         } cut;
+        struct {
+            double radius, max_angle_deg, max_deviation;
+        } correct;
         struct {
             uint32_t vertex;
             double xyz[3];

@@ -42,9 +42,10 @@ static void test_names_and_objects_parse_with_defaults(void **state)
     assert_int_equal(p.ops[0].kind, PROTO_OP_INSPECT);
     assert_int_equal(p.ops[1].kind, PROTO_OP_MERGE_FACETS);
     assert_true(p.ops[1].u.merge.max_angle_deg == 0.5);
-    assert_true(p.ops[1].u.merge.max_deviation == 0.005);
+    /* 0: relative to the model's size (lib/merge.h, lib/clusters.h) */
+    assert_true(p.ops[1].u.merge.max_deviation == 0);
     assert_int_equal(p.ops[1].u.merge.ngroups, 0);
-    assert_true(p.ops[2].u.collapse.radius == 0.002);
+    assert_true(p.ops[2].u.collapse.radius == 0);
     proto_pipeline_free(&p);
 }
 
@@ -53,11 +54,11 @@ static void test_auto_is_the_post_scan_correction(void **state)
     (void)state;
     proto_pipeline p;
     assert_int_equal(parse("\"auto\"", &p, NULL), 0);
-    assert_int_equal(p.nops, 4);
-    proto_op_kind want[] = {PROTO_OP_INSPECT, PROTO_OP_COLLAPSE_CLUSTERS,
-                            PROTO_OP_MERGE_FACETS, PROTO_OP_INSPECT};
-    for (int i = 0; i < 4; i++)
+    assert_int_equal(p.nops, 3);
+    proto_op_kind want[] = {PROTO_OP_INSPECT, PROTO_OP_AUTO, PROTO_OP_INSPECT};
+    for (int i = 0; i < 3; i++)
         assert_int_equal(p.ops[i].kind, want[i]);
+    assert_true(p.ops[1].u.correct.max_angle_deg == 60);
     proto_pipeline_free(&p);
 }
 
