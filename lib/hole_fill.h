@@ -189,7 +189,8 @@ typedef struct geo_fill_stats {
     uint32_t nsplits;         /* centroid splits */
     uint32_t nflips;          /* edge restorations */
     uint32_t nhard_splits;    /* hard edges split */
-    uint32_t nfair_sweeps;    /* fairing sweeps run (or CG iterations) */
+    uint32_t nfair_sweeps;    /* fairing sweeps run (or CG iterations, or
+                                 1 for the direct solve) */
 } geo_fill_stats;
 
 /* Fills every hole of p as described above. 0 or a negative errno (see
