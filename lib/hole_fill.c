@@ -116,8 +116,9 @@ static bool has_edge(const filler *F, uint32_t a, uint32_t b)
     return geo_edgemap_get(&F->edges, geo_edge_ukey(a, b)) != UINT32_MAX;
 }
 
-/* ω of triangle (a, b, c); INFINITY for a degenerate one. ret_n gets its
- * unit normal (as listed). */
+/* ω of triangle (a, b, c); INFINITY for a degenerate one. ret_n gets
+ * the cross product of its edges (as listed: twice the area along the
+ * normal). */
 static double tri_weight(const filler *F, uint32_t a, uint32_t b, uint32_t c,
                          double ret_n[3])
 {
@@ -131,7 +132,6 @@ static double tri_weight(const filler *F, uint32_t a, uint32_t b, uint32_t c,
     double per = geo_vdist(pa, pb) + geo_vdist(pb, pc) + geo_vdist(pc, pa);
     if (!(area > 1e-14 * per * per))
         return INFINITY;
-    geo_vscale(ret_n, 0.5 / area, ret_n);
     return F->o.weight == GEO_FILL_EDGES ? per : area;
 }
 
@@ -176,6 +176,52 @@ static bool turned_back(const double n1[3], const double n2[3])
 {
     return geo_vdot(n1, n1) > 0 && geo_vdot(n2, n2) > 0 &&
            geo_vdot(n1, n2) < -0.5;
+}
+
+/* Whether triangle (w_i, w_m, w_k) of an n-gon, with edge cross product
+ * nt (not degenerate), obeys dp's rules at strictness strict. */
+static bool admissible(const filler *F, double (*en)[3], int strict,
+                       uint32_t i, uint32_t m, uint32_t k, uint32_t n,
+                       const double nt[3])
+{
+    if (strict >= 2 && !(geo_vdot(nt, F->up) > 0))
+        return false;
+    if (strict < 1 || !en)
+        return true;
+    double u[3];
+    geo_vscale(nt, 1.0 / geo_vlen(nt), u);
+    return !((m == i + 1 && turned_back(u, en[i])) ||
+             (k == m + 1 && turned_back(u, en[m])) ||
+             (i == 0 && k == n - 1 && turned_back(u, en[n - 1])));
+}
+
+/* Whether every edge of polygon w[0..n) lies on some triangle of its
+ * vertices that dp admits at strictness strict — else dp cannot succeed
+ * (a loop closing a cone steeper than 60° with a flat lid, say), and
+ * this O(n²) look saves its O(n³) run. */
+static bool edges_coverable(const filler *F, const uint32_t *w, uint32_t n,
+                            double (*en)[3], int strict)
+{
+    for (uint32_t j = 0; j < n; j++) {
+        bool found = false;
+        for (uint32_t x = 0; x < n && !found; x++) {
+            uint32_t j1 = (j + 1) % n;
+            if (x == j || x == j1)
+                continue;
+            /* the triangle's corners in polygon order */
+            uint32_t c[3] = {j, j1, x}, t;
+            for (int a = 0; a < 2; a++)
+                for (int b = 0; b < 2 - a; b++)
+                    if (c[b] > c[b + 1])
+                        t = c[b], c[b] = c[b + 1], c[b + 1] = t;
+            double nt[3];
+            if (isfinite(tri_weight(F, w[c[0]], w[c[1]], w[c[2]], nt)))
+                found = admissible(F, en, strict, c[0], c[1], c[2], n, nt);
+        }
+        if (!found)
+            return false;
+    }
+    return true;
 }
 
 /* Liepa's dynamic programme on polygon w[0..n). en, when not NULL, holds
@@ -230,38 +276,37 @@ static int dp(filler *F, const uint32_t *w, uint32_t n,
             uint32_t bm = i + 1;
             if (angle)
                 A[ik] = INFINITY;
-            for (uint32_t m = i + 1; m < k && ok[ik]; m++) {
+            for (uint32_t m = i + 1; m < k && ok[ik] && angle; m++) {
                 size_t im = (size_t)i * n + m, mk = (size_t)m * n + k;
-                double ws = W[im] + W[mk], a = 0;
-                if (angle) {
-                    a = A[im] > A[mk] ? A[im] : A[mk];
-                    if (!angle_less(a, ws, besta, best))
-                        continue;
-                } else if (ws >= best) {
+                double ws = W[im] + W[mk];
+                double a = A[im] > A[mk] ? A[im] : A[mk];
+                if (!angle_less(a, ws, besta, best))
                     continue;
-                }
                 double nt[3];
                 double t = tri_weight(F, w[i], w[m], w[k], nt);
-                if (!isfinite(t) || (!angle && !(ws + t < best)))
+                if (!isfinite(t) || !admissible(F, en, strict, i, m, k, n, nt))
                     continue;
-                if (strict >= 2 && !(geo_vdot(nt, F->up) > 0))
-                    continue;
-                if (strict >= 1 && en &&
-                    ((m == i + 1 && turned_back(nt, en[i])) ||
-                     (k == m + 1 && turned_back(nt, en[m])) ||
-                     (top && turned_back(nt, closing))))
-                    continue;
-                if (angle) {
-                    a = fmax(a, normal_angle(nt, TN[im]));
-                    a = fmax(a, normal_angle(nt, TN[mk]));
-                    if (top)
-                        a = fmax(a, normal_angle(nt, closing));
-                    if (!angle_less(a, ws + t, besta, best))
-                        continue;
+                geo_vnormalize(nt);
+                a = fmax(a, normal_angle(nt, TN[im]));
+                a = fmax(a, normal_angle(nt, TN[mk]));
+                if (top)
+                    a = fmax(a, normal_angle(nt, closing));
+                if (angle_less(a, ws + t, besta, best)) {
                     besta = a;
+                    best = ws + t;
+                    bm = m;
                 }
-                best = ws + t;
-                bm = m;
+            }
+            for (uint32_t m = i + 1; m < k && ok[ik] && !angle; m++) {
+                double ws = W[(size_t)i * n + m] + W[(size_t)m * n + k];
+                if (ws >= best)
+                    continue;
+                double nt[3];
+                double t = ws + tri_weight(F, w[i], w[m], w[k], nt);
+                if (t < best && admissible(F, en, strict, i, m, k, n, nt)) {
+                    best = t;
+                    bm = m;
+                }
             }
             if (angle)
                 A[ik] = besta;
@@ -468,7 +513,8 @@ static int fill_poly(filler *F, const uint32_t *w, uint32_t n,
          * loop's facets */
         int rc = 1;
         for (int strict = 2; strict >= 0 && rc == 1; strict--)
-            rc = dp(F, w, n, en, strict, rep);
+            if (strict == 0 || edges_coverable(F, w, n, en, strict))
+                rc = dp(F, w, n, en, strict, rep);
         return rc;
     }
     uint32_t ba, bb;
