@@ -641,41 +641,7 @@ typedef struct refiner {
     geo_edgemap hard;    /* undirected hard edges (found once, see below) */
     geo_tmesh_probe probe;
     geo_fill_stats *st;
-    uint32_t (*queue)[2]; /* edges to restore (may repeat or be gone) */
-    size_t nqueue, cap_queue;
 } refiner;
-
-/* Queues edge a–b for restoration. 0 or -ENOMEM. */
-static int push_edge(refiner *R, uint32_t a, uint32_t b)
-{
-    if (R->nqueue == R->cap_queue) {
-        size_t nc = 2 * R->cap_queue + 256;
-        uint32_t(*nq)[2] = realloc(R->queue, nc * sizeof *nq);
-        if (!nq)
-            return -ENOMEM;
-        R->queue = nq;
-        R->cap_queue = nc;
-    }
-    R->queue[R->nqueue][0] = a;
-    R->queue[R->nqueue][1] = b;
-    R->nqueue++;
-    return 0;
-}
-
-/* Queues the sides of the quadrilateral a, c, b, d (around a flipped or
- * split edge a–b): the edges whose restoration the change may undo. */
-static int push_quad(refiner *R, uint32_t a, uint32_t b, uint32_t c,
-                     uint32_t d)
-{
-    int rc = push_edge(R, a, c);
-    if (rc == 0)
-        rc = push_edge(R, c, b);
-    if (rc == 0)
-        rc = push_edge(R, b, d);
-    if (rc == 0)
-        rc = push_edge(R, d, a);
-    return rc;
-}
 
 /* Moves point p, made from the nfrom vertices from[], onto the surface
  * (opts.place, or opts.project). 0, or -EDOM when place refuses it. */
@@ -778,12 +744,6 @@ static int relax(refiner *R, uint32_t a, uint32_t b)
             return rc;
         geo_edgemap_del(&R->hard, geo_edge_ukey(a, b));
         R->st->nhard_splits++;
-        /* the quadrilateral's sides and the new edges at x */
-        uint32_t X2 = (uint32_t)x;
-        if ((rc = push_quad(R, a, b, c, d)) < 0 ||
-            (rc = push_quad(R, c, d, X2, X2)) < 0 ||
-            (rc = push_quad(R, a, b, X2, X2)) < 0)
-            return rc;
         return 1;
     }
     /* a degenerate side has a zero normal and does not vote below */
@@ -827,42 +787,27 @@ static int relax(refiner *R, uint32_t a, uint32_t b)
     if (rc < 0)
         return rc;
     R->st->nflips++;
-    if ((rc = push_quad(R, a, b, c, d)) < 0)
-        return rc;
     return 1;
 }
 
-/* Restores every interior edge until none changes: all of them once,
- * then, from a work queue, the sides of every quadrilateral whose
- * diagonal changed (what repeated sweeps over all edges would revisit),
- * at most 64 restorations per edge on the whole. */
+/* Restores every interior edge until none changes (bounded sweeps). */
 static int relax_all(refiner *R)
 {
-    uint64_t budget = 0;
-    for (uint32_t t = 0; t < R->m.nt; t++)
-        for (int k = 0; k < 3 && !R->m.dead[t] && R->m.tag[t]; k++) {
-            uint32_t a = R->m.t[t][k], b = R->m.t[t][(k + 1) % 3];
-            if (a < b && push_edge(R, a, b) < 0)
-                return -ENOMEM;
-        }
-    budget = 64 * (uint64_t)R->nqueue + 1024;
-    /* first in, first out: a change's neighbours come after the edges
-     * already waiting, as a sweep would take them */
-    size_t head = 0;
-    while (head < R->nqueue && budget-- > 0) {
-        uint32_t a = R->queue[head][0], b = R->queue[head][1];
-        head++;
-        int rc = relax(R, a, b);
-        if (rc < 0)
-            return rc;
-        if (head > 4096 && 2 * head > R->nqueue) {
-            memmove(R->queue, R->queue + head,
-                    (R->nqueue - head) * sizeof *R->queue);
-            R->nqueue -= head;
-            head = 0;
-        }
+    for (int sweep = 0; sweep < 64; sweep++) {
+        uint32_t changed = 0, nt = R->m.nt;
+        for (uint32_t t = 0; t < nt; t++)
+            for (int k = 0; k < 3 && !R->m.dead[t] && R->m.tag[t]; k++) {
+                uint32_t a = R->m.t[t][k], b = R->m.t[t][(k + 1) % 3];
+                if (a > b)
+                    continue;
+                int rc = relax(R, a, b);
+                if (rc < 0)
+                    return rc;
+                changed += (uint32_t)rc;
+            }
+        if (changed == 0)
+            return 0;
     }
-    R->nqueue = 0;
     return 0;
 }
 
@@ -1162,7 +1107,6 @@ out:
     geo_edgemap_destroy(&R.hard);
     geo_tmesh_probe_destroy(&R.probe);
     free(R.s);
-    free(R.queue);
     free(near);
     return rc;
 }
@@ -1446,9 +1390,10 @@ static void fair_rhs(const geo_poly *p, const adjacency *A, const uint32_t *S,
 #undef DEG
 }
 
-/* Bound on the entries of the Cholesky factor of a fairing system
- * (12 bytes each): a 17,500-vertex patch needs about 2.5 million. */
-#define GEO_FAIR_DIRECT_MAX_NNZ (24u << 20)
+/* Bound on the entries of the Cholesky factor of a fairing system (12
+ * bytes each, so at most 192 MB): the 14,300 free vertices of a 1,000-
+ * vertex hole need 1.7 million; the factor grows as n log n. */
+#define GEO_FAIR_DIRECT_MAX_NNZ (16u << 20)
 
 /* U²(p) = 0 at every free vertex at once, for w = 1, solved directly:
  * K_ff = (L·D⁻¹·L)_ff is assembled once — K[u][t] = Σ_s L[s][u]·L[s][t]
