@@ -273,6 +273,50 @@ done:
     return r;
 }
 
+/* Does the group still meet the criterion on the current model? Groups
+ * of a round are found on the model the round started from; a group
+ * merged earlier in the round may have lifted or cut the facets of a
+ * later one, whose vertices can then lie far from any common plane. */
+static int still_fits(geo_mw *w, const uint32_t *mem, uint32_t n,
+                      double max_angle_deg, double max_dev, bool *ret)
+{
+    geo_edit *e = w->e;
+    if (geo_mw_stamp(w) < 0)
+        return -ENOMEM;
+    grower g;
+    memset(&g, 0, sizeof g);
+    g.w = w;
+    g.e = e;
+    memcpy(g.o, e->verts[geo_edit_fv(e, mem[0])[0]], sizeof g.o);
+    memcpy(g.seedn, e->planes[mem[0]], sizeof g.seedn);
+    int r = 0;
+    for (uint32_t i = 0; i < n && r == 0; i++) {
+        uint32_t nv = geo_edit_fn(e, mem[i]);
+        for (uint32_t j = 0; j < nv; j++) {
+            uint32_t v = geo_edit_fv(e, mem[i])[j];
+            if (w->vmark[v] == w->gen)
+                continue;
+            w->vmark[v] = w->gen;
+            if (geo_mw_grow(&g.vs, &g.capvs, (size_t)g.nvs + 1) < 0) {
+                r = -ENOMEM;
+                break;
+            }
+            g.vs[g.nvs++] = v;
+            moments_add(&g, e->verts[v]);
+        }
+    }
+    double pl[4];
+    bool ok = r == 0 && moments_plane(&g, NULL, 0, pl);
+    double cosmax = cos(max_angle_deg * M_PI / 180.0);
+    for (uint32_t i = 0; ok && i < n; i++)
+        ok = geo_vdot(e->planes[mem[i]], pl) >= cosmax;
+    for (uint32_t i = 0; ok && i < g.nvs; i++)
+        ok = fabs(geo_plane_eval(pl, e->verts[g.vs[i]])) <= max_dev;
+    free(g.vs);
+    *ret = ok;
+    return r;
+}
+
 int geo_mw_auto_round(geo_mw *w, double max_angle_deg, double max_dev,
                       const geo_ctx *ctx, double frac0, double frac1,
                       geo_merge_report *rep, uint32_t *ret_merged,
@@ -302,6 +346,13 @@ int geo_mw_auto_round(geo_mw *w, double max_angle_deg, double max_dev,
                 live[n++] = facets[k];
         if (n < 2)
             continue;
+        bool ok;
+        if (still_fits(w, live, n, max_angle_deg, max_dev, &ok) < 0) {
+            r = geo_err_set(err, -ENOMEM, "out of memory");
+            break;
+        }
+        if (!ok)
+            continue; /* found again, as it now is, next round */
         geo_merge_group *gr;
         if (geo_merge_report_add(rep, live, n, &gr) < 0) {
             r = geo_err_set(err, -ENOMEM, "out of memory");
