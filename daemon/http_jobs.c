@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "frep_json.h"
 #include "job_submit.h"
 #include "log.h"
 #include "model_io.h"
@@ -158,33 +159,35 @@ enum MHD_Result http_post_job(http_req *r)
             ok |= strcmp(key, known[i]) == 0;
         if (!ok)
             add_error(errors, key, "unknown member (expected model, "
-                      "pipeline, priority, label)");
+                      "frep, pipeline, priority, label)");
     }
     const json_t *model = json_object_get(root, "model");
-    int inputs = !!model + !!json_object_get(root, "frep") +
-                 !!json_object_get(root, "meshes");
+    const json_t *frep = json_object_get(root, "frep");
+    int inputs = !!model + !!frep + !!json_object_get(root, "meshes");
     if (inputs == 0)
-        add_error(errors, "model", "required: the facet-model/1 to process");
+        add_error(errors, "model", "required: the facet-model/1 to process "
+                  "(or a frep-object/1 as 'frep')");
     else if (inputs > 1)
         add_error(errors, "", "give exactly one of model, frep, meshes");
-    if (json_object_get(root, "frep"))
-        add_error(errors, "frep", "input 'frep' is not available in this "
-                  "build");
     const json_t *meshes = json_object_get(root, "meshes");
     if (meshes && json_array_size(meshes) != 2)
         add_error(errors, "meshes", "expected an array of two facet-model/1 "
                   "objects (the open meshes to stitch)");
     proto_pipeline pl = {0};
     json_t *pv = json_object_get(root, "pipeline");
-    /* two meshes are stitched first; by default then inspected */
-    json_t *pdefault = pv ? NULL
+    /* without a pipeline: the post-scan correction of a model, the
+     * triangulation (at its defaults) of a frep; two meshes are stitched
+     * first, then inspected */
+    json_t *pdefault = pv       ? NULL
+                       : frep   ? json_pack("[s]", "triangulate")
                        : meshes ? json_pack("[s, s]", "stitch", "inspect")
                                 : json_string("auto");
     geo_err err = {{0}};
     bool have_pipeline = false;
     if (proto_pipeline_from_json(pv ? pv : pdefault, "pipeline", &pl, &err) < 0)
         add_geo_error(errors, &err);
-    else if (runner_check(&pl, &err) < 0)
+    else if (runner_check(&pl, &err) < 0 ||
+             (inputs == 1 && runner_check_input(&pl, frep != NULL, &err) < 0))
         add_geo_error(errors, &err);
     else
         have_pipeline = true;
@@ -193,6 +196,13 @@ enum MHD_Result http_post_job(http_req *r)
         add_error(errors, "pipeline", "a job with meshes must start with "
                   "stitch (it joins the two meshes into one model)");
     json_decref(pdefault);
+    if (frep) {
+        /* validated here, stored as JSON (job_submit.h) */
+        geo_frep *f = proto_frep_from_json(frep, NULL, "frep", &err);
+        if (!f)
+            add_geo_error(errors, &err);
+        geo_frep_free(f);
+    }
     job_priority prio = JOB_PRIO_NORMAL;
     const json_t *pr = json_object_get(root, "priority");
     if (pr) {
@@ -235,7 +245,8 @@ enum MHD_Result http_post_job(http_req *r)
         goto out;
     }
     job_request rq = {
-        .model = poly, .pipeline = &pl, .priority = prio, .source = "http",
+        .model = poly, .frep = frep, .pipeline = &pl, .priority = prio,
+        .source = "http",
         .label = label, .idem_key = idem,
         .idem_hash = job_hash64(r->body ? r->body : "", r->len),
     };
@@ -265,10 +276,14 @@ enum MHD_Result http_post_job(http_req *r)
         json_t *extra = NULL;
         if (rep.plane_mismatches)
             extra = json_pack("{s:[s]}", "warnings", rep.first);
-        if (!replayed)
+        if (!replayed && poly)
             log_msg(LOG_INFO, job.id, "queued (%u vertices, %u facets, "
                     "%zu ops, priority %s)", poly->nverts, poly->nfacets,
                     pl.nops, prio == JOB_PRIO_HIGH ? "high" : "normal");
+        else if (!replayed)
+            log_msg(LOG_INFO, job.id, "queued (frep-object, %zu ops, "
+                    "priority %s)", pl.nops,
+                    prio == JOB_PRIO_HIGH ? "high" : "normal");
         res = reply_job(r, 202, &job, h, extra);
         job_rec_clear(&job);
     }

@@ -1,11 +1,14 @@
 /* job_exec.c — one job: stored bytes in, stored bytes out (job_exec.h).
- * Every failure leaves a message naming its place in ret->error. */
+ * The stored input is an FMB1 model or a frep-object/1 JSON text
+ * (job_submit.h). Every failure leaves a message naming its place in
+ * ret->error. */
 #include "job_exec.h"
 
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "frep_json.h"
 #include "model_io.h"
 #include "runner.h"
 
@@ -36,15 +39,30 @@ int job_exec(void *user, const job_rec *job, const void *input,
     json_decref(pj);
     if (r < 0)
         return fail(ret, r, &err);
-    geo_poly *model = proto_model_read_mem(input, input_len, PROTO_FMT_FMB1,
-                                           NULL, &err);
-    if (!model) {
-        geo_err_prefix(&err, "stored input");
-        proto_pipeline_free(&pl);
-        return fail(ret, -EINVAL, &err);
-    }
+    geo_poly *model = NULL;
     json_t *stats = NULL, *summary = NULL;
-    r = runner_run(&pl, &model, ctx, op_timer, user, &stats, &summary, &err);
+    if (input_len >= 4 && memcmp(input, "FMB1", 4) == 0) {
+        model = proto_model_read_mem(input, input_len, PROTO_FMT_FMB1, NULL,
+                                     &err);
+        if (!model) {
+            geo_err_prefix(&err, "stored input");
+            proto_pipeline_free(&pl);
+            return fail(ret, -EINVAL, &err);
+        }
+        r = runner_run(&pl, &model, ctx, op_timer, user, &stats, &summary,
+                       &err);
+    } else {
+        /* a frep-object/1, stored as JSON text (job_submit.h) */
+        geo_frep *f = proto_frep_read_mem(input, input_len, NULL, &err);
+        if (!f) {
+            geo_err_prefix(&err, "stored input");
+            proto_pipeline_free(&pl);
+            return fail(ret, -EINVAL, &err);
+        }
+        r = runner_run_frep(&pl, f, &model, ctx, op_timer, user, &stats,
+                            &summary, &err);
+        geo_frep_free(f);
+    }
     proto_pipeline_free(&pl);
     if (r == 0) {
         char *buf;

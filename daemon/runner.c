@@ -18,6 +18,8 @@
 #include "stats.h"
 #include "stats_json.h"
 #include "stitch.h"
+#include "tri_report_json.h"
+#include "triangulate.h"
 
 /* Runs one operation on *model (may replace it, freeing the old one).
  * Adds its report to *ret_report (a new object it creates) and summary
@@ -25,9 +27,16 @@
 typedef int (*op_fn)(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
                      json_t **ret_report, json_t *summary, geo_err *err);
 
+/* An operation that makes the model from a frep input f (*model is NULL
+ * on entry); otherwise like op_fn. */
+typedef int (*frep_fn)(const proto_op *op, const geo_frep *f,
+                       geo_poly **model, const geo_ctx *ctx,
+                       json_t **ret_report, json_t *summary, geo_err *err);
+
 typedef struct op_entry {
     op_fn run;
     bool changes_model; /* false for read-only ops such as inspect */
+    frep_fn run_frep;   /* set (and run NULL) for ops taking a frep */
 } op_entry;
 
 /* inspect (lib/stats.h): every statistic of the model, unchanged. */
@@ -54,6 +63,47 @@ static int run_inspect(const proto_op *op, geo_poly **model,
         return geo_err_set(err, -ENOMEM, "out of memory");
     }
     *ret_report = rep;
+    return 0;
+}
+
+/* triangulate (lib/triangulate.h): the frep input to a closed mesh; the
+ * report is the quality report (proto/tri_report_json.h). */
+static int run_triangulate(const proto_op *op, const geo_frep *f,
+                           geo_poly **model, const geo_ctx *ctx,
+                           json_t **ret_report, json_t *summary, geo_err *err)
+{
+    geo_tri_opts o;
+    geo_tri_opts_default(&o);
+    o.quad_levels = op->u.triangulate.quad_levels;
+    o.binary_levels = op->u.triangulate.binary_levels;
+    o.fill = op->u.triangulate.fill_edges ? GEO_FILL_EDGES : GEO_FILL_AREA;
+    o.refine = op->u.triangulate.refine;
+    o.sharpen = op->u.triangulate.sharpen;
+    o.fair = op->u.triangulate.fair == PROTO_FAIR_LENGTH    ? GEO_FAIR_LENGTH
+             : op->u.triangulate.fair == PROTO_FAIR_UNIFORM ? GEO_FAIR_UNIFORM
+                                                            : GEO_FAIR_NONE;
+    geo_tri_report rep;
+    geo_poly *m = NULL;
+    int r = geo_frep_triangulate(f, &o, ctx, &m, &rep, err);
+    if (r < 0)
+        return r;
+    json_t *j = proto_tri_report_to_json(&rep);
+    const geo_frep_metrics *q = &rep.quality;
+    int e = !j;
+    e |= json_object_set_new(summary, "closed",
+                             json_boolean(q->boundary_edges == 0 &&
+                                          q->nonmanifold_edges == 0));
+    e |= json_object_set_new(summary, "self_intersections",
+                             json_integer((json_int_t)rep.self_intersections));
+    geo_tri_report_clear(&rep);
+    if (e) {
+        json_decref(j);
+        geo_poly_free(m);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    geo_poly_free(*model);
+    *model = m;
+    *ret_report = j;
     return 0;
 }
 
@@ -196,6 +246,7 @@ static const op_entry ops[PROTO_OP_COUNT] = {
     [PROTO_OP_INSPECT] = {run_inspect, false},
     [PROTO_OP_COLLAPSE_CLUSTERS] = {run_collapse, true},
     [PROTO_OP_MERGE_FACETS] = {run_merge, true},
+    [PROTO_OP_TRIANGULATE] = {NULL, true, run_triangulate},
     [PROTO_OP_FILL_HOLES] = {run_fill_holes, true},
     [PROTO_OP_STITCH] = {run_stitch, true},
     [PROTO_OP_AUTO] = {run_auto, true},
@@ -203,7 +254,26 @@ static const op_entry ops[PROTO_OP_COUNT] = {
 
 bool runner_op_available(proto_op_kind op)
 {
-    return (unsigned)op < PROTO_OP_COUNT && ops[op].run != NULL;
+    return (unsigned)op < PROTO_OP_COUNT &&
+           (ops[op].run != NULL || ops[op].run_frep != NULL);
+}
+
+int runner_check_input(const proto_pipeline *p, bool frep, geo_err *err)
+{
+    for (size_t i = 0; i < p->nops; i++) {
+        proto_op_kind k = p->ops[i].kind;
+        bool takes_frep = (unsigned)k < PROTO_OP_COUNT && ops[k].run_frep;
+        if (takes_frep && (!frep || i > 0))
+            return geo_err_set(err, -EINVAL,
+                               "pipeline[%zu]: op '%s' needs a 'frep' input "
+                               "and must come first", i, proto_op_name(k));
+        if (frep && i == 0 && !takes_frep)
+            return geo_err_set(err, -EINVAL,
+                               "pipeline[0]: op '%s' cannot take a 'frep' "
+                               "input; start with 'triangulate'",
+                               proto_op_name(k));
+    }
+    return 0;
 }
 
 int runner_check(const proto_pipeline *p, geo_err *err)
@@ -248,11 +318,15 @@ static int add_counts(json_t *summary, const char *suffix, const geo_poly *p)
            json_object_set_new(summary, k2, json_integer(p->nfacets));
 }
 
-int runner_run(const proto_pipeline *p, geo_poly **model, const geo_ctx *ctx,
-               runner_op_timer timer, void *timer_user, json_t **ret_stats,
-               json_t **ret_summary, geo_err *err)
+static int run_pipeline(const proto_pipeline *p, const geo_frep *frep,
+                        geo_poly **model, const geo_ctx *ctx,
+                        runner_op_timer timer, void *timer_user,
+                        json_t **ret_stats, json_t **ret_summary,
+                        geo_err *err)
 {
     int r = runner_check(p, err);
+    if (r == 0)
+        r = runner_check_input(p, frep != NULL, err);
     if (r < 0)
         return r;
     json_t *stats = json_object(), *list = json_array(),
@@ -260,7 +334,8 @@ int runner_run(const proto_pipeline *p, geo_poly **model, const geo_ctx *ctx,
     json_t *before = NULL, *after = NULL;
     bool changed = false;
     double t_start = mono_seconds();
-    if (!stats || !list || !summary || add_counts(summary, "before", *model)) {
+    if (!stats || !list || !summary ||
+        (*model && add_counts(summary, "before", *model))) {
         r = geo_err_set(err, -ENOMEM, "out of memory");
         goto fail;
     }
@@ -279,7 +354,10 @@ int runner_run(const proto_pipeline *p, geo_poly **model, const geo_ctx *ctx,
         }
         json_t *report = NULL;
         double t0 = mono_seconds();
-        r = ops[op->kind].run(op, model, &sub, &report, summary, err);
+        r = ops[op->kind].run_frep
+                ? ops[op->kind].run_frep(op, frep, model, &sub, &report,
+                                         summary, err)
+                : ops[op->kind].run(op, model, &sub, &report, summary, err);
         double secs = mono_seconds() - t0;
         if (timer)
             timer(timer_user, op->kind, secs);
@@ -333,5 +411,29 @@ fail:
     json_decref(summary);
     json_decref(before);
     json_decref(after);
+    return r;
+}
+
+int runner_run(const proto_pipeline *p, geo_poly **model, const geo_ctx *ctx,
+               runner_op_timer timer, void *timer_user, json_t **ret_stats,
+               json_t **ret_summary, geo_err *err)
+{
+    return run_pipeline(p, NULL, model, ctx, timer, timer_user, ret_stats,
+                        ret_summary, err);
+}
+
+int runner_run_frep(const proto_pipeline *p, const geo_frep *f,
+                    geo_poly **ret_model, const geo_ctx *ctx,
+                    runner_op_timer timer, void *timer_user,
+                    json_t **ret_stats, json_t **ret_summary, geo_err *err)
+{
+    geo_poly *m = NULL;
+    int r = run_pipeline(p, f, &m, ctx, timer, timer_user, ret_stats,
+                         ret_summary, err);
+    if (r < 0) {
+        geo_poly_free(m);
+        m = NULL;
+    }
+    *ret_model = m;
     return r;
 }

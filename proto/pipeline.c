@@ -5,6 +5,8 @@
  * default. */
 #include "pipeline.h"
 
+#include "frep_grid.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
@@ -37,7 +39,7 @@ static const char *const op_keys[PROTO_OP_COUNT][8] = {
     [PROTO_OP_INVERSION_STATS] = {"op", "samples", "magnitudes", "seed",
                                   "schedule"},
     [PROTO_OP_TRIANGULATE] = {"op", "quad_levels", "binary_levels", "fill",
-                              "refine", "fair"},
+                              "refine", "fair", "sharpen"},
     [PROTO_OP_FILL_HOLES] = {"op", "weight", "refine", "fair"},
     [PROTO_OP_STITCH] = {"op"},
     [PROTO_OP_AUTO] = {"op", "radius", "max_angle_deg", "max_deviation"},
@@ -45,6 +47,8 @@ static const char *const op_keys[PROTO_OP_COUNT][8] = {
 
 static const char *const sched_names[] = {"local-exp", "scaled",
                                           "global-exp"};
+static const char *const fill_names[] = {"area", "edges"};
+static const char *const fair_names[] = {"none", "uniform", "length"};
 
 static const double default_magnitudes[] = {1,     .5,     .1,    .05,
                                             .01,   .005,   .001,  .0005,
@@ -274,9 +278,9 @@ static void set_defaults(proto_op *op)
     case PROTO_OP_TRIANGULATE:
         op->u.triangulate.quad_levels = 9;
         op->u.triangulate.binary_levels = 10;
-        op->u.triangulate.fill = true;
         op->u.triangulate.refine = true;
-        op->u.triangulate.fair = true;
+        op->u.triangulate.sharpen = true;
+        op->u.triangulate.fair = PROTO_FAIR_UNIFORM;
         break;
     case PROTO_OP_FILL_HOLES:
         op->u.fill_holes.refine = true;
@@ -387,19 +391,25 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
             r = get_schedule(o, pl, &op->u.inversion.schedule, err);
         return r;
     }
-    case PROTO_OP_TRIANGULATE:
-        r = get_u32(o, "quad_levels", pl, 1, 12,
+    case PROTO_OP_TRIANGULATE: {
+        int fill = op->u.triangulate.fill_edges, fair = op->u.triangulate.fair;
+        r = get_u32(o, "quad_levels", pl, 1, GEO_FREP_MAX_QLEV,
                     &op->u.triangulate.quad_levels, err);
         if (r == 0)
-            r = get_u32(o, "binary_levels", pl, 1, 20,
+            r = get_u32(o, "binary_levels", pl, 1, GEO_FREP_MAX_BLEV,
                         &op->u.triangulate.binary_levels, err);
         if (r == 0)
-            r = get_bool(o, "fill", pl, &op->u.triangulate.fill, err);
+            r = get_choice(o, "fill", pl, fill_names, 2, &fill, err);
         if (r == 0)
             r = get_bool(o, "refine", pl, &op->u.triangulate.refine, err);
         if (r == 0)
-            r = get_bool(o, "fair", pl, &op->u.triangulate.fair, err);
+            r = get_choice(o, "fair", pl, fair_names, 3, &fair, err);
+        if (r == 0)
+            r = get_bool(o, "sharpen", pl, &op->u.triangulate.sharpen, err);
+        op->u.triangulate.fill_edges = fill == 1;
+        op->u.triangulate.fair = (proto_fair)fair;
         return r;
+    }
     case PROTO_OP_FILL_HOLES: {
         static const char *const weights[] = {"area", "length"};
         int w = op->u.fill_holes.weight_length;
@@ -598,10 +608,14 @@ static json_t *op_to_json(const proto_op *op)
                                  json_integer(op->u.triangulate.quad_levels));
         e |= json_object_set_new(o, "binary_levels",
                                  json_integer(op->u.triangulate.binary_levels));
-        e |= json_object_set_new(o, "fill", json_boolean(op->u.triangulate.fill));
+        e |= json_object_set_new(
+            o, "fill", json_string(fill_names[op->u.triangulate.fill_edges]));
         e |= json_object_set_new(o, "refine",
                                  json_boolean(op->u.triangulate.refine));
-        e |= json_object_set_new(o, "fair", json_boolean(op->u.triangulate.fair));
+        e |= json_object_set_new(
+            o, "fair", json_string(fair_names[op->u.triangulate.fair]));
+        e |= json_object_set_new(o, "sharpen",
+                                 json_boolean(op->u.triangulate.sharpen));
         break;
     case PROTO_OP_FILL_HOLES:
         e |= json_object_set_new(

@@ -23,8 +23,12 @@
  *   inversion_stats {samples 1..100000 [100], magnitudes: [m > 0, ...]
  *                 [1, .5, .1, .05, .01, .005, .001, .0005, .0001, .00005],
  *                 seed [1], schedule ["local-exp"]}
- *   triangulate {quad_levels 1..12 [9], binary_levels 1..20 [10],
- *                 fill [true], refine [true], fair [true]}
+ *   triangulate {quad_levels 1..11 [9], binary_levels 1..20 [10],
+ *                 fill "area"|"edges" ["area"], refine [true],
+ *                 fair "uniform"|"length"|"none" ["uniform"],
+ *                 sharpen [true]} — an F-rep input (lib/triangulate.h)
+ *                 to a mesh; only as the first op of a job whose input is
+ *                 a frep-object/1
  *   fill_holes {weight "area"|"length" ["area"], refine [true],
  *                 fair [true]}
  *   stitch
@@ -67,6 +71,12 @@ typedef enum proto_schedule {
     PROTO_SCHED_GLOBAL_EXP,    /* §4.3.3 */
 } proto_schedule;
 
+typedef enum proto_fair {
+    PROTO_FAIR_NONE = 0,
+    PROTO_FAIR_UNIFORM, /* w = 1 (seed 001, closed form) */
+    PROTO_FAIR_LENGTH,  /* w = edge length (gradient descent) */
+} proto_fair;
+
 enum { PROTO_PIPELINE_MAX_OPS = 64, PROTO_MAX_MAGNITUDES = 64 };
 
 typedef struct proto_op {
@@ -103,7 +113,9 @@ typedef struct proto_op {
         } inversion;
         struct {
             uint32_t quad_levels, binary_levels;
-            bool fill, refine, fair;
+            bool fill_edges;     /* weight holes by edge length (else area) */
+            bool refine, sharpen;
+            proto_fair fair;
         } triangulate;
         struct {
             bool weight_length;  /* weight by edge length (else area) */
