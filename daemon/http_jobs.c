@@ -263,7 +263,8 @@ enum MHD_Result http_post_job(http_req *r)
     job_request rq = {
         .model = poly, .pipeline = &pl, .priority = prio, .source = "http",
         .label = label, .idem_key = idem,
-        .idem_hash = job_hash64(r->body ? r->body : "", r->len),
+        /* only a keyed request is ever compared: no other hashes 464 KB */
+        .idem_hash = idem ? job_hash64(r->body ? r->body : "", r->len) : 0,
     };
     job_rec job;
     bool replayed = false;

@@ -44,12 +44,16 @@ int job_exec(void *user, const job_rec *job, const void *input,
         return fail(ret, -EINVAL, &err);
     }
     json_t *stats = NULL, *summary = NULL;
+    bool changes = runner_changes_model(&pl);
     r = runner_run(&pl, &model, ctx, op_timer, user, &stats, &summary, &err);
     proto_pipeline_free(&pl);
     if (r == 0) {
-        char *buf;
-        size_t len;
-        r = proto_model_write_mem(model, PROTO_FMT_FMB1, &buf, &len, &err);
+        /* a read-only pipeline's result is its input: the store keeps
+         * one copy (store_finish without a model) */
+        char *buf = NULL;
+        size_t len = 0;
+        if (changes)
+            r = proto_model_write_mem(model, PROTO_FMT_FMB1, &buf, &len, &err);
         if (r == 0) {
             ret->model = buf;
             ret->model_len = len;

@@ -59,6 +59,15 @@ bool runner_op_available(proto_op_kind op)
     return (unsigned)op < PROTO_OP_COUNT && ops[op].run != NULL;
 }
 
+bool runner_changes_model(const proto_pipeline *p)
+{
+    for (size_t i = 0; i < p->nops; i++)
+        if (!runner_op_available(p->ops[i].kind) ||
+            ops[p->ops[i].kind].changes_model)
+            return true;
+    return false;
+}
+
 int runner_check(const proto_pipeline *p, geo_err *err)
 {
     for (size_t i = 0; i < p->nops; i++)

@@ -40,6 +40,10 @@ bool runner_op_available(proto_op_kind op);
  * "pipeline[1]: op 'cut' is not available in this build". */
 int runner_check(const proto_pipeline *p, geo_err *err);
 
+/* True when an operation of p may change the model; false for a pipeline
+ * of read-only operations (inspect), whose result is its input. */
+bool runner_changes_model(const proto_pipeline *p);
+
 /* Called after each operation with its run time (for metrics). */
 typedef void (*runner_op_timer)(void *user, proto_op_kind op, double seconds);
 

@@ -98,6 +98,35 @@ void proto_buf_u32(proto_buf *b, uint32_t v)
     b->len += (size_t)n;
 }
 
+unsigned char *proto_buf_grow(proto_buf *b, size_t n)
+{
+    if (!buf_reserve(b, n))
+        return NULL;
+    unsigned char *at = (unsigned char *)b->data + b->len;
+    b->len += n;
+    return at;
+}
+
+void proto_st_u16le(unsigned char *p, uint16_t v)
+{
+    p[0] = (unsigned char)v;
+    p[1] = (unsigned char)(v >> 8);
+}
+
+void proto_st_u32le(unsigned char *p, uint32_t v)
+{
+    for (int i = 0; i < 4; i++)
+        p[i] = (unsigned char)(v >> (8 * i));
+}
+
+void proto_st_f64le(unsigned char *p, double v)
+{
+    uint64_t u;
+    memcpy(&u, &v, 8);
+    for (int i = 0; i < 8; i++)
+        p[i] = (unsigned char)(u >> (8 * i));
+}
+
 void proto_buf_u16le(proto_buf *b, uint16_t v)
 {
     unsigned char s[2] = {(unsigned char)v, (unsigned char)(v >> 8)};

@@ -40,6 +40,13 @@ void proto_buf_printf(proto_buf *b, const char *fmt, ...)
 void proto_buf_double(proto_buf *b, double x);
 /* v in decimal digits. */
 void proto_buf_u32(proto_buf *b, uint32_t v);
+/* Appends n bytes and returns where they start, for the caller to fill;
+ * NULL after an allocation failure (then failed is set). */
+unsigned char *proto_buf_grow(proto_buf *b, size_t n);
+/* Little-endian stores to unaligned bytes. */
+void proto_st_u16le(unsigned char *p, uint16_t v);
+void proto_st_u32le(unsigned char *p, uint32_t v);
+void proto_st_f64le(unsigned char *p, double v);
 void proto_buf_u16le(proto_buf *b, uint16_t v);
 void proto_buf_u32le(proto_buf *b, uint32_t v);
 void proto_buf_f32le(proto_buf *b, float v);
