@@ -181,12 +181,18 @@ int proto_decimal_parse(const char *s, size_t len, double *ret)
                 ex = ex * 10 + (*p - '0');
         q += eneg ? -ex : ex;
     }
+    return proto_decimal_from_parts(neg, w, q, dropped, s, len, ret);
+}
+
+int proto_decimal_from_parts(bool neg, uint64_t w, int64_t q, bool inexact,
+                             const char *s, size_t len, double *ret)
+{
     if (w == 0) {
         *ret = neg ? -0.0 : 0.0;
         return 0;
     }
     double v;
-    if (!dropped && parse_exact(w, q, &v)) {
+    if (!inexact && parse_exact(w, q, &v)) {
         *ret = neg ? -v : v;
         return 0;
     }

@@ -26,7 +26,9 @@
 #ifndef PROTO_DECIMAL_H
 #define PROTO_DECIMAL_H
 
+#include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 /* Room proto_decimal_format needs (sign, 17 digits, point, exponent). */
 #define PROTO_DECIMAL_MAX 32
@@ -38,6 +40,13 @@
  * underflow gives the nearest subnormal or zero, as strtod. -ENOMEM when
  * a very long number cannot be copied for strtod. */
 int proto_decimal_parse(const char *s, size_t len, double *ret);
+
+/* The same, for a scanner that has already gathered the digits: the value
+ * is (neg ? −1 : 1)·w·10^q, exactly unless inexact (a non-zero digit
+ * beyond the 19 significant ones kept in w was dropped); s[0..len) is the
+ * number's text, for strtod when exact arithmetic cannot decide. */
+int proto_decimal_from_parts(bool neg, uint64_t w, int64_t q, bool inexact,
+                             const char *s, size_t len, double *ret);
 
 /* Writes finite x into out (PROTO_DECIMAL_MAX bytes), NUL-terminated, as
  * described above; "0" for +0 and "-0.0" for −0 (so that −0 reads back as

@@ -417,9 +417,51 @@ static bool is_digit(unsigned c)
     return c - '0' < 10;
 }
 
+/* Eight bytes at p as a little-endian word. */
+static uint64_t load8(const unsigned char *p)
+{
+    uint64_t v;
+    memcpy(&v, p, 8);
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
+    v = __builtin_bswap64(v);
+#endif
+    return v;
+}
+
+/* True when all eight bytes of v are ASCII digits. */
+static bool eight_digits(uint64_t v)
+{
+    return ((v & 0xF0F0F0F0F0F0F0F0u) |
+            (((v + 0x0606060606060606u) & 0xF0F0F0F0F0F0F0F0u) >> 4)) ==
+           0x3333333333333333u;
+}
+
+/* The value of eight digit bytes, first byte most significant. */
+static uint32_t eight_digits_value(uint64_t v)
+{
+    v -= 0x3030303030303030u;
+    v = v * 10 + (v >> 8);
+    v = ((v & 0x000000FF000000FFu) * (100 + (UINT64_C(1000000) << 32)) +
+         ((v >> 16 & 0x000000FF000000FFu) * (1 + (UINT64_C(10000) << 32)))) >>
+        32;
+    return (uint32_t)v;
+}
+
+/* Significant digits of v < 10^8. */
+static int digits_of(uint32_t v)
+{
+    static const uint32_t pow10[8] = {1,      10,      100,      1000,
+                                      10000,  100000,  1000000,  10000000};
+    int k = 0;
+    while (k < 8 && v >= pow10[k])
+        k++;
+    return k;
+}
+
 /* A number starting at start ('-' or a digit), read as jansson reads it:
  * "-" or "01" or "1." or "1e" are not numbers (TK_INVALID with the bytes
- * read so far), the look-ahead byte is checked as UTF-8. */
+ * read so far), the look-ahead byte is checked as UTF-8. The digits are
+ * gathered in the same pass (w·10^q, as proto/decimal.h wants them). */
 static int lex_number(proto_jpull *j, size_t start)
 {
     const unsigned char *d = j->data;
@@ -427,81 +469,115 @@ static int lex_number(proto_jpull *j, size_t start)
     bool neg = d[p] == '-';
     if (neg)
         p++;
+    uint64_t w = 0;
+    int nd = 0;
+    int64_t q = 0;
+    bool dropped = false;
     if (p < n && d[p] == '0') {
         p++;
-        if (!lookahead_ok(j, p, start))
-            return TK_FAILED;
-        if (p < n && is_digit(d[p])) {
-            j->tok_end = j->pos = p;
-            return TK_INVALID;
-        }
     } else if (p < n && is_digit(d[p])) {
-        while (p < n && is_digit(d[p]))
-            p++;
-        if (!lookahead_ok(j, p, start))
-            return TK_FAILED;
+        /* eight digits at a time while they fit in w's 19 */
+        uint64_t v;
+        while (nd <= 11 && n - p >= 8 && eight_digits(v = load8(d + p))) {
+            w = w * 100000000 + eight_digits_value(v);
+            nd += 8;
+            p += 8;
+        }
+        while (p < n && is_digit(d[p])) {
+            unsigned dg = d[p++] - '0';
+            if (nd < 19) {
+                w = w * 10 + dg;
+                nd++;
+            } else {
+                q++;
+                dropped |= dg != 0;
+            }
+        }
     } else {
         if (!lookahead_ok(j, p, start))
             return TK_FAILED;
         j->tok_end = j->pos = p;
         return TK_INVALID;
     }
+    if (p < n && d[p] >= 0x80 && !lookahead_ok(j, p, start))
+        return TK_FAILED;
+    if (p < n && is_digit(d[p])) { /* a leading zero */
+        j->tok_end = j->pos = p;
+        return TK_INVALID;
+    }
     if (p >= n || (d[p] != '.' && d[p] != 'e' && d[p] != 'E')) {
         j->tok_end = j->pos = p;
-        uint64_t u = 0;
-        bool over = false;
-        for (size_t i = start + neg; i < p; i++) {
-            unsigned dg = d[i] - '0';
-            if (u > (UINT64_MAX - dg) / 10)
-                over = true;
-            else
-                u = u * 10 + dg;
-        }
+        /* at most 19 digits are in w; more overflow any int64 */
         if (neg) {
-            if (over || u > (UINT64_C(1) << 63))
+            if (q > 0 || w > UINT64_C(1) << 63)
                 return fail_at(j, p, start, p, false,
                                "too big negative integer");
-            j->integer = u == (UINT64_C(1) << 63) ? INT64_MIN : -(int64_t)u;
+            j->integer = w == UINT64_C(1) << 63 ? INT64_MIN : -(int64_t)w;
         } else {
-            if (over || u > (uint64_t)INT64_MAX)
+            if (q > 0 || w > (uint64_t)INT64_MAX)
                 return fail_at(j, p, start, p, false, "too big integer");
-            j->integer = (int64_t)u;
+            j->integer = (int64_t)w;
         }
         return TK_INTEGER;
     }
     if (d[p] == '.') {
         p++;
-        if (!lookahead_ok(j, p, start))
+        if (p < n && d[p] >= 0x80 && !lookahead_ok(j, p, start))
             return TK_FAILED;
         if (p >= n || !is_digit(d[p])) {
             j->tok_end = j->pos = p;
             return TK_INVALID;
         }
-        while (p < n && is_digit(d[p]))
-            p++;
-        if (!lookahead_ok(j, p, start))
+        uint64_t v;
+        while (nd <= 11 && n - p >= 8 && eight_digits(v = load8(d + p))) {
+            uint32_t x = eight_digits_value(v);
+            /* leading zeros of the fraction are not significant */
+            nd += w ? 8 : digits_of(x);
+            w = w * 100000000 + x;
+            q -= 8;
+            p += 8;
+        }
+        while (p < n && is_digit(d[p])) {
+            unsigned dg = d[p++] - '0';
+            if (nd < 19) {
+                w = w * 10 + dg;
+                nd += w != 0;
+                q--;
+            } else {
+                dropped |= dg != 0;
+            }
+        }
+        if (p < n && d[p] >= 0x80 && !lookahead_ok(j, p, start))
             return TK_FAILED;
     }
     if (p < n && (d[p] == 'e' || d[p] == 'E')) {
         p++;
-        if (!lookahead_ok(j, p, start))
+        if (p < n && d[p] >= 0x80 && !lookahead_ok(j, p, start))
             return TK_FAILED;
+        bool eneg = false;
         if (p < n && (d[p] == '+' || d[p] == '-')) {
-            p++;
-            if (!lookahead_ok(j, p, start))
+            eneg = d[p++] == '-';
+            if (p < n && d[p] >= 0x80 && !lookahead_ok(j, p, start))
                 return TK_FAILED;
         }
         if (p >= n || !is_digit(d[p])) {
             j->tok_end = j->pos = p;
             return TK_INVALID;
         }
-        while (p < n && is_digit(d[p]))
+        int64_t ex = 0;
+        do {
+            if (ex < 1000000000)
+                ex = ex * 10 + (d[p] - '0');
             p++;
-        if (!lookahead_ok(j, p, start))
+        } while (p < n && is_digit(d[p]));
+        if (p < n && d[p] >= 0x80 && !lookahead_ok(j, p, start))
             return TK_FAILED;
+        q += eneg ? -ex : ex;
     }
     j->tok_end = j->pos = p;
-    int r = proto_decimal_parse((const char *)d + start, p - start, &j->real);
+    int r = proto_decimal_from_parts(neg, w, q, dropped,
+                                     (const char *)d + start, p - start,
+                                     &j->real);
     if (r == -ENOMEM)
         return fail_oom(j);
     if (r < 0)

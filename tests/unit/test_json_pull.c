@@ -460,6 +460,65 @@ static void test_numbers(void **state)
                         "1:9 real number overflow near '-1.5e400'");
 }
 
+/* Every number the tokenizer reads is strtod's double, bit for bit
+ * (integers: strtoll's value), over random digit strings with fractions
+ * of every length, leading zeros and exponents. */
+static void test_numbers_read_like_strtod(void **state)
+{
+    (void)state;
+    char s[96];
+    for (int it = 0; it < 300000; it++) {
+        char *o = s;
+        *o++ = '[';
+        char *num = o;
+        if (rnd() & 1)
+            *o++ = '-';
+        int ni = (int)(rnd() % 21);
+        if (ni == 0 || rnd() % 3 == 0) {
+            *o++ = '0';
+        } else {
+            *o++ = (char)('1' + rnd() % 9);
+            for (int k = 1; k < ni; k++)
+                *o++ = (char)('0' + rnd() % 10);
+        }
+        if (rnd() % 4) {
+            *o++ = '.';
+            int zeros = rnd() % 3 ? 0 : (int)(rnd() % 12);
+            for (int k = 0; k < zeros; k++)
+                *o++ = '0';
+            int nf = 1 + (int)(rnd() % 24);
+            for (int k = 0; k < nf; k++)
+                *o++ = (char)('0' + rnd() % 10);
+        }
+        if (rnd() % 4 == 0)
+            o += sprintf(o, "%s%d", rnd() & 1 ? "e" : "E-",
+                         (int)(rnd() % 40));
+        *o = '\0';
+        size_t nlen = (size_t)(o - num);
+        *o++ = ']';
+        proto_jpull j;
+        proto_jpull_init(&j, s, (size_t)(o - s));
+        assert_int_equal(proto_jpull_next(&j), PROTO_JT_ARRAY);
+        proto_jtok t = proto_jpull_next(&j);
+        s[nlen + 1] = '\0';
+        if (t == PROTO_JT_INTEGER) {
+            long long want = strtoll(num, NULL, 10);
+            if (j.integer != want)
+                fail_msg("%s: %lld, want %lld", num, (long long)j.integer,
+                         want);
+        } else if (t == PROTO_JT_REAL) {
+            double want = strtod(num, NULL);
+            if (memcmp(&want, &j.real, sizeof want) != 0)
+                fail_msg("%s: %a, want %a", num, j.real, want);
+        } else {
+            /* only integers beyond int64 are refused */
+            assert_int_equal(t, PROTO_JT_ERROR);
+            assert_non_null(strstr(j.error.text, "too big"));
+        }
+        proto_jpull_clear(&j);
+    }
+}
+
 static void test_duplicate_keys_are_refused_per_object(void **state)
 {
     (void)state;
@@ -652,6 +711,7 @@ int main(void)
         cmocka_unit_test(test_strings_escapes_and_utf8),
         cmocka_unit_test(test_escapes_decode_to_utf8),
         cmocka_unit_test(test_numbers),
+        cmocka_unit_test(test_numbers_read_like_strtod),
         cmocka_unit_test(test_duplicate_keys_are_refused_per_object),
         cmocka_unit_test(test_nesting_limit_is_janssons),
         cmocka_unit_test(test_huge_inputs),
