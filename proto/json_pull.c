@@ -688,7 +688,7 @@ static bool key_insert(proto_jpull *j, uint32_t serial, const char *s,
     for (; j->keys[k].hash; k = (k + 1) & mask) {
         const proto_jkey *e = &j->keys[k];
         if (e->hash == h && e->serial == serial && e->len == len &&
-            memcmp(j->arena + e->off, s, len) == 0)
+            (len == 0 || memcmp(j->arena + e->off, s, len) == 0))
             return false;
     }
     if (len > j->acap - j->alen) {
@@ -708,7 +708,8 @@ static bool key_insert(proto_jpull *j, uint32_t serial, const char *s,
         j->arena = a;
         j->acap = cap;
     }
-    memcpy(j->arena + j->alen, s, len);
+    if (len)
+        memcpy(j->arena + j->alen, s, len);
     j->keys[k] = (proto_jkey){h, serial, (uint32_t)len, j->alen};
     j->alen += len;
     j->nkeys++;
