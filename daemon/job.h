@@ -54,8 +54,10 @@ typedef struct job_rec {
     bool cancel_requested;
     int attempts;      /* times a worker took it */
     uint64_t input_bytes, result_bytes; /* sizes of the kept blobs */
-    uint64_t result_hash; /* job_digest64 of the result model (FNV-1a 64 for
-                             jobs finished by older versions), 0 if none */
+    uint64_t result_hash; /* names the result for ETags: job_digest64 of the
+                             result model, or of the id when the result is
+                             the input (FNV-1a 64 of the model for jobs
+                             finished by older versions), 0 if none */
     uint64_t idem_hash;   /* hash of the request that created it */
 } job_rec;
 

@@ -124,8 +124,9 @@ int store_progress(store *s, const char *id, double progress,
  * summary JSON and result blobs (copied; NULL/0 for none). A succeeded job
  * without a model blob has the input as its result (a pipeline that only
  * inspects): no second copy is kept, store_get_blob(STORE_BLOB_MODEL)
- * gives the input, and result_hash is the input's digest. -EBUSY when the
- * job is not running. */
+ * gives the input, and result_hash is the digest of the job's id (it
+ * only has to name the result, which never changes). -EBUSY when the job
+ * is not running. */
 int store_finish(store *s, const char *id, job_state state,
                  const char *error, const char *summary, const void *model,
                  size_t model_len, const void *stats, size_t stats_len,

@@ -39,7 +39,7 @@
 enum stmt_id {
     S_GET, S_COUNT_QUEUED, S_FIND_IDEM, S_INSERT_JOB, S_INSERT_BLOB,
     S_CLAIM, S_PROGRESS, S_FINISH, S_REQUEUE, S_CANCEL, S_SEQ_STATE,
-    S_DELETE_JOB, S_DELETE_BLOBS, S_GET_BLOB, S_INPUT_BLOB, S_LIST, S_RECOVER,
+    S_DELETE_JOB, S_DELETE_BLOBS, S_GET_BLOB, S_LIST, S_RECOVER,
     S_EXPIRED, S_OLDEST_DONE, S_TOTAL_BYTES, S_COUNTS, S_PING,
     S_BEGIN, S_COMMIT, S_ROLLBACK, S_SYNC_FULL, S_SYNC_NORMAL,
     NSTMT
@@ -87,7 +87,6 @@ static const char *const sql[NSTMT] = {
         "SELECT b.data FROM jobs j JOIN blobs b ON b.key IN (j.seq*4+?2, "
         "CASE WHEN ?2=1 AND j.state=2 THEN j.seq*4 END) WHERE j.id=?1 "
         "ORDER BY b.key DESC LIMIT 1",
-    [S_INPUT_BLOB] = "SELECT data FROM blobs WHERE key=?1*4",
     [S_LIST] =
         "SELECT " COLS " FROM jobs WHERE (?1<0 OR state=?1) AND "
         "(?2 IS NULL OR source=?2) AND (?3 IS NULL OR id<?3) "
@@ -532,31 +531,6 @@ static int sq_progress(store *s, const char *id, double progress,
     return r;
 }
 
-/* The digest of a job's input blob (the result of a job that left it
- * unchanged). */
-static int input_digest(conn *c, const char *id, uint64_t *ret, geo_err *err)
-{
-    sqlite3_stmt *st = stmt(c, S_SEQ_STATE, err);
-    if (!st)
-        return -EIO;
-    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
-    int rc = sqlite3_step(st);
-    int64_t seq = rc == SQLITE_ROW ? sqlite3_column_int64(st, 0) : -1;
-    done(st);
-    if (seq < 0)
-        return rc == SQLITE_DONE ? why_not(c, id, err)
-                                 : db_err(c->db, err, "read");
-    if (!(st = stmt(c, S_INPUT_BLOB, err)))
-        return -EIO;
-    sqlite3_bind_int64(st, 1, seq);
-    rc = sqlite3_step(st);
-    if (rc == SQLITE_ROW)
-        *ret = job_digest64(sqlite3_column_blob(st, 0),
-                            (size_t)sqlite3_column_bytes(st, 0));
-    done(st);
-    return rc == SQLITE_ROW ? 0 : db_err(c->db, err, "read input");
-}
-
 static int sq_finish(store *s, const char *id, job_state state,
                      const char *error, const char *summary,
                      const void *model, size_t model_len, const void *stats,
@@ -580,14 +554,11 @@ static int sq_finish(store *s, const char *id, job_state state,
         sqlite3_bind_text(st, 5, summary, -1, SQLITE_STATIC);
     sqlite3_bind_int64(st, 6, (int64_t)((model ? model_len : 0) +
                                         (stats ? stats_len : 0)));
-    uint64_t hash = 0;
-    if (model) {
-        hash = job_digest64(model, model_len);
-    } else if (state == JOB_SUCCEEDED) {
-        r = input_digest(c, id, &hash, err);
-        if (r < 0)
-            goto out;
-    }
+    /* a result that is the input is named by its job: a job's results
+     * never change, so the id serves the ETags as well as a digest */
+    uint64_t hash = model ? job_digest64(model, model_len)
+                    : state == JOB_SUCCEEDED ? job_digest64(id, strlen(id))
+                                             : 0;
     sqlite3_bind_int64(st, 7, (int64_t)hash);
     int rc = sqlite3_step(st);
     int64_t seq = rc == SQLITE_ROW ? sqlite3_column_int64(st, 0) : 0;
