@@ -108,7 +108,7 @@ $(B)/tools/%: $(B)/obj/tests/tools/%.o $(call obj,$(TESTLIB_SRCS)) $(ALL_LIBS)
 DEB_PKGS := build-essential pkg-config libjansson-dev libmicrohttpd-dev \
     libsqlite3-dev libsystemd-dev libusb-1.0-0-dev libhidapi-dev libudev-dev \
     libcmocka-dev umockdev libumockdev-dev libglib2.0-dev curl systemd \
-    clang libclang-rt-14-dev wrk
+    clang libclang-rt-14-dev wrk jq
 deps:
 	@sh tests/tools/install-deps.sh $(DEB_PKGS)
 

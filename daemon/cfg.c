@@ -13,9 +13,15 @@
 #include <string.h>
 #include <strings.h>
 
+#include "config.h"
 #include "log.h"
+#include "pipeline.h"
 
-enum ktype { K_STR, K_BOOL, K_UINT, K_SIZE, K_DURATION, K_LEVEL };
+/* K_LIST: a repeatable key (Scanner=): each line adds an entry, an empty
+ * value resets the default list. K_PIPELINE: a string checked with
+ * cfg_pipeline_json. */
+enum ktype { K_STR, K_BOOL, K_UINT, K_SIZE, K_DURATION, K_LEVEL, K_LIST,
+             K_PIPELINE };
 
 typedef struct key {
     const char *section, *name, *flag;
@@ -86,6 +92,15 @@ static const key keys[] = {
      "finished jobs beyond this total size are deleted, oldest first"},
     {"Log", "LogLevel", "log-level", K_LEVEL, F(log_level), 0, 0, true,
      "info", "err, warning, notice, info or debug"},
+    {"Scanners", "Enabled", "scanners", K_BOOL, F(scanners), 0, 1, false,
+     "yes", "take scans from USB scanners (--no-scanners: serve HTTP only)"},
+    {"Scanners", "Scanner", "scanner", K_LIST, F(scanner), 0, 0, false,
+     SCAN_DEFAULT_DEVICES, "VID:PID:bulk|hid [PIPELINE]: a scanner model "
+     "(repeatable; the first replaces the default list)"},
+    {"Scanners", "Pipeline", "scanner-pipeline", K_PIPELINE,
+     F(scanner_pipeline), 0, 0, true, "auto",
+     "pipeline of scanner jobs: auto, op names (inspect,triangulate), "
+     "inline JSON or a /path/to/pipeline.json"},
 };
 enum { NKEYS = sizeof keys / sizeof keys[0] };
 
@@ -177,13 +192,101 @@ static int parse_bool(const char *s, bool *ret)
     return -EINVAL;
 }
 
+/* Checks one Scanner= line; with the first n entries of c's list as the
+ * scanners it is added to (no VID:PID twice). */
+static int check_scanner(const cfg *c, unsigned n, const key *k,
+                         const char *value, geo_err *err)
+{
+    char dev[64];
+    const char *pipeline = cfg_scanner_split(value, dev, sizeof dev);
+    scan_match m;
+    int r = scan_match_parse(dev, &m, err);
+    if (r < 0) {
+        geo_err_prefix(err, k->name);
+        return r;
+    }
+    for (unsigned i = 0; i < n; i++) {
+        char other[64];
+        cfg_scanner_split(c->scanner[i], other, sizeof other);
+        scan_match o;
+        if (scan_match_parse(other, &o, NULL) == 0 && o.vid == m.vid &&
+            o.pid == m.pid)
+            return geo_err_set(err, -EINVAL, "%s: %04x:%04x listed twice",
+                               k->name, m.vid, m.pid);
+    }
+    if (*pipeline) {
+        json_t *pj = cfg_pipeline_json(pipeline, err);
+        if (!pj) {
+            geo_err_prefix(err, k->name);
+            return -EINVAL;
+        }
+        json_decref(pj);
+    }
+    if (n == CFG_SCANNERS_MAX)
+        return geo_err_set(err, -EINVAL, "%s: more than %d scanners",
+                           k->name, CFG_SCANNERS_MAX);
+    if (strlen(value) >= CFG_SCANNER_LEN)
+        return geo_err_set(err, -EINVAL, "%s: longer than %d bytes", k->name,
+                           CFG_SCANNER_LEN - 1);
+    return 0;
+}
+
+/* K_LIST: an empty value restores the default list; the first line after
+ * that replaces it, later lines add. c is unchanged on error. */
+static int set_list(cfg *c, const key *k, const char *value, geo_err *err)
+{
+    if (*value) {
+        unsigned n = c->scanner_set ? c->nscanner : 0;
+        int r = check_scanner(c, n, k, value, err);
+        if (r < 0)
+            return r;
+        if (!c->scanner_set)
+            memset(c->scanner, 0, sizeof c->scanner);
+        memcpy(c->scanner[n], value, strlen(value) + 1);
+        c->nscanner = n + 1;
+        c->scanner_set = true;
+        return 0;
+    }
+    memset(c->scanner, 0, sizeof c->scanner);
+    c->nscanner = 0;
+    char def[256];
+    snprintf(def, sizeof def, "%s", k->def);
+    for (char *save, *e = strtok_r(def, ",", &save); e;
+         e = strtok_r(NULL, ",", &save)) {
+        char *entry = trim(e);
+        if (check_scanner(c, c->nscanner, k, entry, err) == 0)
+            memcpy(c->scanner[c->nscanner++], entry, strlen(entry) + 1);
+    }
+    c->scanner_set = false;
+    return 0;
+}
+
 static int set_value(cfg *c, const key *k, const char *value, geo_err *err)
 {
     char *field = (char *)c + k->off;
     uint64_t v = 0;
+    if (k->type == K_LIST)
+        return set_list(c, k, value, err);
+    bool given = *value != '\0';
     if (!*value)
         value = k->def;
     switch (k->type) {
+    case K_LIST:
+        break;
+    case K_PIPELINE: {
+        if (strlen(value) >= k->size)
+            return geo_err_set(err, -EINVAL, "%s: longer than %zu bytes",
+                               k->name, k->size - 1);
+        json_t *pj = cfg_pipeline_json(value, err);
+        if (!pj) {
+            geo_err_prefix(err, k->name);
+            return -EINVAL;
+        }
+        json_decref(pj);
+        memcpy(field, value, strlen(value) + 1);
+        c->scanner_pipeline_set = given;
+        return 0;
+    }
     case K_STR:
         if (strlen(value) >= k->size)
             return geo_err_set(err, -EINVAL, "%s: longer than %zu bytes",
@@ -248,7 +351,7 @@ void cfg_defaults(cfg *c)
 {
     memset(c, 0, sizeof *c);
     for (int i = 0; i < NKEYS; i++) {
-        int r = set_value(c, &keys[i], keys[i].def, NULL);
+        int r = set_value(c, &keys[i], "", NULL);
         (void)r;
     }
 }
@@ -438,11 +541,21 @@ static int walk_args(int argc, char **argv, cfg *c, const char **ret_path,
         const char *name = a + 2, *eq = strchr(name, '=');
         size_t len = eq ? (size_t)(eq - name) : strlen(name);
         const key *k = find_flag(name, len);
+        /* --no-FLAG turns a boolean off */
+        bool negated = false;
+        if (!k && !eq && len > 3 && strncmp(name, "no-", 3) == 0) {
+            k = find_flag(name + 3, len - 3);
+            negated = k && k->type == K_BOOL;
+            if (!negated)
+                k = NULL;
+        }
         if (!k)
             return geo_err_set(err, -EINVAL, "unknown option --%.*s",
                                (int)len, name);
         const char *value;
-        if (eq)
+        if (negated)
+            value = "no";
+        else if (eq)
             value = eq + 1;
         else if (k->type == K_BOOL)
             value = "yes";
@@ -519,6 +632,65 @@ int cfg_finish(cfg *c, geo_err *err)
     return 0;
 }
 
+json_t *cfg_pipeline_json(const char *spec, geo_err *err)
+{
+    while (isspace((unsigned char)*spec))
+        spec++;
+    json_t *pj = NULL;
+    json_error_t je;
+    if (!*spec) {
+        geo_err_set(err, -EINVAL, "empty pipeline");
+        return NULL;
+    }
+    if (*spec == '[' || *spec == '"' || *spec == '{') {
+        pj = json_loads(spec, JSON_DECODE_ANY | JSON_REJECT_DUPLICATES, &je);
+        if (!pj) {
+            geo_err_set(err, -EINVAL, "column %d: %s", je.column, je.text);
+            return NULL;
+        }
+    } else if (*spec == '/' || strncmp(spec, "./", 2) == 0) {
+        pj = json_load_file(spec, JSON_DECODE_ANY | JSON_REJECT_DUPLICATES,
+                            &je);
+        if (!pj) {
+            geo_err_set(err, -EINVAL, "%s:%d:%d: %s", spec, je.line,
+                        je.column, je.text);
+            return NULL;
+        }
+    } else if (strcmp(spec, "auto") == 0) {
+        pj = json_string("auto");
+    } else {
+        pj = json_array();
+        char buf[CFG_PIPELINE_LEN];
+        snprintf(buf, sizeof buf, "%s", spec);
+        for (char *save, *op = strtok_r(buf, ",", &save); pj && op;
+             op = strtok_r(NULL, ",", &save))
+            json_array_append_new(pj, json_string(trim(op)));
+    }
+    if (!pj) {
+        geo_err_set(err, -ENOMEM, "out of memory");
+        return NULL;
+    }
+    proto_pipeline pl;
+    if (proto_pipeline_from_json(pj, "pipeline", &pl, err) < 0) {
+        json_decref(pj);
+        return NULL;
+    }
+    proto_pipeline_free(&pl);
+    return pj;
+}
+
+const char *cfg_scanner_split(const char *line, char *dev, size_t dev_size)
+{
+    while (isspace((unsigned char)*line))
+        line++;
+    size_t n = strcspn(line, " \t");
+    snprintf(dev, dev_size, "%.*s", (int)n, line);
+    line += n;
+    while (isspace((unsigned char)*line))
+        line++;
+    return line;
+}
+
 void cfg_print_help(FILE *out, const char *prog)
 {
     fprintf(out,
@@ -540,6 +712,8 @@ void cfg_print_help(FILE *out, const char *prog)
         char flag[64];
         snprintf(flag, sizeof flag, "--%s%s", k->flag,
                  k->type == K_BOOL ? "" : "=V");
+        if (k->type == K_BOOL && strcmp(k->def, "yes") == 0)
+            snprintf(flag, sizeof flag, "--[no-]%s", k->flag);
         fprintf(out, "  %-26s %s=  %s (default: %s)%s\n", flag, k->name,
                 k->help, *k->def ? k->def : "none",
                 k->reloadable ? "" : " [restart]");
@@ -560,6 +734,21 @@ int cfg_restart_only_changes(const cfg *a, const cfg *b, char *buf,
         const key *k = &keys[i];
         if (k->reloadable)
             continue;
+        if (k->type == K_LIST) {
+            bool same = a->nscanner == b->nscanner;
+            for (unsigned j = 0; same && j < a->nscanner; j++)
+                same = strcmp(a->scanner[j], b->scanner[j]) == 0;
+            if (!same) {
+                n++;
+                if (used < size) {
+                    int w = snprintf(buf + used, size - used, "%s%s.%s",
+                                     used ? ", " : "", k->section, k->name);
+                    if (w > 0)
+                        used += (size_t)w;
+                }
+            }
+            continue;
+        }
         size_t len = k->type == K_STR ? strlen((const char *)a + k->off) + 1
                      : k->type == K_UINT ? sizeof(unsigned)
                      : k->type == K_BOOL ? sizeof(bool)

@@ -6,7 +6,10 @@
  * File syntax (like journald.conf): "[Section]" lines, "Key=Value" lines,
  * blank lines and lines starting with '#' or ';' ignored, whitespace
  * around keys and values trimmed. An empty value resets the key to its
- * default. An unknown section or key, or a malformed value, is an error
+ * default. A repeatable key (Scanner=) adds one entry per line; its first
+ * line replaces the default list and an empty value restores it. Boolean
+ * flags also take the form --no-FLAG. An unknown section or key, or a
+ * malformed value, is an error
  * naming the file and line ("facetd.conf:12: Workers: expected a whole
  * number"). Every key is also a flag (--workers=4 or --workers 4); the
  * table in cfg.c is the one list of keys, and --help is printed from it.
@@ -24,9 +27,17 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include <jansson.h>
+
 #include "ctx.h"
 
 #define CFG_DEFAULT_PATH "/etc/facetd/facetd.conf"
+
+enum {
+    CFG_SCANNERS_MAX = 32,     /* Scanner= lines (SCAN_MATCH_MAX) */
+    CFG_SCANNER_LEN = 1024,    /* bytes of one, NUL included */
+    CFG_PIPELINE_LEN = 1024,   /* bytes of Pipeline=, NUL included */
+};
 
 typedef struct cfg {
     /* [Server] */
@@ -58,6 +69,15 @@ typedef struct cfg {
     uint64_t retention_bytes;     /* finished jobs' total size cap */
     /* [Log] */
     int log_level;                /* syslog level, LOG_INFO by default */
+    /* [Scanners] */
+    bool scanners;                /* Enabled=: run the USB scanner intake */
+    char scanner[CFG_SCANNERS_MAX][CFG_SCANNER_LEN]; /* Scanner= lines,
+                                     "VID:PID:bulk|hid [PIPELINE]", checked */
+    unsigned nscanner;
+    bool scanner_set;             /* a Scanner= line replaced the default
+                                     list (later lines add to it) */
+    char scanner_pipeline[CFG_PIPELINE_LEN]; /* Pipeline=, checked */
+    bool scanner_pipeline_set;    /* Pipeline= given, not the default */
 } cfg;
 
 /* Fills every field with its default. */
@@ -86,6 +106,22 @@ bool cfg_wants_help(int argc, char **argv);
 
 /* Prints the usage with every flag, its section/key, default and meaning. */
 void cfg_print_help(FILE *out, const char *prog);
+
+/* The pipeline a Pipeline= value (or the PIPELINE of a Scanner= line)
+ * names, as the JSON value of the Job API's "pipeline" member: "auto";
+ * op names separated by commas ("inspect" or "inspect,triangulate",
+ * each with its defaults); a JSON array or string written inline
+ * ("[{\"op\":\"merge_facets\",\"max_angle_deg\":2}]"); or the path
+ * of a file holding that JSON (starting with '/' or "./", as `facet run`
+ * takes it). Only the form is checked here, not whether the operations
+ * are in this build. A new JSON value the caller owns, or NULL with err
+ * set. Reads the file, if any, each time it is called. */
+json_t *cfg_pipeline_json(const char *spec, geo_err *err);
+
+/* Splits a checked Scanner= line into the device entry (written to
+ * dev, NUL-terminated, at most dev_size bytes) and the pipeline after it
+ * (a pointer into line, "" when the line names none). */
+const char *cfg_scanner_split(const char *line, char *dev, size_t dev_size);
 
 /* Writes the keys whose values differ between a and b and that a reload
  * cannot change (listen address, state directory, threads, ...) as a

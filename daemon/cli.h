@@ -32,13 +32,18 @@ int cli_input_error(const char *cmd, const char *fmt, ...)
 bool cli_wants_help(int argc, char **argv);
 
 /* The commands; each lives in daemon/cmd_NAME.c. */
+int cmd_inside(int argc, char **argv);
 int cmd_convert(int argc, char **argv);
 int cmd_cut(int argc, char **argv);
 int cmd_inspect(int argc, char **argv);
 int cmd_orient(int argc, char **argv);
+int cmd_triangulate(int argc, char **argv);
 int cmd_run(int argc, char **argv);
-int cmd_inside(int argc, char **argv);
 int cmd_move(int argc, char **argv);
 int cmd_inversion_stats(int argc, char **argv);
+int cmd_merge(int argc, char **argv);
+int cmd_correct(int argc, char **argv);
+int cmd_fill(int argc, char **argv);
+int cmd_stitch(int argc, char **argv);
 
 #endif

@@ -18,7 +18,8 @@ static const char USAGE[] =
     "\n"
     "Cuts the polyhedron MODEL by the plane A·x+B·y+C·z+D = 0 and writes the\n"
     "part where A·x+B·y+C·z+D <= 0 to OUT, closed by new facets on the plane\n"
-    "(one per section component; their outward normal is (A,B,C)). Formats\n"
+    "(one per section component, several side by side for a component with\n"
+    "holes; their outward normal is (A,B,C)). Formats\n"
     "come from the file extensions (see 'facet convert --help').\n"
     "\n"
     "  --plane A,B,C,D  the plane; (A,B,C) need not be unit\n"
@@ -31,7 +32,9 @@ static const char USAGE[] =
     "removed_facets, new_vertices, removed_vertices, hanging_dropped,\n"
     "unchanged, empty, volume_before, volume_after, vertices, facets.\n"
     "exit status: 0 success (also unchanged or empty), 1 bad input or a\n"
-    "result the format cannot hold (a section with a hole), 2 usage error\n";
+    "result no valid polyhedron can represent (the kept part touching\n"
+    "itself along an edge or at a point: the message says which way to\n"
+    "move the plane), 2 usage error\n";
 
 static int parse_plane(const char *s, double ret[4])
 {

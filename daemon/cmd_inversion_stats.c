@@ -25,6 +25,7 @@ static void usage(FILE *out)
             "                  [--magnitudes M1,M2,...] [--threads N]\n"
             "                  [--schedule local-exp|scaled|global-exp]\n"
             "                  [--max-steps N] [--runs] [--first-selfint]\n"
+            "                  [--fit through-fixed|all] [--scaled-k s2sum|s2]\n"
             "\n"
             "For N random vertices (default 100, seed S, default 1): moves\n"
             "each by m times the distance to its nearest vertex in a random\n"
@@ -36,7 +37,8 @@ static void usage(FILE *out)
             "  --threads N      worker threads (default: all CPUs)\n"
             "  --runs           also list every run\n"
             "  --first-selfint  record the step of each run's first\n"
-            "                   self-intersection (counts every step)\n");
+            "                   self-intersection (counts every step)\n"
+            "  --fit, --scaled-k  as in facet move\n");
 }
 
 static bool parse_u64(const char *s, uint64_t *ret)
@@ -84,11 +86,15 @@ int cmd_inversion_stats(int argc, char **argv)
         {"max-steps", required_argument, NULL, 'x'},
         {"runs", no_argument, NULL, 'r'},
         {"first-selfint", no_argument, NULL, 'F'},
+        {"fit", required_argument, NULL, 'f'},
+        {"scaled-k", required_argument, NULL, 'K'},
         {NULL, 0, NULL, 0},
     };
     geo_inversion_opts o;
     geo_inversion_opts_default(&o);
     uint64_t seed = 1, samples = o.samples, threads = 0, max_steps = 0;
+    enum geo_replanar_fit fit = GEO_REPLANAR_FIT_THROUGH_FIXED;
+    enum geo_replanar_scaled_k scaled_k = GEO_REPLANAR_SCALED_K_S2SUM;
     optind = 1;
     opterr = 0;
     int c;
@@ -134,6 +140,15 @@ int cmd_inversion_stats(int argc, char **argv)
         case 'F':
             o.first_selfint = true;
             break;
+        case 'f':
+            if (geo_replanar_fit_parse(optarg, &fit) < 0)
+                return cli_usage_error(CMD, "--fit: unknown '%s'", optarg);
+            break;
+        case 'K':
+            if (geo_replanar_scaled_k_parse(optarg, &scaled_k) < 0)
+                return cli_usage_error(CMD, "--scaled-k: unknown '%s'",
+                                       optarg);
+            break;
         default:
             return cli_usage_error(CMD, "unknown or incomplete option '%s'",
                                    argv[optind - 1]);
@@ -145,6 +160,8 @@ int cmd_inversion_stats(int argc, char **argv)
     geo_replanar_opts_default(&o.replanar, o.schedule);
     if (max_steps)
         o.replanar.max_steps = (uint32_t)max_steps;
+    o.replanar.fit = fit;
+    o.replanar.scaled_k = scaled_k;
 
     const char *path = argv[optind];
     geo_err err = {{0}};

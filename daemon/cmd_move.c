@@ -22,6 +22,7 @@ static void usage(FILE *out)
             "usage: facet move MODEL --vertex I (--to X,Y,Z | --by DX,DY,DZ)\n"
             "                  [--schedule local-exp|scaled|global-exp]\n"
             "                  [--max-steps N] [--count-selfint] [--log FILE]\n"
+            "                  [--fit through-fixed|all] [--scaled-k s2sum|s2]\n"
             "                  [--force] -o OUT\n"
             "\n"
             "Moves vertex I (0-based) to X,Y,Z (or by DX,DY,DZ, mm), keeps it\n"
@@ -34,6 +35,10 @@ static void usage(FILE *out)
             "  --log FILE       the iteration log: JSON if FILE ends in .json,\n"
             "                   else a tab-separated table like the paper's\n"
             "  --count-selfint  count self-intersections after every step\n"
+            "  --fit all        plain least-squares planes, the moved vertex\n"
+            "                   included (the paper's logs; leaves it off its\n"
+            "                   planes by fixed_residual)\n"
+            "  --scaled-k s2    scaled: K = S1/S2 as in the paper's tables\n"
             "  --force          write OUT even when the result is not valid\n"
             "Prints the result as JSON. Exit 1 when the result is not valid.\n");
 }
@@ -107,6 +112,8 @@ int cmd_move(int argc, char **argv)
         {"log", required_argument, NULL, 'l'},
         {"force", no_argument, NULL, 'f'},
         {"output", required_argument, NULL, 'o'},
+        {"fit", required_argument, NULL, 'F'},
+        {"scaled-k", required_argument, NULL, 'K'},
         {NULL, 0, NULL, 0},
     };
     uint32_t vertex = 0;
@@ -116,6 +123,8 @@ int cmd_move(int argc, char **argv)
     const char *log_path = NULL, *out = NULL;
     uint32_t max_steps = 0;
     bool count_si = false;
+    enum geo_replanar_fit fit = GEO_REPLANAR_FIT_THROUGH_FIXED;
+    enum geo_replanar_scaled_k scaled_k = GEO_REPLANAR_SCALED_K_S2SUM;
     optind = 1;
     opterr = 0;
     int c;
@@ -161,6 +170,15 @@ int cmd_move(int argc, char **argv)
         case 'o':
             out = optarg;
             break;
+        case 'F':
+            if (geo_replanar_fit_parse(optarg, &fit) < 0)
+                return cli_usage_error(CMD, "--fit: unknown '%s'", optarg);
+            break;
+        case 'K':
+            if (geo_replanar_scaled_k_parse(optarg, &scaled_k) < 0)
+                return cli_usage_error(CMD, "--scaled-k: unknown '%s'",
+                                       optarg);
+            break;
         default:
             return cli_usage_error(CMD, "unknown or incomplete option '%s'",
                                    argv[optind - 1]);
@@ -179,6 +197,8 @@ int cmd_move(int argc, char **argv)
     if (max_steps)
         o.max_steps = max_steps;
     o.count_selfint = count_si;
+    o.fit = fit;
+    o.scaled_k = scaled_k;
 
     const char *path = argv[optind];
     geo_err err = {{0}};

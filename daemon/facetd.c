@@ -1,7 +1,9 @@
 /* facetd.c — the daemon's entry point: configuration, start-up in
- * dependency order (listener, store, workers, HTTP), the main loop
- * (signals, systemd notifications and watchdog, retention, status), and
- * the graceful shutdown.
+ * dependency order (listener, store, workers, scanner intake, HTTP), the
+ * main loop (signals, systemd notifications and watchdog, retention,
+ * status), and the graceful shutdown (HTTP stops accepting, new scans
+ * only go to the store, running jobs finish — their RESULTs still go to
+ * the scanners — then HTTP, the intake and the store close).
  *
  * Signals are blocked in every thread and read from a signalfd by the main
  * thread only, so no handler runs in the middle of library code:
@@ -34,12 +36,15 @@
 #include "log.h"
 #include "metrics.h"
 #include "parallel.h"
+#include "scanners.h"
 #include "store.h"
 
-/* What the pool's callbacks reach; hs is set once HTTP is up. */
+/* What the pool's callbacks reach; hs is set once HTTP is up, sc before
+ * the workers start. */
 typedef struct app {
     _Atomic(http_server *) hs;
     metrics *m;
+    scanners *sc;
 } app;
 
 static void on_job_changed(void *user, const char *id, bool progress_only)
@@ -53,8 +58,9 @@ static void on_job_changed(void *user, const char *id, bool progress_only)
 static void on_job_done(void *user, const job_rec *job, job_state st,
                         double seconds)
 {
-    (void)job;
-    metrics_job(((app *)user)->m, st, seconds);
+    app *a = user;
+    metrics_job(a->m, st, seconds);
+    scanners_job_done(a->sc, job);
 }
 
 static unsigned cpus(void)
@@ -88,7 +94,8 @@ static int check_auth(const cfg *c, bool loopback, const char *where)
 static void retention(store *s, const cfg *c);
 
 static void reload(cfg *cur, int argc, char **argv, http_env *env,
-                   store *s, job_pool *pool, bool loopback, const char *where)
+                   store *s, job_pool *pool, scanners *sc, bool loopback,
+                   const char *where)
 {
     sd_notify(0, "RELOADING=1\nSTATUS=reloading the configuration");
     cfg next;
@@ -111,6 +118,17 @@ static void reload(cfg *cur, int argc, char **argv, http_env *env,
         next.connection_timeout_ms = cur->connection_timeout_ms;
         next.connection_memory = cur->connection_memory;
         next.workers = cur->workers;
+        next.scanners = cur->scanners;
+        memcpy(next.scanner, cur->scanner, sizeof next.scanner);
+        next.nscanner = cur->nscanner;
+        next.scanner_set = cur->scanner_set;
+        if (scanners_reload(sc, &next, &err) < 0) {
+            log_msg(LOG_ERR, NULL, "reload: %s; scanner pipelines unchanged",
+                    err.msg);
+            snprintf(next.scanner_pipeline, sizeof next.scanner_pipeline,
+                     "%s", cur->scanner_pipeline);
+            next.scanner_pipeline_set = cur->scanner_pipeline_set;
+        }
         *cur = next;
         log_set_level(cur->log_level);
         apply_http_settings(env, cur);
@@ -185,9 +203,22 @@ int main(int argc, char **argv)
     par_pool *par = NULL;
     job_pool *pool = NULL;
     http_server *hs = NULL;
+    scanners *sc = NULL;
     http_env env;
     http_env_init(&env);
-    app a = {NULL, NULL};
+    app a = {NULL, NULL, NULL};
+
+    /* A scanner pipeline this build cannot run is a configuration error:
+     * scans would be taken only to be refused. */
+    if (scanners_new(&c, &sc, &err) < 0) {
+        log_msg(LOG_ERR, NULL, "%s", err.msg);
+        rc = 2;
+        goto out;
+    }
+    const char *why;
+    if (!scanners_enabled(sc, &why) && c.scanners)
+        log_msg(LOG_WARNING, NULL, "scanner intake off: %s", why);
+    a.sc = sc;
 
     int nfds = sd_listen_fds(1);
     if (nfds > 1) {
@@ -269,8 +300,13 @@ int main(int argc, char **argv)
         log_msg(LOG_ERR, NULL, "%s", err.msg);
         goto out;
     }
+    if (scanners_start(sc, s, pool, m, &err) < 0) {
+        log_msg(LOG_ERR, NULL, "%s", err.msg);
+        goto out;
+    }
     env.s = s;
     env.pool = pool;
+    env.sc = sc;
     env.m = m;
     env.workers = workers;
     apply_http_settings(&env, &c);
@@ -311,8 +347,8 @@ int main(int argc, char **argv)
             struct signalfd_siginfo si;
             if (read(sfd, &si, sizeof si) == (ssize_t)sizeof si) {
                 if (si.ssi_signo == SIGHUP) {
-                    reload(&c, argc - 1, argv + 1, &env, s, pool, loopback,
-                           where);
+                    reload(&c, argc - 1, argv + 1, &env, s, pool, sc,
+                           loopback, where);
                     continue;
                 }
                 log_msg(LOG_NOTICE, NULL, "%s: shutting down",
@@ -338,6 +374,8 @@ int main(int argc, char **argv)
                "running jobs", (double)c.shutdown_timeout_ms / 1000);
     http_server_quiesce(hs);
 out:
+    /* scans still arriving are stored for the next start */
+    scanners_detach_pool(sc);
     if (pool) {
         /* The grace period may be longer than systemd's stop timeout. */
         if (rc == 0)
@@ -348,6 +386,7 @@ out:
     }
     atomic_store(&a.hs, NULL);
     hs = http_server_stop(hs);
+    sc = scanners_free(sc);
     if (lfd >= 0)
         close(lfd);
     s = store_close(s);

@@ -70,6 +70,7 @@ typedef struct http_req {
     http_method method;
     int route;               /* index into the route table, -1 unmatched */
     char id[JOB_ID_LEN + 1]; /* {id} of the path, if any */
+    char serial[64];         /* {serial} of the path, if any */
     int64_t t0_us;           /* monotonic start */
     unsigned status;         /* of the queued response */
     uint64_t bytes_in, bytes_out;
@@ -118,7 +119,8 @@ bool http_not_modified(http_req *r, const char *etag);
 const char *http_arg(http_req *r, const char *name);
 const char *http_header(http_req *r, const char *name);
 
-/* ---- handlers (http_jobs.c, http_events.c, http_ops.c) ---- */
+/* ---- handlers (http_jobs.c, http_events.c, http_ops.c,
+ * http_scanners.c) ---- */
 typedef enum MHD_Result (*http_handler)(http_req *r);
 enum MHD_Result http_post_job(http_req *r);
 enum MHD_Result http_get_job(http_req *r);
@@ -134,6 +136,7 @@ enum MHD_Result http_metrics(http_req *r);
 enum MHD_Result http_version(http_req *r);
 enum MHD_Result http_openapi(http_req *r);
 enum MHD_Result http_scanners(http_req *r);
+enum MHD_Result http_scanner_scan(http_req *r);
 
 /* The embedded OpenAPI document (http_openapi.c): NUL-terminated, its
  * length in *ret_len; static storage. */

@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "frep_json.h"
 #include "job_submit.h"
 #include "log.h"
 #include "model_io.h"
@@ -165,6 +166,49 @@ static bool valid_idem_key(const char *k)
     return true;
 }
 
+/* The two meshes of a stitch job as one model of two pieces (mesh 1's
+ * vertices and facets first), which the stitch operation splits again;
+ * NULL with the errors added. */
+static geo_poly *meshes_union(const json_t *meshes, proto_read_report *rep,
+                              json_t *errors)
+{
+    geo_poly *m[2] = {NULL, NULL}, *u = NULL;
+    geo_err err = {{0}};
+    for (size_t k = 0; k < 2; k++) {
+        char where[32];
+        snprintf(where, sizeof where, "meshes[%zu]", k);
+        m[k] = proto_model_from_json_ex(json_array_get(meshes, k), NULL, where,
+                                        rep, &err);
+        if (!m[k])
+            add_geo_error(errors, &err);
+    }
+    if (m[0] && m[1]) {
+        u = geo_poly_copy(m[0]);
+        uint32_t off = m[0]->nverts;
+        bool ok = u && geo_poly_reserve(u, (size_t)off + m[1]->nverts,
+                                        (size_t)u->nfacets + m[1]->nfacets,
+                                        (size_t)geo_poly_ncorners(u) +
+                                            geo_poly_ncorners(m[1])) == 0;
+        for (uint32_t v = 0; ok && v < m[1]->nverts; v++)
+            geo_poly_add_vertex(u, m[1]->verts[v]);
+        for (uint32_t f = 0; ok && f < m[1]->nfacets; f++) {
+            int64_t nf = geo_poly_add_facet(u, geo_poly_facet(m[1], f),
+                                            geo_poly_facet_size(m[1], f));
+            uint32_t *fv = u->fidx + u->fstart[nf];
+            for (uint32_t i = 0; i < geo_poly_facet_size(m[1], f); i++)
+                fv[i] += off;
+            memcpy(u->planes[nf], m[1]->planes[f], sizeof u->planes[0]);
+        }
+        if (!ok) {
+            u = geo_poly_free(u);
+            add_error(errors, "meshes", "out of memory");
+        }
+    }
+    geo_poly_free(m[0]);
+    geo_poly_free(m[1]);
+    return u;
+}
+
 enum MHD_Result http_post_job(http_req *r)
 {
     http_env *env = r->env;
@@ -197,33 +241,50 @@ enum MHD_Result http_post_job(http_req *r)
             ok |= strcmp(key, known[i]) == 0;
         if (!ok)
             add_error(errors, key, "unknown member (expected model, "
-                      "pipeline, priority, label)");
+                      "frep, pipeline, priority, label)");
     }
     const json_t *model = json_object_get(root, "model");
-    int inputs = !!model + !!json_object_get(root, "frep") +
-                 !!json_object_get(root, "meshes");
+    const json_t *frep = json_object_get(root, "frep");
+    int inputs = !!model + !!frep + !!json_object_get(root, "meshes");
     if (inputs == 0)
-        add_error(errors, "model", "required: the facet-model/1 to process");
+        add_error(errors, "model", "required: the facet-model/1 to process "
+                  "(or a frep-object/1 as 'frep')");
     else if (inputs > 1)
         add_error(errors, "", "give exactly one of model, frep, meshes");
-    if (json_object_get(root, "frep"))
-        add_error(errors, "frep", "input 'frep' is not available in this "
-                  "build");
-    if (json_object_get(root, "meshes"))
-        add_error(errors, "meshes", "input 'meshes' is not available in this "
-                  "build");
+    const json_t *meshes = json_object_get(root, "meshes");
+    if (meshes && json_array_size(meshes) != 2)
+        add_error(errors, "meshes", "expected an array of two facet-model/1 "
+                  "objects (the open meshes to stitch)");
     proto_pipeline pl = {0};
     json_t *pv = json_object_get(root, "pipeline");
-    json_t *pdefault = pv ? NULL : json_string("auto");
+    /* without a pipeline: the post-scan correction of a model, the
+     * triangulation (at its defaults) of a frep; two meshes are stitched
+     * first, then inspected */
+    json_t *pdefault = pv       ? NULL
+                       : frep   ? json_pack("[s]", "triangulate")
+                       : meshes ? json_pack("[s, s]", "stitch", "inspect")
+                                : json_string("auto");
     geo_err err = {{0}};
     bool have_pipeline = false;
     if (proto_pipeline_from_json(pv ? pv : pdefault, "pipeline", &pl, &err) < 0)
         add_geo_error(errors, &err);
-    else if (runner_check(&pl, &err) < 0)
+    else if (runner_check(&pl, &err) < 0 ||
+             (inputs == 1 && runner_check_input(&pl, frep != NULL, &err) < 0))
         add_geo_error(errors, &err);
     else
         have_pipeline = true;
+    if (have_pipeline && meshes &&
+        (pl.nops == 0 || pl.ops[0].kind != PROTO_OP_STITCH))
+        add_error(errors, "pipeline", "a job with meshes must start with "
+                  "stitch (it joins the two meshes into one model)");
     json_decref(pdefault);
+    if (frep) {
+        /* validated here, stored as JSON (job_submit.h) */
+        geo_frep *f = proto_frep_from_json(frep, NULL, "frep", &err);
+        if (!f)
+            add_geo_error(errors, &err);
+        geo_frep_free(f);
+    }
     job_priority prio = JOB_PRIO_NORMAL;
     const json_t *pr = json_object_get(root, "priority");
     if (pr) {
@@ -243,10 +304,14 @@ enum MHD_Result http_post_job(http_req *r)
             add_error(errors, "label", "longer than %d bytes",
                       JOB_LABEL_MAX - 1);
     }
+    /* the model read in place (now owned here), or the union of meshes */
     geo_poly *poly = jb.model;
-    const proto_read_report rep = jb.rep;
+    proto_read_report rep = jb.rep;
+    jb.model = NULL;
     if (model && !poly)
         add_geo_error(errors, &jb.model_err);
+    else if (meshes && json_array_size(meshes) == 2)
+        poly = meshes_union(meshes, &rep, errors);
     enum MHD_Result res;
     if (json_array_size(errors) > 0) {
         const json_t *first = json_array_get(errors, 0);
@@ -261,7 +326,8 @@ enum MHD_Result http_post_job(http_req *r)
         goto out;
     }
     job_request rq = {
-        .model = poly, .pipeline = &pl, .priority = prio, .source = "http",
+        .model = poly, .frep = frep, .pipeline = &pl, .priority = prio,
+        .source = "http",
         .label = label, .idem_key = idem,
         /* only a keyed request is ever compared: no other hashes 464 KB */
         .idem_hash = idem ? job_hash64(r->body ? r->body : "", r->len) : 0,
@@ -292,15 +358,20 @@ enum MHD_Result http_post_job(http_req *r)
         json_t *extra = NULL;
         if (rep.plane_mismatches)
             extra = json_pack("{s:[s]}", "warnings", rep.first);
-        if (!replayed)
+        if (!replayed && poly)
             log_msg(LOG_INFO, job.id, "queued (%u vertices, %u facets, "
                     "%zu ops, priority %s)", poly->nverts, poly->nfacets,
                     pl.nops, prio == JOB_PRIO_HIGH ? "high" : "normal");
+        else if (!replayed)
+            log_msg(LOG_INFO, job.id, "queued (frep-object, %zu ops, "
+                    "priority %s)", pl.nops,
+                    prio == JOB_PRIO_HIGH ? "high" : "normal");
         res = reply_job(r, 202, &job, h, extra);
         job_rec_clear(&job);
     }
 out:
     json_decref(errors);
+    geo_poly_free(poly);
     if (have_pipeline || pl.ops)
         proto_pipeline_free(&pl);
     job_body_clear(&jb, &j);

@@ -1,6 +1,5 @@
 /* http_ops.c — the operational routes: /livez, /readyz, /metrics,
- * /v1/version, /v1/openapi.json, /v1/scanners, and the synchronous
- * POST /v1/inspect.
+ * /v1/version, /v1/openapi.json, and the synchronous POST /v1/inspect.
  *
  * /livez answers 200 while the process serves HTTP at all; /readyz
  * answers 200 only when start-up is complete, shutdown has not begun, the
@@ -63,6 +62,7 @@ enum MHD_Result http_metrics(http_req *r)
     g.waiters = http_hub_count(r->srv->hub);
     g.queue_size = atomic_load(&env->queue_size);
     g.ready = atomic_load(&env->ready);
+    scanners_get_metrics(env->sc, &g.scan);
     char *text;
     size_t len;
     if (metrics_render(env->m, &g, &text, &len) < 0)
@@ -103,11 +103,6 @@ enum MHD_Result http_openapi(http_req *r)
     if (http_not_modified(r, etag))
         return http_reply(r, 304, NULL, (char *)"", 0, false, h);
     return http_reply(r, 200, "application/json", (char *)doc, len, false, h);
-}
-
-enum MHD_Result http_scanners(http_req *r)
-{
-    return http_reply_json(r, 200, json_pack("{s:[]}", "scanners"), NULL);
 }
 
 enum MHD_Result http_post_inspect(http_req *r)

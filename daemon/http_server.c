@@ -22,29 +22,36 @@ typedef struct route {
     unsigned methods;     /* HTTP_GET implies HEAD */
     http_handler get, post, del;
     bool open;            /* answered without a token */
+    bool body_optional;   /* a POST without a body needs no Content-Type */
 } route;
 
 static const route routes[] = {
-    {"/livez", HTTP_GET, http_livez, NULL, NULL, true},
-    {"/readyz", HTTP_GET, http_readyz, NULL, NULL, true},
-    {"/metrics", HTTP_GET, http_metrics, NULL, NULL, false},
-    {"/v1/version", HTTP_GET, http_version, NULL, NULL, false},
-    {"/v1/openapi.json", HTTP_GET, http_openapi, NULL, NULL, false},
-    {"/v1/scanners", HTTP_GET, http_scanners, NULL, NULL, false},
-    {"/v1/inspect", HTTP_POST, NULL, http_post_inspect, NULL, false},
+    {"/livez", HTTP_GET, http_livez, NULL, NULL, true, false},
+    {"/readyz", HTTP_GET, http_readyz, NULL, NULL, true, false},
+    {"/metrics", HTTP_GET, http_metrics, NULL, NULL, false, false},
+    {"/v1/version", HTTP_GET, http_version, NULL, NULL, false, false},
+    {"/v1/openapi.json", HTTP_GET, http_openapi, NULL, NULL, false, false},
+    {"/v1/scanners", HTTP_GET, http_scanners, NULL, NULL, false, false},
+    {"/v1/scanners/{serial}/scan", HTTP_POST, NULL, http_scanner_scan, NULL,
+     false, true},
+    {"/v1/inspect", HTTP_POST, NULL, http_post_inspect, NULL, false, false},
     {"/v1/jobs", HTTP_GET | HTTP_POST, http_list_jobs, http_post_job, NULL,
-     false},
+     false, false},
     {"/v1/jobs/{id}", HTTP_GET | HTTP_DELETE, http_get_job, NULL,
-     http_delete_job, false},
-    {"/v1/jobs/{id}/model", HTTP_GET, http_get_model, NULL, NULL, false},
-    {"/v1/jobs/{id}/stats", HTTP_GET, http_get_stats, NULL, NULL, false},
-    {"/v1/jobs/{id}/events", HTTP_GET, http_job_events, NULL, NULL, false},
+     http_delete_job, false, false},
+    {"/v1/jobs/{id}/model", HTTP_GET, http_get_model, NULL, NULL, false,
+     false},
+    {"/v1/jobs/{id}/stats", HTTP_GET, http_get_stats, NULL, NULL, false,
+     false},
+    {"/v1/jobs/{id}/events", HTTP_GET, http_job_events, NULL, NULL, false,
+     false},
 };
 enum { NROUTES = sizeof routes / sizeof routes[0] };
 
 const char *const http_route_names[NROUTES] = {
     "/livez", "/readyz", "/metrics", "/v1/version", "/v1/openapi.json",
-    "/v1/scanners", "/v1/inspect", "/v1/jobs", "/v1/jobs/{id}",
+    "/v1/scanners", "/v1/scanners/{serial}/scan", "/v1/inspect", "/v1/jobs",
+    "/v1/jobs/{id}",
     "/v1/jobs/{id}/model", "/v1/jobs/{id}/stats", "/v1/jobs/{id}/events",
 };
 const unsigned http_nroutes = NROUTES;
@@ -88,23 +95,28 @@ static http_method method_of(const char *m)
     return HTTP_OTHER;
 }
 
-/* Matches url against a template with at most one "{id}" segment. */
-static bool match(const char *tmpl, const char *url, char *id, size_t idsz)
+/* Matches url against a template with at most one "{id}" or "{serial}"
+ * segment, which goes to r->id or r->serial (cut to fit: a cut value
+ * names nothing that exists). */
+static bool match(const char *tmpl, const char *url, http_req *r)
 {
-    const char *brace = strstr(tmpl, "{id}");
-    if (!brace)
+    const char *brace = strchr(tmpl, '{'), *close;
+    if (!brace || !(close = strchr(brace, '}')))
         return strcmp(tmpl, url) == 0;
     size_t pre = (size_t)(brace - tmpl);
     if (strncmp(tmpl, url, pre) != 0)
         return false;
     const char *seg = url + pre, *slash = strchr(seg, '/');
     size_t n = slash ? (size_t)(slash - seg) : strlen(seg);
-    if (n == 0 || strcmp(slash ? slash : "", brace + 4) != 0)
+    if (n == 0 || strcmp(slash ? slash : "", close + 1) != 0)
         return false;
-    if (n >= idsz)
-        n = idsz - 1;
-    memcpy(id, seg, n);
-    id[n] = '\0';
+    bool serial = strncmp(brace, "{serial}", 8) == 0;
+    char *dst = serial ? r->serial : r->id;
+    size_t cap = serial ? sizeof r->serial : sizeof r->id;
+    if (n >= cap)
+        n = cap - 1;
+    memcpy(dst, seg, n);
+    dst[n] = '\0';
     return true;
 }
 
@@ -155,7 +167,7 @@ static enum MHD_Result admit(http_req *r, const char *url, bool *answered)
     *answered = true;
     const route *rt = NULL;
     for (int i = 0; i < NROUTES; i++) {
-        if (match(routes[i].name, url, r->id, sizeof r->id)) {
+        if (match(routes[i].name, url, r)) {
             rt = &routes[i];
             r->route = i;
             break;
@@ -181,7 +193,7 @@ static enum MHD_Result admit(http_req *r, const char *url, bool *answered)
                             "this server requires an API token "
                             "(Authorization: Bearer TOKEN)");
     }
-    if (m == HTTP_POST) {
+    if (m == HTTP_POST && (r->has_body || !rt->body_optional)) {
         if (!json_content_type(http_header(r, MHD_HTTP_HEADER_CONTENT_TYPE))) {
             const char *h[] = {"Accept-Post", "application/json", NULL};
             return http_problem(r, 415, "unsupported-media-type",

@@ -29,6 +29,7 @@
 #include "ctx.h"
 #include "job_pool.h"
 #include "metrics.h"
+#include "scanners.h"
 #include "store.h"
 
 /* What the routes use; owned by the caller, outlives the server. The
@@ -36,6 +37,7 @@
 typedef struct http_env {
     store *s;
     job_pool *pool;                 /* local workers, may be NULL */
+    scanners *sc;                   /* the scanner intake, may be NULL */
     metrics *m;
     unsigned workers;               /* for /metrics */
     atomic_uint_fast64_t max_body;  /* bytes */

@@ -36,14 +36,15 @@ enum { JOB_NSTATES = 5 };
 typedef enum job_priority { JOB_PRIO_NORMAL = 0, JOB_PRIO_HIGH = 1 } job_priority;
 
 #define JOB_ID_LEN 26
-#define JOB_SOURCE_MAX 64  /* bytes of source, NUL included */
+#define JOB_SOURCE_MAX 72  /* bytes of source, NUL included ("usb:" and
+                              a serial of up to 63) */
 #define JOB_LABEL_MAX 256  /* bytes of label, NUL included */
 
 typedef struct job_rec {
     char id[JOB_ID_LEN + 1];
     job_state state;
     job_priority priority;
-    char source[JOB_SOURCE_MAX]; /* "http" or "scanner:SERIAL" */
+    char source[JOB_SOURCE_MAX]; /* "http" or "usb:SERIAL" */
     char label[JOB_LABEL_MAX];   /* caller's label, may be empty */
     char *pipeline;    /* JSON text of the pipeline as submitted (owned) */
     char *error;       /* why it failed/was canceled, or NULL (owned) */

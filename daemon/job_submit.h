@@ -1,18 +1,22 @@
 /* job_submit.h — turning a validated request into a queued job: the one
- * path every source (HTTP now, the scanner intake later) takes into the
+ * path every source (HTTP, the scanner intake) takes into the
  * store, so the checks (operations available, queue bound, idempotency)
  * and the stored form are the same for all.
  *
- * The input is stored as FMB1 (the scanner's binary model, proto/
+ * A model input is stored as FMB1 (the scanner's binary model, proto/
  * model_io.h): a worker decodes it in microseconds instead of parsing JSON
- * again, and it keeps every double bit for bit. The pipeline is stored in
- * canonical JSON (every parameter explicit), so a job's record says
- * exactly what ran. */
+ * again, and it keeps every double bit for bit. A frep-object/1 input is
+ * stored as its compact JSON text (jansson prints doubles exactly); the
+ * executor tells the two apart by FMB1's magic "FMB1", which JSON text
+ * cannot start with. The pipeline is stored in canonical JSON (every
+ * parameter explicit), so a job's record says exactly what ran. */
 #ifndef FACETD_JOB_SUBMIT_H
 #define FACETD_JOB_SUBMIT_H
 
 #include <stdbool.h>
 #include <stdint.h>
+
+#include <jansson.h>
 
 #include "job.h"
 #include "job_pool.h"
@@ -22,9 +26,11 @@
 
 typedef struct job_request {
     const geo_poly *model;          /* the validated input (borrowed) */
+    const json_t *frep;             /* or a validated frep-object/1
+                                       (borrowed); exactly one is set */
     const proto_pipeline *pipeline; /* parsed pipeline (borrowed) */
     job_priority priority;
-    const char *source;             /* "http", "scanner:SERIAL" */
+    const char *source;             /* "http", "usb:SERIAL" */
     const char *label;              /* may be NULL */
     const char *idem_key;           /* Idempotency-Key, may be NULL */
     uint64_t idem_hash;             /* hash of the request's bytes */

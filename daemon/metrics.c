@@ -37,6 +37,9 @@ struct metrics {
     atomic_uint_fast64_t queue_full;
     hist job_time;
     hist op_time[PROTO_OP_COUNT];
+    atomic_uint_fast64_t scan_refused[METRICS_NREFUSALS];
+    atomic_uint_fast64_t scan_results;
+    hist scan_result_time;
 };
 
 metrics *metrics_new(const char *const *route_names, unsigned nroutes)
@@ -110,6 +113,22 @@ void metrics_queue_full(metrics *m)
     atomic_fetch_add_explicit(&m->queue_full, 1, memory_order_relaxed);
 }
 
+void metrics_scan_refused(metrics *m, metrics_refusal why)
+{
+    if (m && (unsigned)why < METRICS_NREFUSALS)
+        atomic_fetch_add_explicit(&m->scan_refused[why], 1,
+                                  memory_order_relaxed);
+}
+
+void metrics_scan_result(metrics *m, double seconds)
+{
+    if (!m)
+        return;
+    atomic_fetch_add_explicit(&m->scan_results, 1, memory_order_relaxed);
+    if (seconds >= 0)
+        observe(&m->scan_result_time, seconds);
+}
+
 /* A growing output buffer; on out-of-memory it stays failed. */
 typedef struct out {
     char *buf;
@@ -172,6 +191,72 @@ static void put_hist(out *o, const char *name, const char *label,
         label ? "}" : "", (double)ld(&h->sum_us) / 1e6);
     put(o, "%s_count%s%s%s %llu\n", name, label ? "{" : "", lv,
         label ? "}" : "", (unsigned long long)ld(&h->count));
+}
+
+static void put_counter(out *o, const char *name, const char *help,
+                        const char *label, const char *const *values,
+                        const uint64_t *counts, size_t n)
+{
+    put(o, "# HELP %s %s\n# TYPE %s counter\n", name, help, name);
+    for (size_t i = 0; i < n; i++) {
+        if (label)
+            put(o, "%s{%s=\"%s\"} %llu\n", name, label, values[i],
+                (unsigned long long)counts[i]);
+        else
+            put(o, "%s %llu\n", name, (unsigned long long)counts[i]);
+    }
+}
+
+static void put_scanners(out *o, metrics *m, const metrics_scanners *s)
+{
+    const scan_metrics *x = &s->intake;
+    put(o, "# HELP facetd_scanner_intake_up 1 while the USB scanner intake "
+           "runs.\n# TYPE facetd_scanner_intake_up gauge\n"
+           "facetd_scanner_intake_up %d\n", s->enabled ? 1 : 0);
+    put(o, "# HELP facetd_scanner_devices_connected Scanners connected and "
+           "greeted.\n# TYPE facetd_scanner_devices_connected gauge\n"
+           "facetd_scanner_devices_connected %llu\n",
+        (unsigned long long)x->devices_connected);
+    static const char *const dir_io[] = {"in", "out"};
+    uint64_t frames[] = {x->frames_in, x->frames_out};
+    put_counter(o, "facetd_scanner_frames_total", "FSP/1 frames received "
+                "(valid) and sent.", "direction", dir_io, frames, 2);
+    put_counter(o, "facetd_scanner_crc_errors_total", "Frames from scanners "
+                "that failed their CRC.", NULL, NULL, &x->crc_errors, 1);
+    put_counter(o, "facetd_scanner_bad_frames_total", "Frames from scanners "
+                "with a bad magic, length or payload.", NULL, NULL,
+                &x->bad_frames, 1);
+    put_counter(o, "facetd_scanner_sequence_errors_total", "Gaps and jumps in "
+                "scanners' sequence numbers.", NULL, NULL, &x->seq_errors, 1);
+    static const char *const dir_nak[] = {"sent", "received"};
+    uint64_t naks[] = {x->naks_sent, x->naks_received};
+    put_counter(o, "facetd_scanner_naks_total", "NAKs sent to and received "
+                "from scanners.", "direction", dir_nak, naks, 2);
+    put_counter(o, "facetd_scanner_reassembly_failures_total", "HID reports "
+                "dropped while reassembling frames.", NULL, NULL,
+                &x->reassembly_failures, 1);
+    static const char *const outcome[] = {"completed", "dropped"};
+    uint64_t scans[] = {x->scans_completed, x->scans_dropped};
+    put_counter(o, "facetd_scanner_scans_total", "Scans completed (kept as "
+                "jobs) and dropped (faults, unplugging, refusals).",
+                "outcome", outcome, scans, 2);
+    put_counter(o, "facetd_scanner_model_bytes_total", "Model bytes of "
+                "completed scans.", NULL, NULL, &x->model_bytes, 1);
+    static const char *const reason[] = {"invalid_model", "store"};
+    uint64_t refused[METRICS_NREFUSALS];
+    for (int i = 0; i < METRICS_NREFUSALS; i++)
+        refused[i] = ld(&m->scan_refused[i]);
+    put_counter(o, "facetd_scanner_scans_refused_total", "Complete scans not "
+                "kept, by reason (the scanner got ABORT).", "reason", reason,
+                refused, METRICS_NREFUSALS);
+    uint64_t results = ld(&m->scan_results);
+    put_counter(o, "facetd_scanner_results_total", "RESULTs handed to the "
+                "intake for scanners.", NULL, NULL, &results, 1);
+    put(o, "# HELP facetd_scanner_result_latency_seconds Time from a scan's "
+           "SCAN_DONE to its RESULT.\n# TYPE "
+           "facetd_scanner_result_latency_seconds histogram\n");
+    put_hist(o, "facetd_scanner_result_latency_seconds", NULL, NULL,
+             &m->scan_result_time);
 }
 
 int metrics_render(metrics *m, const metrics_gauges *g, char **ret,
@@ -265,6 +350,7 @@ int metrics_render(metrics *m, const metrics_gauges *g, char **ret,
             "# TYPE facetd_http_sent_bytes_total counter\n"
             "facetd_http_sent_bytes_total %llu\n",
         (unsigned long long)ld(&m->bytes_out));
+    put_scanners(&o, m, &g->scan);
     if (o.failed) {
         free(o.buf);
         return -ENOMEM;

@@ -20,6 +20,7 @@
 
 #include "job.h"
 #include "pipeline.h"
+#include "scanner.h"
 #include "store.h"
 
 typedef struct metrics metrics;
@@ -44,6 +45,26 @@ void metrics_op(metrics *m, proto_op_kind op, double seconds);
 /* A submission was refused because the queue was full. */
 void metrics_queue_full(metrics *m);
 
+/* Why a complete scan was not kept (its device got ABORT). */
+typedef enum metrics_refusal {
+    METRICS_REFUSED_INVALID = 0, /* the model bytes do not parse */
+    METRICS_REFUSED_STORE,       /* the job could not be stored */
+    METRICS_NREFUSALS
+} metrics_refusal;
+
+void metrics_scan_refused(metrics *m, metrics_refusal why);
+
+/* A RESULT went to a scanner seconds after the SCAN_DONE it answers
+ * (negative: not measured, the scan came before this start or the
+ * scanner is offline). */
+void metrics_scan_result(metrics *m, double seconds);
+
+/* The scanner intake's counters, read at scrape time. */
+typedef struct metrics_scanners {
+    int enabled;             /* the intake runs */
+    scan_metrics intake;
+} metrics_scanners;
+
 /* Values read at scrape time. */
 typedef struct metrics_gauges {
     int store_ok;            /* counts valid */
@@ -53,6 +74,7 @@ typedef struct metrics_gauges {
     unsigned waiters;        /* suspended ?wait= / event-stream clients */
     unsigned queue_size;     /* configured bound */
     int ready;
+    metrics_scanners scan;
 } metrics_gauges;
 
 /* Renders every metric into a malloc'd, NUL-terminated buffer (*ret, its

@@ -9,12 +9,21 @@
 #include <string.h>
 #include <time.h>
 
+#include "clusters.h"
+#include "correct.h"
+#include "correct_json.h"
 #include "cut.h"
+#include "fill.h"
+#include "fill_json.h"
 #include "inversion.h"
+#include "merge.h"
 #include "replanar.h"
 #include "replanar_json.h"
 #include "stats.h"
 #include "stats_json.h"
+#include "stitch.h"
+#include "tri_report_json.h"
+#include "triangulate.h"
 
 /* Runs one operation on *model (may replace it, freeing the old one).
  * Adds its report to *ret_report (a new object it creates) and summary
@@ -22,9 +31,16 @@
 typedef int (*op_fn)(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
                      json_t **ret_report, json_t *summary, geo_err *err);
 
+/* An operation that makes the model from a frep input f (*model is NULL
+ * on entry); otherwise like op_fn. */
+typedef int (*frep_fn)(const proto_op *op, const geo_frep *f,
+                       geo_poly **model, const geo_ctx *ctx,
+                       json_t **ret_report, json_t *summary, geo_err *err);
+
 typedef struct op_entry {
     op_fn run;
     bool changes_model; /* false for read-only ops such as inspect */
+    frep_fn run_frep;   /* set (and run NULL) for ops taking a frep */
 } op_entry;
 
 /* inspect (lib/stats.h): every statistic of the model, unchanged. */
@@ -51,6 +67,182 @@ static int run_inspect(const proto_op *op, geo_poly **model,
         return geo_err_set(err, -ENOMEM, "out of memory");
     }
     *ret_report = rep;
+    return 0;
+}
+
+/* triangulate (lib/triangulate.h): the frep input to a closed mesh; the
+ * report is the quality report (proto/tri_report_json.h). */
+static int run_triangulate(const proto_op *op, const geo_frep *f,
+                           geo_poly **model, const geo_ctx *ctx,
+                           json_t **ret_report, json_t *summary, geo_err *err)
+{
+    geo_tri_opts o;
+    geo_tri_opts_default(&o);
+    o.quad_levels = op->u.triangulate.quad_levels;
+    o.binary_levels = op->u.triangulate.binary_levels;
+    o.fill = op->u.triangulate.fill_edges ? GEO_FILL_EDGES : GEO_FILL_AREA;
+    o.refine = op->u.triangulate.refine;
+    o.sharpen = op->u.triangulate.sharpen;
+    o.fair = op->u.triangulate.fair == PROTO_FAIR_LENGTH    ? GEO_FAIR_LENGTH
+             : op->u.triangulate.fair == PROTO_FAIR_UNIFORM ? GEO_FAIR_UNIFORM
+                                                            : GEO_FAIR_NONE;
+    geo_tri_report rep;
+    geo_poly *m = NULL;
+    int r = geo_frep_triangulate(f, &o, ctx, &m, &rep, err);
+    if (r < 0)
+        return r;
+    json_t *j = proto_tri_report_to_json(&rep);
+    const geo_frep_metrics *q = &rep.quality;
+    int e = !j;
+    e |= json_object_set_new(summary, "closed",
+                             json_boolean(q->boundary_edges == 0 &&
+                                          q->nonmanifold_edges == 0));
+    e |= json_object_set_new(summary, "self_intersections",
+                             json_integer((json_int_t)rep.self_intersections));
+    geo_tri_report_clear(&rep);
+    if (e) {
+        json_decref(j);
+        geo_poly_free(m);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    geo_poly_free(*model);
+    *model = m;
+    *ret_report = j;
+    return 0;
+}
+
+/* Hands a kernel's JSON report over, or fails with -ENOMEM. */
+static int give_report(json_t *rep, json_t **ret_report, geo_err *err)
+{
+    if (!rep)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    *ret_report = rep;
+    return 0;
+}
+
+/* collapse_clusters (lib/clusters.h): radius 0 means the kernel's
+ * default relative to the model's size. */
+static int run_collapse(const proto_op *op, geo_poly **model,
+                        const geo_ctx *ctx, json_t **ret_report,
+                        json_t *summary, geo_err *err)
+{
+    (void)summary;
+    geo_collapse_opts o;
+    geo_collapse_opts_default(&o);
+    o.radius = op->u.collapse.radius;
+    geo_collapse_report rep;
+    int r = geo_collapse_clusters(*model, &o, ctx, &rep, err);
+    if (r < 0)
+        return r;
+    json_t *j = proto_collapse_report_to_json(&rep);
+    geo_collapse_report_clear(&rep);
+    return give_report(j, ret_report, err);
+}
+
+/* merge_facets (lib/merge.h): the given groups, or automatic ones. */
+static int run_merge(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
+                     json_t **ret_report, json_t *summary, geo_err *err)
+{
+    (void)summary;
+    geo_merge_opts o;
+    geo_merge_opts_default(&o);
+    o.max_angle_deg = op->u.merge.max_angle_deg;
+    o.max_deviation = op->u.merge.max_deviation;
+    geo_merge_report rep = {0};
+    int r = op->u.merge.ngroups
+                ? geo_merge_groups(*model, op->u.merge.ngroups,
+                                   op->u.merge.gstart, op->u.merge.gfacets,
+                                   &o, ctx, &rep, err)
+                : geo_merge_auto(*model, &o, ctx, &rep, err);
+    if (r < 0)
+        return r;
+    json_t *j = proto_merge_report_to_json(&rep);
+    geo_merge_report_clear(&rep);
+    return give_report(j, ret_report, err);
+}
+
+/* auto (lib/correct.h): the whole post-scan correction, the same call as
+ * `facet correct`, so the daemon serves the same model. */
+static int run_auto(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
+                    json_t **ret_report, json_t *summary, geo_err *err)
+{
+    geo_correct_opts o;
+    geo_correct_opts_default(&o);
+    o.collapse.radius = op->u.correct.radius;
+    o.merge.max_angle_deg = op->u.correct.max_angle_deg;
+    o.merge.max_deviation = op->u.correct.max_deviation;
+    geo_correct_report rep;
+    int r = geo_correct_auto(*model, &o, ctx, &rep, err);
+    if (r < 0)
+        return r;
+    json_t *j = proto_correct_report_to_json(&rep);
+    int e = json_object_set_new(summary, "hausdorff", json_real(rep.hausdorff));
+    e |= json_object_set_new(summary, "groups_merged",
+                             json_integer(rep.merge.merged));
+    geo_correct_report_clear(&rep);
+    if (e) {
+        json_decref(j);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    return give_report(j, ret_report, err);
+}
+
+/* fill_holes (lib/fill.h): every hole closed and checked, or reported. */
+static int run_fill_holes(const proto_op *op, geo_poly **model,
+                          const geo_ctx *ctx, json_t **ret_report,
+                          json_t *summary, geo_err *err)
+{
+    geo_mesh_fill_opts o;
+    geo_mesh_fill_opts_default(&o);
+    o.fill.weight =
+        op->u.fill_holes.weight_length ? GEO_FILL_EDGES : GEO_FILL_AREA;
+    o.fill.refine = op->u.fill_holes.refine;
+    o.fill.fair = op->u.fill_holes.fair ? GEO_FAIR_UNIFORM : GEO_FAIR_NONE;
+    geo_mesh_fill_report rep;
+    int r = geo_fill_mesh(*model, &o, ctx, &rep, err);
+    if (r < 0)
+        return r;
+    json_t *j = proto_fill_report_to_json(&rep);
+    int e = !j;
+    e |= json_object_set_new(summary, "holes_filled", json_integer(rep.nfilled));
+    e |= json_object_set_new(summary, "holes_left_open",
+                             json_integer(rep.nopen));
+    geo_mesh_fill_report_clear(&rep);
+    if (e) {
+        json_decref(j);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    *ret_report = j;
+    return 0;
+}
+
+/* stitch (lib/stitch.h): the model's two pieces joined into one. */
+static int run_stitch(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
+                      json_t **ret_report, json_t *summary, geo_err *err)
+{
+    (void)op;
+    geo_poly *out = geo_poly_new();
+    if (!out)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    geo_stitch_report rep;
+    int r = geo_stitch_pieces(*model, NULL, ctx, out, &rep, err);
+    if (r < 0) {
+        geo_poly_free(out);
+        return r;
+    }
+    json_t *j = proto_stitch_report_to_json(&rep);
+    int e = !j;
+    e |= json_object_set_new(summary, "stitch_openings_left",
+                             json_integer(rep.fill.nopen));
+    geo_stitch_report_clear(&rep);
+    if (e) {
+        json_decref(j);
+        geo_poly_free(out);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    geo_poly_free(*model);
+    *model = out;
+    *ret_report = j;
     return 0;
 }
 
@@ -192,6 +384,12 @@ static int run_inversion_stats(const proto_op *op, geo_poly **model,
 
 static const op_entry ops[PROTO_OP_COUNT] = {
     [PROTO_OP_INSPECT] = {run_inspect, false},
+    [PROTO_OP_COLLAPSE_CLUSTERS] = {run_collapse, true},
+    [PROTO_OP_MERGE_FACETS] = {run_merge, true},
+    [PROTO_OP_TRIANGULATE] = {NULL, true, run_triangulate},
+    [PROTO_OP_FILL_HOLES] = {run_fill_holes, true},
+    [PROTO_OP_STITCH] = {run_stitch, true},
+    [PROTO_OP_AUTO] = {run_auto, true},
     [PROTO_OP_CUT] = {run_cut, true},
     [PROTO_OP_MOVE_VERTEX] = {run_move_vertex, true},
     [PROTO_OP_INVERSION_STATS] = {run_inversion_stats, false},
@@ -199,7 +397,26 @@ static const op_entry ops[PROTO_OP_COUNT] = {
 
 bool runner_op_available(proto_op_kind op)
 {
-    return (unsigned)op < PROTO_OP_COUNT && ops[op].run != NULL;
+    return (unsigned)op < PROTO_OP_COUNT &&
+           (ops[op].run != NULL || ops[op].run_frep != NULL);
+}
+
+int runner_check_input(const proto_pipeline *p, bool frep, geo_err *err)
+{
+    for (size_t i = 0; i < p->nops; i++) {
+        proto_op_kind k = p->ops[i].kind;
+        bool takes_frep = (unsigned)k < PROTO_OP_COUNT && ops[k].run_frep;
+        if (takes_frep && (!frep || i > 0))
+            return geo_err_set(err, -EINVAL,
+                               "pipeline[%zu]: op '%s' needs a 'frep' input "
+                               "and must come first", i, proto_op_name(k));
+        if (frep && i == 0 && !takes_frep)
+            return geo_err_set(err, -EINVAL,
+                               "pipeline[0]: op '%s' cannot take a 'frep' "
+                               "input; start with 'triangulate'",
+                               proto_op_name(k));
+    }
+    return 0;
 }
 
 bool runner_changes_model(const proto_pipeline *p)
@@ -253,11 +470,15 @@ static int add_counts(json_t *summary, const char *suffix, const geo_poly *p)
            json_object_set_new(summary, k2, json_integer(p->nfacets));
 }
 
-int runner_run(const proto_pipeline *p, geo_poly **model, const geo_ctx *ctx,
-               runner_op_timer timer, void *timer_user, json_t **ret_stats,
-               json_t **ret_summary, geo_err *err)
+static int run_pipeline(const proto_pipeline *p, const geo_frep *frep,
+                        geo_poly **model, const geo_ctx *ctx,
+                        runner_op_timer timer, void *timer_user,
+                        json_t **ret_stats, json_t **ret_summary,
+                        geo_err *err)
 {
     int r = runner_check(p, err);
+    if (r == 0)
+        r = runner_check_input(p, frep != NULL, err);
     if (r < 0)
         return r;
     json_t *stats = json_object(), *list = json_array(),
@@ -265,7 +486,8 @@ int runner_run(const proto_pipeline *p, geo_poly **model, const geo_ctx *ctx,
     json_t *before = NULL, *after = NULL;
     bool changed = false;
     double t_start = mono_seconds();
-    if (!stats || !list || !summary || add_counts(summary, "before", *model)) {
+    if (!stats || !list || !summary ||
+        (*model && add_counts(summary, "before", *model))) {
         r = geo_err_set(err, -ENOMEM, "out of memory");
         goto fail;
     }
@@ -284,7 +506,10 @@ int runner_run(const proto_pipeline *p, geo_poly **model, const geo_ctx *ctx,
         }
         json_t *report = NULL;
         double t0 = mono_seconds();
-        r = ops[op->kind].run(op, model, &sub, &report, summary, err);
+        r = ops[op->kind].run_frep
+                ? ops[op->kind].run_frep(op, frep, model, &sub, &report,
+                                         summary, err)
+                : ops[op->kind].run(op, model, &sub, &report, summary, err);
         double secs = mono_seconds() - t0;
         if (timer)
             timer(timer_user, op->kind, secs);
@@ -338,5 +563,29 @@ fail:
     json_decref(summary);
     json_decref(before);
     json_decref(after);
+    return r;
+}
+
+int runner_run(const proto_pipeline *p, geo_poly **model, const geo_ctx *ctx,
+               runner_op_timer timer, void *timer_user, json_t **ret_stats,
+               json_t **ret_summary, geo_err *err)
+{
+    return run_pipeline(p, NULL, model, ctx, timer, timer_user, ret_stats,
+                        ret_summary, err);
+}
+
+int runner_run_frep(const proto_pipeline *p, const geo_frep *f,
+                    geo_poly **ret_model, const geo_ctx *ctx,
+                    runner_op_timer timer, void *timer_user,
+                    json_t **ret_stats, json_t **ret_summary, geo_err *err)
+{
+    geo_poly *m = NULL;
+    int r = run_pipeline(p, f, &m, ctx, timer, timer_user, ret_stats,
+                         ret_summary, err);
+    if (r < 0) {
+        geo_poly_free(m);
+        m = NULL;
+    }
+    *ret_model = m;
     return r;
 }

@@ -22,7 +22,10 @@
  *     facets of that edge, so following the chain is the paper's transition
  *     F(facet, edge) = (next facet, next edge); edges of the model lying in
  *     the plane join the chain when only one of their two facets is kept
- *     there;
+ *     there; a component with holes, or passing a vertex twice, is split
+ *     into simple coplanar facets (lib/region_split.h) with every
+ *     crossing's rounding bound, so the split holds for the exact
+ *     section too;
  *  6. dropping the removed side, the hanging on-plane vertices, and
  *     renumbering (geo_poly_compact).
  *
@@ -37,6 +40,8 @@
 #include <string.h>
 
 #include "predicates.h"
+#include "region_split.h"
+#include "selfint.h"
 #include "vec.h"
 
 enum ev_type { EV_ENTRY, EV_EXIT, EV_DOUBLE, EV_PASS };
@@ -63,9 +68,13 @@ typedef struct cutter {
     const geo_poly *p;
     const geo_topo *t;
     const double *plane; /* as given: decides every side */
+    bool drop_hanging;   /* opts.drop_hanging */
     double unit[4];      /* normalised: the new facets' plane */
     int8_t *side;
     uint32_t *xv;        /* per corner: crossing vertex id or GEO_NONE */
+    double *xerr;        /* per crossing vertex (id − p->nverts): bound on
+                            its distance from the exact crossing */
+    size_t capxerr;
     geo_poly *out;
     geo_err *err;
 
@@ -136,11 +145,26 @@ static int dominant_axis(const double v[3])
     return k;
 }
 
+#define U_ROUND 0x1.0p-53
+
+/* Σ|plane[k]·x[k]| + |plane[3]|: the scale of plane(x)'s rounding. */
+static double plane_mag(const double plane[4], const double x[3])
+{
+    return fabs(plane[0] * x[0]) + fabs(plane[1] * x[1]) +
+           fabs(plane[2] * x[2]) + fabs(plane[3]);
+}
+
 /* The crossing of edge a–b (sides of opposite sign) computed from the end
  * nearer to the plane, so the parameter is at most 1/2 and the point lies
- * in that half; the same edge gives the same bits whichever facet asks. */
-static void crossing_point(const double plane[4], const double a[3],
-                           const double b[3], double ret[3])
+ * in that half; the same edge gives the same bits whichever facet asks.
+ * `plane` is the given plane normalised. Returns a bound on how far, in
+ * each coordinate, the exact crossing with the given plane lies from the
+ * computed point: the plane values carry the normalisation's rounding
+ * and their own (≤ 8u·magnitude each), which moves the parameter by at
+ * most twice their sum over |f0 − f1| less that sum, plus the rounding
+ * of the interpolation; the whole edge when that sum is not smaller. */
+static double crossing_point(const double plane[4], const double a[3],
+                             const double b[3], double ret[3])
 {
     double fa = geo_plane_eval(plane, a), fb = geo_plane_eval(plane, b);
     const double *p0 = a, *p1 = b;
@@ -158,6 +182,16 @@ static void crossing_point(const double plane[4], const double a[3],
         double lo = fmin(a[j], b[j]), hi = fmax(a[j], b[j]);
         ret[j] = fmin(fmax(x, lo), hi);
     }
+    double e = 8 * U_ROUND * (plane_mag(plane, p0) + plane_mag(plane, p1));
+    double den = fabs(f0 - f1) - e;
+    double dt = den > 0 ? 2 * e / den + 4 * U_ROUND : 1.0;
+    double err = 0;
+    for (int j = 0; j < 3; j++) {
+        double ej = dt * fabs(p1[j] - p0[j]) +
+                    4 * U_ROUND * (fabs(p0[j]) + fabs(p1[j]));
+        err = fmax(err, ej);
+    }
+    return err * (1 + 16 * U_ROUND);
 }
 
 /* ---- one cut facet ---------------------------------------------------- */
@@ -452,6 +486,158 @@ static uint32_t pick_out(const cutter *k, const uint32_t *head,
     return best;
 }
 
+/* The plane's projection: 2D coordinates of output vertex v, mirrored
+ * when the normal points to −drop, so that every new facet turns
+ * counter-clockwise (exact copies of the coordinates, no rounding). */
+static void plane_xy(const cutter *k, uint32_t v, int drop, int osign,
+                     double ret[2])
+{
+    const double *x = k->out->verts[v];
+    int u = (drop + 1) % 3, w = (drop + 2) % 3;
+    ret[0] = osign > 0 ? x[u] : x[w];
+    ret[1] = osign > 0 ? x[w] : x[u];
+}
+
+/* lidx without the on-plane old vertices that lie in exactly one kept
+ * facet: on the section's boundary they sit on a straight line between
+ * that facet and the new facet, and drop_hanging removes them from the
+ * old facet; leaving them out of the region keeps diagonals off them. */
+static int leave_out_hanging(const cutter *k, const uint32_t *ids,
+                             const uint32_t *loc, uint32_t nl,
+                             uint32_t *lstart, uint32_t *lidx, uint32_t nloops)
+{
+    const geo_poly *o = k->out;
+    uint32_t nold = k->p->nverts;
+    uint8_t *cnt = calloc((size_t)nl + 1, 1);
+    if (!cnt)
+        return -ENOMEM;
+    uint32_t nc = geo_poly_ncorners(o);
+    for (uint32_t c = 0; c < nc; c++) {
+        uint32_t v = o->fidx[c];
+        if (v < nold && k->side[v] == 0 && loc[v] < nl && ids[loc[v]] == v &&
+            cnt[loc[v]] < 2)
+            cnt[loc[v]]++;
+    }
+    uint32_t w = 0;
+    for (uint32_t l = 0, b = 0; l < nloops; l++) {
+        uint32_t e = lstart[l + 1], s = w, keep = 0;
+        for (uint32_t j = b; j < e; j++) {
+            uint32_t v = ids[lidx[j]];
+            keep += !(v < nold && k->side[v] == 0 && cnt[lidx[j]] == 1);
+        }
+        for (uint32_t j = b; j < e; j++) {
+            uint32_t v = ids[lidx[j]];
+            if (keep < 3 || !(v < nold && k->side[v] == 0 && cnt[lidx[j]] == 1))
+                lidx[w++] = lidx[j];
+        }
+        lstart[l] = s;
+        b = e;
+    }
+    lstart[nloops] = w;
+    free(cnt);
+    return 0;
+}
+
+/* Adds the new facets for the traced section loops (lv, lstart): each
+ * counter-clockwise loop that passes each point once is one facet; when
+ * there is a hole or a loop touching itself, the region is split into
+ * simple coplanar facets (lib/region_split.h), decided in the plane's
+ * projection with exact orientation signs on the computed vertex
+ * positions, and each resulting facet is checked again for simplicity in
+ * 3D (lib/selfint.h). loc: scratch of out->nverts entries. */
+static int place_section(cutter *k, const uint32_t *lv, uint32_t *lstart,
+                         uint32_t nloops, uint32_t *loc, uint32_t *ret_parts)
+{
+    uint32_t nlv = lstart[nloops], nl = 0;
+    int drop = dominant_axis(k->unit);
+    int osign = k->unit[drop] > 0 ? 1 : -1;
+    uint32_t *ids = malloc(((size_t)nlv + 1) * sizeof *ids);
+    uint32_t *lidx = malloc(((size_t)nlv + 1) * sizeof *lidx);
+    double(*xy)[2] = malloc(((size_t)nlv + 1) * sizeof *xy);
+    double *perr = malloc(((size_t)nlv + 1) * sizeof *perr);
+    geo_region_pieces pc;
+    memset(&pc, 0, sizeof pc);
+    int r = 0;
+    if (!ids || !lidx || !xy || !perr) {
+        r = geo_err_set(k->err, -ENOMEM, "out of memory");
+        goto done;
+    }
+    for (uint32_t i = 0; i < nlv; i++)
+        loc[lv[i]] = GEO_NONE;
+    for (uint32_t i = 0; i < nlv; i++) {
+        uint32_t v = lv[i];
+        if (loc[v] == GEO_NONE) {
+            loc[v] = nl;
+            ids[nl] = v;
+            plane_xy(k, v, drop, osign, xy[nl]);
+            perr[nl] = v < k->p->nverts ? 0.0 : k->xerr[v - k->p->nverts];
+            nl++;
+        }
+        lidx[i] = loc[v];
+    }
+    int need = geo_region_needs_split((const double(*)[2])xy, nl, lstart,
+                                      lidx, nloops);
+    if (need < 0) {
+        r = geo_err_set(k->err, -ENOMEM, "out of memory");
+        goto done;
+    }
+    if (!need) {
+        for (uint32_t l = 0; l < nloops; l++) {
+            int64_t f = geo_poly_add_facet(k->out, lv + lstart[l],
+                                           lstart[l + 1] - lstart[l]);
+            if (f < 0) {
+                r = geo_err_set(k->err, (int)f, "out of memory adding a facet");
+                goto done;
+            }
+            memcpy(k->out->planes[f], k->unit, sizeof k->unit);
+        }
+        *ret_parts = nloops;
+        goto done;
+    }
+    if (k->drop_hanging &&
+        leave_out_hanging(k, ids, loc, nl, lstart, lidx, nloops) < 0) {
+        r = geo_err_set(k->err, -ENOMEM, "out of memory");
+        goto done;
+    }
+    r = geo_region_split((const double(*)[2])xy, perr, nl, lstart, lidx,
+                         nloops, &pc, k->err);
+    if (r < 0) {
+        geo_err_prefix(k->err, "section");
+        goto done;
+    }
+    for (uint32_t q = 0; q < pc.npieces; q++) {
+        uint32_t n = pc.start[q + 1] - pc.start[q];
+        uint32_t *v = pc.idx + pc.start[q];
+        for (uint32_t j = 0; j < n; j++)
+            v[j] = ids[v[j]];
+        int64_t f = geo_poly_add_facet(k->out, v, n);
+        if (f < 0) {
+            r = geo_err_set(k->err, (int)f, "out of memory adding a facet");
+            goto done;
+        }
+        memcpy(k->out->planes[f], k->unit, sizeof k->unit);
+        geo_facet_shape sh;
+        geo_facet_shape_of(k->out, (uint32_t)f, &sh);
+        double area[3];
+        geo_poly_facet_area_vector(k->out, (uint32_t)f, area);
+        if (sh.degenerate || geo_facet_self_intersects(k->out, (uint32_t)f, &sh) ||
+            !(geo_vdot(area, k->unit) > 0)) {
+            r = geo_err_set(k->err, -ENOTSUP,
+                            "section: component %u, split because of a hole "
+                            "or a point it touches itself at, gives a facet "
+                            "that is not a simple polygon once its vertices "
+                            "are rounded; move the plane a little (change "
+                            "plane[3] by 1e-6 of the model's size)", pc.part[q]);
+            goto done;
+        }
+    }
+    *ret_parts = pc.nparts;
+done:
+    geo_region_pieces_clear(&pc);
+    free(ids), free(lidx), free(xy), free(perr);
+    return r;
+}
+
 static int build_section(cutter *k, uint32_t *ret_components)
 {
     uint32_t nv = k->out->nverts;
@@ -460,10 +646,15 @@ static int build_section(cutter *k, uint32_t *ret_components)
     uint32_t *nextedge = malloc((m + 1) * sizeof *nextedge);
     uint32_t *outdeg = calloc((size_t)nv + 1, sizeof *outdeg);
     uint8_t *used = calloc(m + 1, 1);
-    uint32_t *loop = malloc((m + 1) * sizeof *loop);
+    uint32_t *lv = malloc((m + 1) * sizeof *lv);
+    uint32_t *lstart = malloc((m + 2) * sizeof *lstart);
     int r = 0;
-    if (!head || !nextedge || !outdeg || !used || !loop) {
+    if (!head || !nextedge || !outdeg || !used || !lv || !lstart) {
         r = geo_err_set(k->err, -ENOMEM, "out of memory building the section");
+        goto done;
+    }
+    if (m > UINT32_MAX / 2) {
+        r = geo_err_set(k->err, -EINVAL, "section: too many edges");
         goto done;
     }
     for (uint32_t v = 0; v < nv; v++)
@@ -476,15 +667,16 @@ static int build_section(cutter *k, uint32_t *ret_components)
     }
     int drop = dominant_axis(k->unit);
     int osign = k->unit[drop] > 0 ? 1 : -1;
-    uint32_t comps = 0;
+    uint32_t nloops = 0, nlv = 0;
+    lstart[0] = 0;
     for (size_t e0 = 0; e0 < m; e0++) {
         if (used[e0])
             continue;
-        size_t len = 0;
+        uint32_t len = 0;
         size_t e = e0;
         for (;;) {
             used[e] = 1;
-            loop[len++] = k->cap[e][0];
+            lv[nlv + len++] = k->cap[e][0];
             uint32_t u = k->cap[e][0], v = k->cap[e][1];
             uint32_t nx = outdeg[v] == 1 ? head[v]
                         : outdeg[v] == 0 ? GEO_NONE
@@ -507,29 +699,16 @@ static int build_section(cutter *k, uint32_t *ret_components)
         }
         if (len < 3) {
             r = geo_err_set(k->err, -EINVAL,
-                            "section: a component with %zu vertices", len);
+                            "section: a component with %u vertices", len);
             goto done;
         }
-        int64_t f = geo_poly_add_facet(k->out, loop, (uint32_t)len);
-        if (f < 0) {
-            r = geo_err_set(k->err, (int)f, "out of memory adding a facet");
-            goto done;
-        }
-        memcpy(k->out->planes[f], k->unit, sizeof k->unit);
-        double area[3];
-        geo_poly_facet_area_vector(k->out, (uint32_t)f, area);
-        if (!(geo_vdot(area, k->unit) > 0)) {
-            r = geo_err_set(k->err, -ENOTSUP,
-                            "section: component %u has a hole (the new "
-                            "facet would need an inner boundary, which "
-                            "facet-model/1 cannot represent)", comps);
-            goto done;
-        }
-        comps++;
+        nlv += len;
+        lstart[++nloops] = nlv;
     }
-    *ret_components = comps;
+    /* head is free now: it serves as the vertex → local index map */
+    r = place_section(k, lv, lstart, nloops, head, ret_components);
 done:
-    free(head), free(nextedge), free(outdeg), free(used), free(loop);
+    free(head), free(nextedge), free(outdeg), free(used), free(lv), free(lstart);
     return r;
 }
 
@@ -570,8 +749,13 @@ static int inplane_edges(cutter *k)
             geo_orient3d(p->verts[a], p->verts[b], lowest[0], lowest[1]) > 0)
             return geo_err_set(k->err, -ENOTSUP,
                                "facets[%u]: the plane touches the reflex "
-                               "edge %u-%u from inside; the kept part would "
-                               "pinch along it", fs[0], a, b);
+                               "edge %u-%u from inside: the kept part would "
+                               "be two pieces meeting only along that edge, "
+                               "which no valid polyhedron represents; move "
+                               "the plane a little, e.g. by 1e-6 of the "
+                               "model's size (a larger plane[3] separates "
+                               "the pieces, a smaller one keeps them "
+                               "joined)", fs[0], a, b);
     }
     return 0;
 }
@@ -626,15 +810,22 @@ static int check_cavity_apexes(cutter *k, uint32_t first_new)
             if (on || wn != 0)
                 return geo_err_set(k->err, -ENOTSUP,
                                    "vertices[%u]: the plane touches the apex "
-                                   "of a cavity from inside; a new facet "
-                                   "would pass over it", v);
+                                   "of a cavity from inside: the cavity would "
+                                   "meet the new facet in that one point, "
+                                   "which no valid polyhedron represents; "
+                                   "move the plane a little, e.g. by 1e-6 of "
+                                   "the model's size (a larger plane[3] opens "
+                                   "the cavity into a hole of the section, a "
+                                   "smaller one keeps it closed)", v);
         }
     }
     return 0;
 }
 
 /* Removes on-plane vertices left in exactly two facets (they lie on the
- * straight edge between those two). Returns the count or -EINVAL. */
+ * straight edge between those two), or in one (left out of a split
+ * section by leave_out_hanging: they lie on the edge that facet shares
+ * with a new facet). Returns the count or -EINVAL. */
 static int64_t drop_hanging(cutter *k)
 {
     geo_poly *o = k->out;
@@ -650,7 +841,7 @@ static int64_t drop_hanging(cutter *k)
     }
     int64_t dropped = 0;
     for (uint32_t v = 0; v < nold; v++)
-        if (cnt[v] == 2)
+        if (cnt[v] == 1 || cnt[v] == 2)
             dropped++;
     if (dropped == 0) {
         free(cnt);
@@ -661,7 +852,7 @@ static int64_t drop_hanging(cutter *k)
         uint32_t s = o->fstart[f], e = o->fstart[f + 1], start = w;
         for (uint32_t c = s; c < e; c++) {
             uint32_t v = o->fidx[c];
-            if (v < nold && cnt[v] == 2)
+            if (v < nold && (cnt[v] == 1 || cnt[v] == 2))
                 continue;
             o->fidx[w++] = v;
         }
@@ -741,7 +932,11 @@ static int check_plane_fans(cutter *k)
         if (steps != b - a || want != w[a].next)
             r = geo_err_set(k->err, -ENOTSUP,
                             "vertices[%u]: the kept part would touch itself "
-                            "at this vertex on the plane", w[a].v);
+                            "at this vertex on the plane (two parts meeting "
+                            "in one point), which no valid polyhedron "
+                            "represents; move the plane a little, e.g. by "
+                            "1e-6 of the model's size (a larger plane[3] "
+                            "separates the parts, a smaller one joins them)", w[a].v);
         a = b;
     }
     free(w);
@@ -792,6 +987,7 @@ int geo_cut(const geo_poly *p, const double plane[4],
     memset(&k, 0, sizeof k);
     k.p = p;
     k.plane = plane;
+    k.drop_hanging = o.drop_hanging;
     k.out = out;
     k.err = err;
     double len = geo_vlen(plane);
@@ -879,10 +1075,12 @@ int geo_cut(const geo_poly *p, const double plane[4],
         if (k.side[a] * k.side[b] >= 0 || k.xv[c] != GEO_NONE)
             continue;
         double x[3];
-        crossing_point(k.unit, p->verts[a], p->verts[b], x);
+        double xe = crossing_point(k.unit, p->verts[a], p->verts[b], x);
         int64_t id = geo_poly_add_vertex(out, x);
-        if (id < 0)
+        if (id < 0 || grow((void **)&k.xerr, &k.capxerr, k.new_vertices + 1,
+                           sizeof *k.xerr) < 0)
             goto oom;
+        k.xerr[k.new_vertices] = xe;
         k.xv[c] = (uint32_t)id;
         k.xv[k.t->mate[c]] = (uint32_t)id;
         k.new_vertices++;
@@ -937,6 +1135,13 @@ int geo_cut(const geo_poly *p, const double plane[4],
                         "merge needs exactly one", rp.components);
         goto done;
     }
+    if (o.main_facet != GEO_NONE && rp.new_facets != 1) {
+        r = geo_err_set(err, -EINVAL,
+                        "main facet: the section has a hole or touches "
+                        "itself at a point, so it takes %u facets; the "
+                        "merge needs exactly one", rp.new_facets);
+        goto done;
+    }
     if (o.drop_hanging) {
         int64_t d = drop_hanging(&k);
         if (d < 0) {
@@ -977,7 +1182,8 @@ done:
     } else if (rep) {
         *rep = rp;
     }
-    free(k.side), free(k.xv), free(k.kept_inplane), free(k.cap), free(k.kin);
+    free(k.side), free(k.xv), free(k.xerr), free(k.kept_inplane), free(k.cap);
+    free(k.kin);
     free(k.nodes), free(k.ev), free(k.piece), free(k.used);
     geo_topo_free(own);
     return r;

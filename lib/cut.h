@@ -4,7 +4,9 @@
  *
  * The input is any closed, consistently oriented, manifold polyhedron
  * (convex or not, facets convex or not). The section may have several
- * components (each becomes one new facet), an old facet may fall into
+ * components (each becomes one new facet, or several coplanar simple
+ * facets when it has holes or its boundary passes a vertex twice: a
+ * facet cannot have holes; see lib/region_split.h), an old facet may fall into
  * several pieces, vertices and edges may lie exactly on the plane, and
  * whole facets may lie in it (a facet in the plane whose outward normal is
  * the plane's normal ends up inside a new facet; one facing the other way
@@ -21,12 +23,19 @@
  * rounded (each edge's crossing is computed once and shared by both of
  * its facets).
  *
- * Results that facet-model/1 cannot represent are refused with -ENOTSUP
- * and a message, never returned: a section component with a hole (a facet
- * cannot have holes, see README "Plane cut"), and a kept part that would
- * pinch — the plane touching from inside a reflex edge lying in it or the
- * apex of a cavity, or a vertex on the plane left with two separate fans
- * of facets (a saddle vertex with the two humps kept).
+ * The split of a section is decided so that it holds for the exact
+ * crossing points as well as for their rounded positions (each crossing
+ * carries a bound on its rounding), so no diagonal grazes a vertex.
+ *
+ * Kept parts that no valid polyhedron represents are refused with
+ * -ENOTSUP and a message, never returned: the plane touching from inside
+ * a reflex edge lying in it (two pieces sharing only that edge), the apex
+ * of a cavity (the cavity meeting the new facet in one point), or a
+ * vertex on the plane left with two separate fans of facets (two parts
+ * meeting in one point); two vertices at one position would count as a
+ * contact, so duplicating does not help. The message says why and that
+ * moving the plane a little either way (plane[3] larger: apart, smaller:
+ * joined) gives a valid cut.
  *
  * Thread safety: geo_cut is reentrant; the input is only read. */
 #ifndef GEO_CUT_H
@@ -44,7 +53,8 @@ typedef struct geo_cut_opts {
      * be non-planar; all its vertices must lie on the plane or on the
      * removed side (≥ 0), it is removed and replaced by the new facet,
      * and the section must have exactly one component. GEO_NONE (the
-     * default from geo_cut_opts_default) for an ordinary cut. */
+     * default from geo_cut_opts_default) for an ordinary cut. The
+     * section must also be one facet: one with a hole is refused. */
     uint32_t main_facet;
     /* Optional topology of the input (geo_topo_build of the same poly) to
      * save rebuilding it; NULL builds it. Not modified. */
@@ -58,8 +68,9 @@ typedef struct geo_cut_opts {
 typedef struct geo_cut_report {
     bool unchanged;             /* no vertex on the removed side */
     bool empty;                 /* no vertex on the kept side */
-    uint32_t components;        /* section components = new facets */
-    uint32_t new_facets;        /* facets created on the plane */
+    uint32_t components;        /* section components (connected parts) */
+    uint32_t new_facets;        /* facets created on the plane: one per
+                                   component, more for one with holes */
     uint32_t first_new_facet;   /* index of the first of them in the
                                    output (they come last), or GEO_NONE */
     uint32_t split_facets;      /* old facets that were cut */
@@ -89,14 +100,17 @@ void geo_cut_opts_default(geo_cut_opts *opts);
  * Returns 0 (also for an unchanged or empty result: see rep), or
  *  -EINVAL  bad input: plane not finite or zero normal, indices invalid,
  *           the model not a closed oriented manifold, a facet whose
- *           section is inconsistent (a self-intersecting facet), a main
- *           facet with a vertex on the kept side, or a §3.4 cut whose
- *           section is not one component;
- *  -ENOTSUP the result cannot be represented (see above);
+ *           section is inconsistent (a self-intersecting facet, or a
+ *           section whose boundaries cross), a main facet with a vertex
+ *           on the kept side, or a §3.4 cut whose section is not one
+ *           component of one facet;
+ *  -ENOTSUP the result cannot be represented (see above), or a split
+ *           facet that is not simple once rounded (move the plane);
  *  -ENOMEM, -ECANCELED;
  * with err naming the place ("facets[12]: ..."). On error out is left
  * empty. Complexity: O(n) for the classification plus O(k log k) for the
- * k crossings; memory O(n). */
+ * k crossings, plus the split of a section with holes (README "Plane
+ * cut"); memory O(n). */
 int geo_cut(const geo_poly *p, const double plane[4],
             const geo_cut_opts *opts, const geo_ctx *ctx, geo_poly *out,
             geo_cut_report *rep, geo_err *err);

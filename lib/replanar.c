@@ -3,8 +3,9 @@
  * a growing active region (see replanar.h for the quantities and the
  * schedules).
  *
- * Invariants of a run: fixed vertices never move and every plane of a
- * facet through a fixed vertex passes through it (up to rounding of d);
+ * Invariants of a run: fixed vertices never move and, with the default
+ * fit, every plane of a facet through a fixed vertex passes through it (up
+ * to rounding of d);
  * a vertex or facet outside the active region has exactly its start
  * position / plane; the active region only grows; the Jacobi-style update
  * (all vertices of a step read the same planes and positions) makes the
@@ -57,6 +58,53 @@ int geo_replanar_schedule_parse(const char *name,
     return -EINVAL;
 }
 
+const char *geo_replanar_fit_name(enum geo_replanar_fit f)
+{
+    switch (f) {
+    case GEO_REPLANAR_FIT_THROUGH_FIXED:
+        return "through-fixed";
+    case GEO_REPLANAR_FIT_ALL:
+        return "all";
+    }
+    return "unknown";
+}
+
+int geo_replanar_fit_parse(const char *name, enum geo_replanar_fit *ret)
+{
+    static const enum geo_replanar_fit all[] = {
+        GEO_REPLANAR_FIT_THROUGH_FIXED, GEO_REPLANAR_FIT_ALL};
+    for (size_t i = 0; name && i < sizeof all / sizeof all[0]; i++)
+        if (strcmp(name, geo_replanar_fit_name(all[i])) == 0) {
+            *ret = all[i];
+            return 0;
+        }
+    return -EINVAL;
+}
+
+const char *geo_replanar_scaled_k_name(enum geo_replanar_scaled_k k)
+{
+    switch (k) {
+    case GEO_REPLANAR_SCALED_K_S2SUM:
+        return "s2sum";
+    case GEO_REPLANAR_SCALED_K_S2:
+        return "s2";
+    }
+    return "unknown";
+}
+
+int geo_replanar_scaled_k_parse(const char *name,
+                                enum geo_replanar_scaled_k *ret)
+{
+    static const enum geo_replanar_scaled_k all[] = {
+        GEO_REPLANAR_SCALED_K_S2SUM, GEO_REPLANAR_SCALED_K_S2};
+    for (size_t i = 0; name && i < sizeof all / sizeof all[0]; i++)
+        if (strcmp(name, geo_replanar_scaled_k_name(all[i])) == 0) {
+            *ret = all[i];
+            return 0;
+        }
+    return -EINVAL;
+}
+
 void geo_replanar_opts_default(geo_replanar_opts *o,
                                enum geo_replanar_schedule s)
 {
@@ -72,6 +120,8 @@ void geo_replanar_opts_default(geo_replanar_opts *o,
     o->wake_tol = 1e-2;
     o->count_selfint = false;
     o->check = true;
+    o->fit = GEO_REPLANAR_FIT_THROUGH_FIXED;
+    o->scaled_k = GEO_REPLANAR_SCALED_K_S2SUM;
 }
 
 void geo_replanar_log_clear(geo_replanar_log *log)
@@ -205,6 +255,7 @@ typedef struct run {
     uint32_t *wake, nwake;        /* facets to activate after this step */
     uint8_t *fwake;               /* facet queued in wake */
     double wake_abs;              /* mm */
+    bool fit_all;                 /* GEO_REPLANAR_FIT_ALL */
     double s1, s2, s2sum, delta;  /* of the last step */
 } run;
 
@@ -434,8 +485,9 @@ static void solve_vertex(const run *r, uint32_t v, const double x0[3],
  * §4.3.2) or the start position (§4.3.3). */
 static void step(run *r, double k, bool local)
 {
+    const uint8_t *fixflag = r->fit_all ? NULL : r->vflag;
     for (uint32_t i = 0; i < r->naf; i++)
-        fit_plane(r->p0, r->x, r->vflag, r->af[i], r->pl[r->af[i]]);
+        fit_plane(r->p0, r->x, fixflag, r->af[i], r->pl[r->af[i]]);
     for (uint32_t i = 0; i < r->nav; i++) {
         uint32_t v = r->av[i];
         if (r->vflag[v] & V_FIXED)
@@ -472,6 +524,8 @@ static void step(run *r, double k, bool local)
     const geo_replanar_prep *pr = r->prep;
     for (uint32_t i = 0; i < r->nav; i++) {
         uint32_t v = r->av[i];
+        if (r->vflag[v] & V_FIXED)
+            continue;
         for (uint32_t j = pr->vstart[v]; j < pr->vstart[v + 1]; j++) {
             double e = geo_plane_eval(r->pl[pr->vfacets[j]], r->x[v]);
             s2sum += e * e;
@@ -528,7 +582,7 @@ static void run_free(run *r)
 
 static int run_init(run *r, const geo_replanar_prep *prep, uint32_t nfixed,
                     const uint32_t *fixed, const double (*targets)[3],
-                    double wake_tol, geo_err *err)
+                    double wake_tol, bool fit_all, geo_err *err)
 {
     const geo_poly *p = prep->poly;
     memset(r, 0, sizeof *r);
@@ -550,6 +604,7 @@ static int run_init(run *r, const geo_replanar_prep *prep, uint32_t nfixed,
     memcpy(r->x, p->verts, (size_t)p->nverts * sizeof *r->x);
     memcpy(r->pl, p->planes, (size_t)p->nfacets * sizeof *r->pl);
     r->wake_abs = wake_tol * prep->eps;
+    r->fit_all = fit_all;
     for (uint32_t i = 0; i < nfixed; i++) {
         uint32_t v = fixed[i];
         if (v >= p->nverts)
@@ -577,7 +632,7 @@ static int run_init(run *r, const geo_replanar_prep *prep, uint32_t nfixed,
             activate_facet(r, f);
     /* a facet with three or more fixed vertices is fitted to them alone:
      * they must be coplanar */
-    for (uint32_t i = 0; i < r->naf; i++) {
+    for (uint32_t i = 0; i < r->naf && !fit_all; i++) {
         uint32_t f = r->af[i], nfix = 0;
         const uint32_t *v = geo_poly_facet(p, f);
         uint32_t n = geo_poly_facet_size(p, f);
@@ -758,6 +813,24 @@ static void inspect_orientation(const run *r, geo_replanar_result *ret)
     ret->volume = r->prep->volume + vol6 / 6.0;
 }
 
+/* The largest distance of a fixed vertex from the plane of one of its
+ * facets (mm). */
+static double fixed_residual(const run *r, uint32_t nfixed,
+                             const uint32_t *fixed)
+{
+    const geo_replanar_prep *pr = r->prep;
+    double m = 0;
+    for (uint32_t i = 0; i < nfixed; i++)
+        for (uint32_t j = pr->vstart[fixed[i]]; j < pr->vstart[fixed[i] + 1];
+             j++) {
+            double e = fabs(geo_plane_eval(r->pl[pr->vfacets[j]],
+                                           r->x[fixed[i]]));
+            if (e > m || isnan(e))
+                m = e;
+        }
+    return m;
+}
+
 int geo_replanar_solve(const geo_replanar_prep *prep, uint32_t nfixed,
                        const uint32_t *fixed, const double (*targets)[3],
                        enum geo_replanar_schedule schedule,
@@ -773,7 +846,11 @@ int geo_replanar_solve(const geo_replanar_prep *prep, uint32_t nfixed,
     if (!(o.k0 > 0 && isfinite(o.k0)) || !(o.k_factor >= 1) ||
         !isfinite(o.k_factor) || !(o.eps0 > 0) || !(o.eps_factor > 0) ||
         !(o.eps_factor <= 1) || !(o.eps_final > 0) || o.max_steps == 0 ||
-        !(o.wake_tol >= 0) || o.outer_rounds == 0)
+        !(o.wake_tol >= 0) || o.outer_rounds == 0 ||
+        (o.fit != GEO_REPLANAR_FIT_THROUGH_FIXED &&
+         o.fit != GEO_REPLANAR_FIT_ALL) ||
+        (o.scaled_k != GEO_REPLANAR_SCALED_K_S2SUM &&
+         o.scaled_k != GEO_REPLANAR_SCALED_K_S2))
         return geo_err_set(err, -EINVAL, "options: out of range");
     if (schedule != GEO_REPLANAR_LOCAL_EXP &&
         schedule != GEO_REPLANAR_SCALED && schedule != GEO_REPLANAR_GLOBAL_EXP)
@@ -787,7 +864,8 @@ int geo_replanar_solve(const geo_replanar_prep *prep, uint32_t nfixed,
     ret->nselfint = ret->ninverted = ret->first_selfint_step = -1;
 
     run r;
-    int rc = run_init(&r, prep, nfixed, fixed, targets, o.wake_tol, err);
+    int rc = run_init(&r, prep, nfixed, fixed, targets, o.wake_tol,
+                      o.fit == GEO_REPLANAR_FIT_ALL, err);
     if (rc < 0) {
         run_free(&r);
         return rc;
@@ -845,7 +923,11 @@ int geo_replanar_solve(const geo_replanar_prep *prep, uint32_t nfixed,
             converged = true;
             break;
         } else if (schedule == GEO_REPLANAR_SCALED) {
-            double nk = r.s2sum > 0 ? r.s1 / r.s2sum : k;
+            double nk = k;
+            if (o.scaled_k == GEO_REPLANAR_SCALED_K_S2)
+                nk = r.s2 > 0 ? r.s1 / r.s2 : k;
+            else if (r.s2sum > 0)
+                nk = r.s1 / r.s2sum;
             if (r.delta == 0 && nk == k)
                 break;
             k = nk;
@@ -863,6 +945,7 @@ int geo_replanar_solve(const geo_replanar_prep *prep, uint32_t nfixed,
         ret->k = k;
         ret->active_vertices = r.nav;
         ret->active_facets = r.naf;
+        ret->fixed_resid = fixed_residual(&r, nfixed, fixed);
         if (o.check) {
             inspect_orientation(&r, ret);
             if (nsi < 0)

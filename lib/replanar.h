@@ -1,7 +1,7 @@
 /* replanar.h — moving vertices of a polyhedron and restoring the planarity
  * of its facets (seed 000 §4, variant 3 of §4.2.3): alternate
- *   (a) least-squares planes of the facets (a facet through a fixed vertex
- *       is fitted through that vertex exactly), and
+ *   (a) least-squares planes of the facets (by default a facet through a
+ *       fixed vertex is fitted through that vertex exactly), and
  *   (b) per-vertex penalised positions: every free vertex x minimises
  *       |x − x0|² + K Σ_f (n_f·x + d_f)² over its facets f, i.e. solves
  *       the 3×3 SPD system (I + K Σ n nᵀ) x = x0 − K Σ n d,
@@ -12,15 +12,20 @@
  *         (the first term of the §4.3.1 functional);
  *   S1  = Σ |x − x_start|² over the free vertices: the total displacement
  *         from the start (§4.3.2);
- *   S2  = max |n_f·x_v + d_f| over every vertex–facet incidence, with the
- *         planes of the step: the plane error, a distance. Every bound the
- *         schedules test (ε, ε₀, 1e-10) is a bound on S2;
+ *   S2  = max |n_f·x_v + d_f| over the incidences of the free vertices v
+ *         with their facets f, with the planes of the step: the plane
+ *         error, a distance. Every bound the schedules test (ε, ε₀, 1e-10)
+ *         is a bound on S2;
  *   S2sum = Σ (n_f·x_v + d_f)² over the same incidences: the penalty term
- *         of the functional (J = S1 + K·S2sum), used by the scaled schedule.
- * Why S2 is a maximum distance: in the paper's §4.3.1 table the error
- * decays by 0.62 per step while Δ decays by 0.39 = 0.62², so the error is
- * linear in the residuals and Δ quadratic; a distance also makes the final
- * bound directly comparable with the planarity tolerance geo_poly_eps.
+ *         of the functional (J = S1 + K·S2sum).
+ * Why S2 is a distance: in the paper's §4.3.1 table the error decays by
+ * 0.62 per step while Δ decays by 0.39 = 0.62², so the error is linear in
+ * the residuals and Δ quadratic. A mean or RMS over all incidences is
+ * ruled out by scale: the paper's first row has Δ/ε² ≈ 65 (and 60 in the
+ * §4.3.2 run); the maximum gives 30–600 on the sample stones, a mean
+ * 10⁵–10⁸. The fixed vertices are left out as in the paper's sums
+ * (i = 1 … N−1); with the default fit they lie on their planes anyway, and
+ * ret->fixed_resid reports their distance.
  *
  * Only what can change is recomputed: the active facets start as the
  * facets through a fixed vertex (and any facet whose start residual
@@ -57,8 +62,8 @@ enum geo_replanar_schedule {
      * until S2 < ε, then K ×= k_factor, ε ×= eps_factor; outer_rounds
      * rounds. */
     GEO_REPLANAR_LOCAL_EXP = 0,
-    /* §4.3.2: the step is minimised; after each step K = S1 / S2sum; until
-     * S2 < eps_final. */
+    /* §4.3.2: the step is minimised; after each step K = S1 / S2sum (or
+     * S1 / S2, opts.scaled_k); until S2 < eps_final. */
     GEO_REPLANAR_SCALED = 1,
     /* §4.3.3: the total displacement is minimised (x0 = the start
      * position); K ×= k_factor each step until S2 < eps_final. */
@@ -70,6 +75,40 @@ enum geo_replanar_schedule {
 const char *geo_replanar_schedule_name(enum geo_replanar_schedule s);
 int geo_replanar_schedule_parse(const char *name,
                                 enum geo_replanar_schedule *ret);
+
+/* How the planes of facets through fixed vertices are fitted (step (a)). */
+enum geo_replanar_fit {
+    /* §4.2.1: the moved vertex lies in its facets exactly: the plane is
+     * fitted through it (through the line of two, or to three or more
+     * alone). The result is planar at the fixed vertices. */
+    GEO_REPLANAR_FIT_THROUGH_FIXED = 0,
+    /* The paper's §4.3 runs as their logs show them: every plane is the
+     * plain least-squares plane of all its vertices, fixed ones included,
+     * so the planes reach the fixed vertex only gradually. Reproduces the
+     * tables' shapes (see README); the result leaves each fixed vertex
+     * off its planes by ret->fixed_resid (up to ~1e-7 mm on the sample
+     * stones), more than the planarity tolerance. */
+    GEO_REPLANAR_FIT_ALL = 1,
+};
+
+/* The scaled schedule's penalty after each step. */
+enum geo_replanar_scaled_k {
+    /* K = S1 / S2sum: the two terms of J of one order; independent of the
+     * move's scale. */
+    GEO_REPLANAR_SCALED_K_S2SUM = 0,
+    /* K = S1 / S2, the rule of the paper's §4.3.2 and §4.3.5 tables (each
+     * row's K is the previous row's S1/S2 to all printed digits). K then
+     * scales with the move, so small moves take thousands of steps. */
+    GEO_REPLANAR_SCALED_K_S2 = 1,
+};
+
+/* Names "through-fixed", "all", "s2sum", "s2"; parse returns -EINVAL for
+ * an unknown name (ret untouched). */
+const char *geo_replanar_fit_name(enum geo_replanar_fit f);
+int geo_replanar_fit_parse(const char *name, enum geo_replanar_fit *ret);
+const char *geo_replanar_scaled_k_name(enum geo_replanar_scaled_k k);
+int geo_replanar_scaled_k_parse(const char *name,
+                                enum geo_replanar_scaled_k *ret);
 
 typedef struct geo_replanar_opts {
     double k0;           /* first penalty K [100] */
@@ -87,6 +126,9 @@ typedef struct geo_replanar_opts {
                             column; also gives first_selfint_step) */
     bool check;          /* inspect the result (self-intersections,
                             orientation) [true] */
+    enum geo_replanar_fit fit; /* [GEO_REPLANAR_FIT_THROUGH_FIXED] */
+    enum geo_replanar_scaled_k scaled_k; /* scaled: the rule for K
+                            [GEO_REPLANAR_SCALED_K_S2SUM] */
 } geo_replanar_opts;
 
 /* The paper's defaults for schedule s (k_factor 2 for global-exp). */
@@ -136,6 +178,9 @@ typedef struct geo_replanar_result {
     double volume;          /* signed volume of the result */
     int64_t first_selfint_step; /* with count_selfint: the first step
                                    with a self-intersection, else −1 */
+    double fixed_resid;     /* max |n·x + d| of a fixed vertex against the
+                               planes of its facets, mm: rounding with
+                               GEO_REPLANAR_FIT_THROUGH_FIXED */
 } geo_replanar_result;
 
 /* True when the result is usable: converged, no self-intersection, no
@@ -166,11 +211,12 @@ const geo_poly *geo_replanar_prep_poly(const geo_replanar_prep *prep);
  * ret_poly is non-NULL it must have the prep's facets (a copy of
  * geo_replanar_prep_poly): its vertices and planes receive the result.
  *
- * Facets through fixed vertices: with one, the plane is the least-squares
- * plane through it (smallest eigenvector of Σ (x − p)(x − p)ᵀ); with two,
+ * Facets through fixed vertices (opts.fit = GEO_REPLANAR_FIT_THROUGH_FIXED,
+ * the default): with one, the plane is the least-squares plane through it (smallest eigenvector of Σ (x − p)(x − p)ᵀ); with two,
  * the least-squares plane through the line of both; with three or more,
  * the least-squares plane of the fixed vertices alone, and the call fails
- * with -EINVAL when they are not coplanar within geo_poly_eps.
+ * with -EINVAL when they are not coplanar within geo_poly_eps. With
+ * GEO_REPLANAR_FIT_ALL every plane is the plain least-squares plane.
  *
  * Returns 0 (also when the run did not converge: see ret->converged),
  * -EINVAL (bad index, duplicate fixed vertex, non-finite target,

@@ -482,6 +482,28 @@ static bool point_hits_facet(const geo_poly *p, const facet_ref *F,
 static int segment_pierces_facet(const geo_poly *p, const facet_ref *F,
                                   const double P[3], const double Q[3])
 {
+    /* First in F's own projection: the crossing point projects onto the
+     * projected segment, so when that segment and the projected polygon
+     * have no point in common the crossing is outside F. This settles the
+     * segments that run nearly in π_F (an edge of a coplanar neighbour):
+     * seen along them F collapses to a sliver of the width of its
+     * non-planarity, and the winding below could then put the crossing
+     * anywhere on the line through pq. */
+    {
+        int axis = F->s->axis;
+        double a2[2], b2[2], c[2], e[2];
+        proj(P, axis, a2);
+        proj(Q, axis, b2);
+        proj(V(p, F->v[F->n - 1]), axis, c);
+        bool contact = false;
+        for (uint32_t i = 0; i < F->n && !contact; i++) {
+            proj(V(p, F->v[i]), axis, e);
+            contact = seg_contact(a2, b2, false, false, c, e);
+            c[0] = e[0], c[1] = e[1];
+        }
+        if (!contact && point_in_facet2(p, F->id, axis, a2) < 0)
+            return -1;
+    }
     double d[3];
     geo_vsub(Q, P, d);
     int j = 0; /* the axis pq moves most along; the others span H, H2 */

@@ -22,10 +22,16 @@
  * counts as lying on π_F by definition, even when a slightly non-planar
  * facet puts it a rounding error off: shared vertices and edges therefore
  * never produce false contacts. Inside/outside questions are decided on
- * the facet's own vertices: for a segment pq that crosses π_F, the
- * crossing point's winding number with respect to the facet's polygon
- * projected along pq (orient3d(p, q, vᵢ, vᵢ₊₁) and two auxiliary planes
- * through pq); for points and segments lying on π_F, orient2d in the
+ * the facet's own vertices: for a segment pq that crosses π_F, outside
+ * when pq and the polygon, both projected by dropping the dominant
+ * coordinate of π_F's normal, have no point in common (the crossing
+ * point projects onto pq), else the crossing point's winding number with
+ * respect to the facet's polygon projected along pq (orient3d(p, q, vᵢ,
+ * vᵢ₊₁) and two auxiliary planes through pq) — the first test keeps a
+ * segment running nearly in π_F beside the polygon, like an edge of a
+ * coplanar neighbour, from being read as crossing it where the polygon,
+ * seen along pq, shrinks to a sliver of its non-planarity's width; for
+ * points and segments lying on π_F, orient2d in the
  * projection that drops the dominant coordinate of π_F's normal. For an
  * exactly planar facet these are the exact answers; for a facet planar
  * within geo_poly_eps the polygon is interpreted, per query, as its

@@ -276,19 +276,57 @@ int geo_topo_boundary_loops(const geo_poly *p, const geo_topo *t,
         free(start), free(corners), free(used);
         return -ENOMEM;
     }
+    /* pos[v]: 1 + the stack slot of the corner leaving v in the walk
+     * being split; walk, stack: scratch for that walk */
+    bool split = t->nnonmanifold_vertices > 0;
+    uint32_t *pos = split ? calloc((size_t)p->nverts + 1, sizeof *pos) : NULL;
+    uint32_t *walk = split ? malloc(((size_t)nb + 1) * sizeof *walk) : NULL;
+    uint32_t *stack = split ? malloc(((size_t)nb + 1) * sizeof *stack) : NULL;
+    if (split && (!pos || !walk || !stack)) {
+        free(start), free(corners), free(used), free(pos), free(walk),
+            free(stack);
+        return -ENOMEM;
+    }
     uint32_t nloops = 0, n = 0;
     start[0] = 0;
     for (uint32_t c0 = 0; c0 < t->ncorners; c0++) {
         if (t->edge_kind[c0] != GEO_EDGE_BOUNDARY || used[c0])
             continue;
-        uint32_t c = c0;
+        uint32_t c = c0, first = n;
         while (c != GEO_NONE && !used[c]) {
             used[c] = 1;
             corners[n++] = c;
             c = next_boundary(p, t, c);
         }
-        start[++nloops] = n;
+        if (c != c0 || !split) {
+            start[++nloops] = n;
+            continue;
+        }
+        /* A closed walk that comes back to a vertex it left before (two
+         * holes touching at a pinch vertex: each fan there leads from one
+         * hole into the other) is split into simple loops: the stretch
+         * since the walk left that vertex is a loop of its own. Loops are
+         * written in the order they close. */
+        uint32_t len = n - first, top = 0, o = first;
+        memcpy(walk, corners + first, (size_t)len * sizeof *walk);
+        for (uint32_t k = 0; k <= len; k++) {
+            uint32_t v = k < len ? p->fidx[walk[k]] : GEO_NONE;
+            uint32_t from = k < len ? (pos[v] ? pos[v] - 1 : GEO_NONE) : 0;
+            if (from != GEO_NONE) {
+                for (uint32_t q = from; q < top; q++) {
+                    pos[p->fidx[stack[q]]] = 0;
+                    corners[o++] = stack[q];
+                }
+                start[++nloops] = o;
+                top = from;
+            }
+            if (k < len) {
+                stack[top] = walk[k];
+                pos[v] = ++top;
+            }
+        }
     }
+    free(pos), free(walk), free(stack);
     free(used);
     *ret_start = start;
     *ret_corners = corners;

@@ -96,7 +96,11 @@ static inline int geo_topo_is_closed_manifold(const geo_topo *t)
 /* The boundary loops of p: each loop is a cycle of boundary corners, each
  * corner's edge ending where the next one's begins. Loops are split at
  * non-manifold boundary vertices (two holes touching at a vertex give two
- * loops). On success *ret_start (nloops + 1 offsets) and *ret_corners are
+ * loops): the walk turns within the fan of the facet it arrives by and
+ * never crosses to another fan, and a closed walk that still comes back
+ * to a vertex (each fan of a pinch leads from one hole into the other) is
+ * cut there, so every closed loop passes each vertex once. A walk that
+ * ends at a non-manifold edge is returned as it is (an open chain). On success *ret_start (nloops + 1 offsets) and *ret_corners are
  * malloc'd for the caller to free, and *ret_nloops set; returns 0 or
  * -ENOMEM (outputs untouched). */
 int geo_topo_boundary_loops(const geo_poly *p, const geo_topo *t,

@@ -5,6 +5,8 @@
  * default. */
 #include "pipeline.h"
 
+#include "frep_grid.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
@@ -22,6 +24,7 @@ static const char *const op_names[PROTO_OP_COUNT] = {
     [PROTO_OP_TRIANGULATE] = "triangulate",
     [PROTO_OP_FILL_HOLES] = "fill_holes",
     [PROTO_OP_STITCH] = "stitch",
+    [PROTO_OP_AUTO] = "auto",
 };
 
 /* Parameters each op accepts, "op" included, NULL-terminated. */
@@ -36,13 +39,16 @@ static const char *const op_keys[PROTO_OP_COUNT][8] = {
     [PROTO_OP_INVERSION_STATS] = {"op", "samples", "magnitudes", "seed",
                                   "schedule"},
     [PROTO_OP_TRIANGULATE] = {"op", "quad_levels", "binary_levels", "fill",
-                              "refine", "fair"},
+                              "refine", "fair", "sharpen"},
     [PROTO_OP_FILL_HOLES] = {"op", "weight", "refine", "fair"},
     [PROTO_OP_STITCH] = {"op"},
+    [PROTO_OP_AUTO] = {"op", "radius", "max_angle_deg", "max_deviation"},
 };
 
 static const char *const sched_names[] = {"local-exp", "scaled",
                                           "global-exp"};
+static const char *const fill_names[] = {"area", "edges"};
+static const char *const fair_names[] = {"none", "uniform", "length"};
 
 static const double default_magnitudes[] = {1,     .5,     .1,    .05,
                                             .01,   .005,   .001,  .0005,
@@ -245,11 +251,16 @@ static void set_defaults(proto_op *op)
     memset(&op->u, 0, sizeof op->u);
     switch (op->kind) {
     case PROTO_OP_COLLAPSE_CLUSTERS:
-        op->u.collapse.radius = 0.002;
+        op->u.collapse.radius = 0;
         break;
     case PROTO_OP_MERGE_FACETS:
-        op->u.merge.max_angle_deg = 1.0;
-        op->u.merge.max_deviation = 0.005;
+        op->u.merge.max_angle_deg = 60.0;
+        op->u.merge.max_deviation = 0;
+        break;
+    case PROTO_OP_AUTO:
+        op->u.correct.radius = 0;
+        op->u.correct.max_angle_deg = 60.0;
+        op->u.correct.max_deviation = 0;
         break;
     case PROTO_OP_MOVE_VERTEX:
         op->u.move.schedule = PROTO_SCHED_LOCAL_EXP;
@@ -267,9 +278,9 @@ static void set_defaults(proto_op *op)
     case PROTO_OP_TRIANGULATE:
         op->u.triangulate.quad_levels = 9;
         op->u.triangulate.binary_levels = 10;
-        op->u.triangulate.fill = true;
         op->u.triangulate.refine = true;
-        op->u.triangulate.fair = true;
+        op->u.triangulate.sharpen = true;
+        op->u.triangulate.fair = PROTO_FAIR_UNIFORM;
         break;
     case PROTO_OP_FILL_HOLES:
         op->u.fill_holes.refine = true;
@@ -290,8 +301,20 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
     case PROTO_OP_COUNT:
         return 0;
     case PROTO_OP_COLLAPSE_CLUSTERS:
-        return get_number(o, "radius", pl, 0, 1e9, true,
+        return get_number(o, "radius", pl, 0, 1e9, false,
                           &op->u.collapse.radius, err);
+    case PROTO_OP_AUTO:
+        r = get_number(o, "radius", pl, 0, 1e9, false,
+                       &op->u.correct.radius, err);
+        if (r == 0)
+            r = get_number(o, "max_angle_deg", pl, 0, 90, true,
+                           &op->u.correct.max_angle_deg, err);
+        if (r == 0 && op->u.correct.max_angle_deg == 90)
+            r = FAIL(pl, "max_angle_deg", "must be below 90");
+        if (r == 0)
+            r = get_number(o, "max_deviation", pl, 0, 1e9, false,
+                           &op->u.correct.max_deviation, err);
+        return r;
     case PROTO_OP_MERGE_FACETS: {
         r = get_number(o, "max_angle_deg", pl, 0, 90, true,
                        &op->u.merge.max_angle_deg, err);
@@ -368,19 +391,25 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
             r = get_schedule(o, pl, &op->u.inversion.schedule, err);
         return r;
     }
-    case PROTO_OP_TRIANGULATE:
-        r = get_u32(o, "quad_levels", pl, 1, 12,
+    case PROTO_OP_TRIANGULATE: {
+        int fill = op->u.triangulate.fill_edges, fair = op->u.triangulate.fair;
+        r = get_u32(o, "quad_levels", pl, 1, GEO_FREP_MAX_QLEV,
                     &op->u.triangulate.quad_levels, err);
         if (r == 0)
-            r = get_u32(o, "binary_levels", pl, 1, 20,
+            r = get_u32(o, "binary_levels", pl, 1, GEO_FREP_MAX_BLEV,
                         &op->u.triangulate.binary_levels, err);
         if (r == 0)
-            r = get_bool(o, "fill", pl, &op->u.triangulate.fill, err);
+            r = get_choice(o, "fill", pl, fill_names, 2, &fill, err);
         if (r == 0)
             r = get_bool(o, "refine", pl, &op->u.triangulate.refine, err);
         if (r == 0)
-            r = get_bool(o, "fair", pl, &op->u.triangulate.fair, err);
+            r = get_choice(o, "fair", pl, fair_names, 3, &fair, err);
+        if (r == 0)
+            r = get_bool(o, "sharpen", pl, &op->u.triangulate.sharpen, err);
+        op->u.triangulate.fill_edges = fill == 1;
+        op->u.triangulate.fair = (proto_fair)fair;
         return r;
+    }
     case PROTO_OP_FILL_HOLES: {
         static const char *const weights[] = {"area", "length"};
         int w = op->u.fill_holes.weight_length;
@@ -443,8 +472,7 @@ static int parse_op(const json_t *v, const place *pl, proto_op *op,
     return r;
 }
 
-static const char *const auto_ops[] = {"inspect", "collapse_clusters",
-                                       "merge_facets", "inspect"};
+static const char *const auto_ops[] = {"inspect", "auto", "inspect"};
 
 int proto_pipeline_from_json(const json_t *v, const char *where,
                              proto_pipeline *ret, geo_err *err)
@@ -456,7 +484,8 @@ int proto_pipeline_from_json(const json_t *v, const char *where,
             return FAIL(&whole, NULL, "expected an array of operations or "
                         "\"auto\"");
         expanded = json_array();
-        for (size_t i = 0; expanded && i < 4; i++)
+        size_t nauto = sizeof auto_ops / sizeof *auto_ops;
+        for (size_t i = 0; expanded && i < nauto; i++)
             if (json_array_append_new(expanded, json_string(auto_ops[i])) < 0)
                 expanded = (json_decref(expanded), NULL);
         if (!expanded)
@@ -547,6 +576,13 @@ static json_t *op_to_json(const proto_op *op)
     case PROTO_OP_CUT:
         e |= json_object_set_new(o, "plane", vec(op->u.cut.plane, 4));
         break;
+    case PROTO_OP_AUTO:
+        e |= json_object_set_new(o, "radius", json_real(op->u.correct.radius));
+        e |= json_object_set_new(o, "max_angle_deg",
+                                 json_real(op->u.correct.max_angle_deg));
+        e |= json_object_set_new(o, "max_deviation",
+                                 json_real(op->u.correct.max_deviation));
+        break;
     case PROTO_OP_MOVE_VERTEX:
         e |= json_object_set_new(o, "vertex", json_integer(op->u.move.vertex));
         e |= json_object_set_new(o, op->u.move.relative ? "by" : "to",
@@ -572,10 +608,14 @@ static json_t *op_to_json(const proto_op *op)
                                  json_integer(op->u.triangulate.quad_levels));
         e |= json_object_set_new(o, "binary_levels",
                                  json_integer(op->u.triangulate.binary_levels));
-        e |= json_object_set_new(o, "fill", json_boolean(op->u.triangulate.fill));
+        e |= json_object_set_new(
+            o, "fill", json_string(fill_names[op->u.triangulate.fill_edges]));
         e |= json_object_set_new(o, "refine",
                                  json_boolean(op->u.triangulate.refine));
-        e |= json_object_set_new(o, "fair", json_boolean(op->u.triangulate.fair));
+        e |= json_object_set_new(
+            o, "fair", json_string(fair_names[op->u.triangulate.fair]));
+        e |= json_object_set_new(o, "sharpen",
+                                 json_boolean(op->u.triangulate.sharpen));
         break;
     case PROTO_OP_FILL_HOLES:
         e |= json_object_set_new(

@@ -9,9 +9,12 @@
  *
  * Operations and parameters (lengths in the model's units, mm):
  *   inspect
- *   collapse_clusters {radius > 0 [0.002]}
- *   merge_facets {max_angle_deg in (0, 90) [1.0], max_deviation ≥ 0
- *                 [0.005], groups?: [[facet, facet, ...], ...]}
+ *   collapse_clusters {radius ≥ 0 [0: 2e-4 × the model's size]}
+ *   merge_facets {max_angle_deg in (0, 90) [60], max_deviation ≥ 0
+ *                 [0: 5e-4 × the model's size], groups?: [[facet, facet,
+ *                 ...], ...]}
+ *   auto {radius, max_angle_deg, max_deviation: as above} — the whole
+ *                 post-scan correction of lib/correct.h in one op
  *   cut {plane: [a, b, c, d]} — keeps plane(p) ≤ 0; (a,b,c) non-zero,
  *                 normalised to unit length (d scaled with it)
  *   move_vertex {vertex, to: [x,y,z] | by: [dx,dy,dz], schedule
@@ -20,13 +23,20 @@
  *   inversion_stats {samples 1..100000 [100], magnitudes: [m > 0, ...]
  *                 [1, .5, .1, .05, .01, .005, .001, .0005, .0001, .00005],
  *                 seed [1], schedule ["local-exp"]}
- *   triangulate {quad_levels 1..12 [9], binary_levels 1..20 [10],
- *                 fill [true], refine [true], fair [true]}
+ *   triangulate {quad_levels 1..11 [9], binary_levels 1..20 [10],
+ *                 fill "area"|"edges" ["area"], refine [true],
+ *                 fair "uniform"|"length"|"none" ["uniform"],
+ *                 sharpen [true]} — an F-rep input (lib/triangulate.h)
+ *                 to a mesh; only as the first op of a job whose input is
+ *                 a frep-object/1
  *   fill_holes {weight "area"|"length" ["area"], refine [true],
  *                 fair [true]}
  *   stitch
- * "auto" is the post-scan correction: inspect → collapse_clusters →
- * merge_facets (automatic groups) → inspect, with the defaults above.
+ * "auto" is the post-scan correction: inspect → auto → inspect, with the
+ * defaults above; the auto op merges (automatic groups) and collapses
+ * clusters, repeating both until nothing changes (formats.md's inspect →
+ * collapse_clusters → merge_facets → inspect, in the order and with the
+ * repeats that lib/correct.h explains).
  *
  * Ownership: a proto_pipeline owns its arrays; proto_pipeline_free
  * releases them. Functions are reentrant and thread-safe. */
@@ -51,6 +61,7 @@ typedef enum proto_op_kind {
     PROTO_OP_TRIANGULATE,
     PROTO_OP_FILL_HOLES,
     PROTO_OP_STITCH,
+    PROTO_OP_AUTO,
     PROTO_OP_COUNT
 } proto_op_kind;
 
@@ -59,6 +70,12 @@ typedef enum proto_schedule {
     PROTO_SCHED_SCALED,        /* §4.3.2 */
     PROTO_SCHED_GLOBAL_EXP,    /* §4.3.3 */
 } proto_schedule;
+
+typedef enum proto_fair {
+    PROTO_FAIR_NONE = 0,
+    PROTO_FAIR_UNIFORM, /* w = 1 (seed 001, closed form) */
+    PROTO_FAIR_LENGTH,  /* w = edge length (gradient descent) */
+} proto_fair;
 
 enum { PROTO_PIPELINE_MAX_OPS = 64, PROTO_MAX_MAGNITUDES = 64 };
 
@@ -78,6 +95,9 @@ typedef struct proto_op {
             double plane[4];     /* unit normal, offset */
         } cut;
         struct {
+            double radius, max_angle_deg, max_deviation;
+        } correct;
+        struct {
             uint32_t vertex;
             double xyz[3];
             bool relative;       /* xyz is "by" (else "to") */
@@ -93,7 +113,9 @@ typedef struct proto_op {
         } inversion;
         struct {
             uint32_t quad_levels, binary_levels;
-            bool fill, refine, fair;
+            bool fill_edges;     /* weight holes by edge length (else area) */
+            bool refine, sharpen;
+            proto_fair fair;
         } triangulate;
         struct {
             bool weight_length;  /* weight by edge length (else area) */

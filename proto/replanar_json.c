@@ -89,6 +89,7 @@ json_t *proto_replanar_result_to_json(const geo_replanar_result *r,
     put(o, "inverted_facets", count(r->ninverted), &ok);
     put(o, "volume", num(r->volume), &ok);
     put(o, "first_selfint_step", count(r->first_selfint_step), &ok);
+    put(o, "fixed_residual", num(r->fixed_resid), &ok);
     return finish(o, ok);
 }
 

@@ -9,7 +9,7 @@
  *              "selfint","active_vertices","active_facets"}
  *   result:   {"schedule","converged","valid","steps","s1","s2","k",
  *              "active_vertices","active_facets","selfint","inverted_facets",
- *              "volume","first_selfint_step"}
+ *              "volume","first_selfint_step","fixed_residual"}
  *   stats:    {"samples","seed","schedule","table":[{"m","runs","inverted",
  *              "p","ci95":[lo,hi],"not_converged","selfint",
  *              "inverted_facets","nonpositive_volume"}], "runs":[{"sample",

@@ -74,12 +74,16 @@ struct scan_conn {
 typedef struct pending_result {
     char job[PROTO_FSP_TEXT_MAX + 1];
     bool naming, ready;
+    bool prior;             /* owed from before this intake started
+                               (scan_owe_result): older than every scan
+                               seen since, so queued ahead of them */
     proto_fsp_result r;
 } pending_result;
 
 struct scan_known {
     scan_known *next;
-    scan_device_info info;
+    scan_device_info info;  /* only serial until the first INFO */
+    bool seen;              /* an INFO arrived since the intake started */
     scan_conn *conn;        /* the connection it is on, NULL when offline */
     scan_state state;
     uint32_t pdone, ptotal;
@@ -218,6 +222,35 @@ static scan_known *known_find(scan_intake *in, const char *serial)
     return NULL;
 }
 
+/* A new, offline entry for serial, or NULL (out of memory, or KNOWN_MAX
+ * scanners that are online or owed a RESULT). A device inventing serials
+ * must not grow the list without end: past KNOWN_MAX an offline scanner
+ * that is owed nothing goes. */
+static scan_known *known_add(scan_intake *in, const char *serial)
+{
+    size_t n = 0;
+    scan_known **victim = NULL;
+    for (scan_known **pp = &in->known; *pp; pp = &(*pp)->next) {
+        n++;
+        if (!(*pp)->conn && (*pp)->npend == 0)
+            victim = pp;
+    }
+    if (n >= KNOWN_MAX && victim) {
+        scan_known *v = *victim;
+        *victim = v->next;
+        free(v);
+        n--;
+    }
+    scan_known *k = n < KNOWN_MAX ? calloc(1, sizeof *k) : NULL;
+    if (!k)
+        return NULL;
+    snprintf(k->info.serial, sizeof k->info.serial, "%s", serial);
+    k->state = SCAN_STATE_OFFLINE;
+    k->next = in->known;
+    in->known = k;
+    return k;
+}
+
 /* Sends the RESULTs at the head of k's queue that are ready, as long as
  * k is online and greeted. */
 static void deliver_results(scan_intake *in, scan_known *k)
@@ -258,32 +291,14 @@ static void on_info_event(scan_conn *c, const proto_fsp_info *info)
         atomic_store(&c->leave, true);
         return;
     }
+    if (!k)
+        k = known_add(in, info->serial);
     if (!k) {
-        /* a device inventing serials must not grow the list without end:
-         * past KNOWN_MAX an offline scanner that is owed nothing goes */
-        size_t n = 0;
-        scan_known **victim = NULL;
-        for (scan_known **pp = &in->known; *pp; pp = &(*pp)->next) {
-            n++;
-            if (!(*pp)->conn && (*pp)->npend == 0)
-                victim = pp;
-        }
-        if (n >= KNOWN_MAX && victim) {
-            scan_known *v = *victim;
-            *victim = v->next;
-            free(v);
-            n--;
-        }
-        k = n < KNOWN_MAX ? calloc(1, sizeof *k) : NULL;
-        if (!k) {
-            pthread_mutex_unlock(&in->mu);
-            notice(in, info->serial, "%s: too many scanners; ignoring this one",
-                   c->addr.path);
-            atomic_store(&c->leave, true);
-            return;
-        }
-        k->next = in->known;
-        in->known = k;
+        pthread_mutex_unlock(&in->mu);
+        notice(in, info->serial, "%s: too many scanners; ignoring this one",
+               c->addr.path);
+        atomic_store(&c->leave, true);
+        return;
     }
     if (c->known && c->known != k)
         c->known->conn = NULL;
@@ -299,6 +314,7 @@ static void on_info_event(scan_conn *c, const proto_fsp_info *info)
     snprintf(k->info.path, sizeof k->info.path, "%s", c->addr.path);
     bool first = k->conn != c;
     k->conn = c;
+    k->seen = true;
     c->known = k;
     if (first)
         k->state = SCAN_STATE_IDLE;
@@ -340,7 +356,6 @@ static void deliver(scan_conn *c, conn_event *e)
         case EV_COMPLETE:
             k->state = SCAN_STATE_IDLE;
             k->pdone = k->ptotal = 0;
-            k->completed++;
             break;
         case EV_DROPPED:
             k->state = SCAN_STATE_IDLE;
@@ -381,13 +396,25 @@ static void deliver(scan_conn *c, conn_event *e)
                                               e->len, fmt, job, sizeof job)
                     : -ENOTSUP;
         job[sizeof job - 1] = '\0';
+        bool kept = r == 0 && job[0];
+        /* the scan is ACKed only now that the caller has it (stored as a
+         * job): a scan the device saw ACKed is never lost */
+        pthread_mutex_lock(&c->smu);
+        if (c->s && c->t &&
+            scan_session_ack_done(c->s, kept, mono_ms()) == 0)
+            scan_session_flush(c->s, c->t, in->opt.io_timeout_ms);
+        pthread_mutex_unlock(&c->smu);
         pthread_mutex_lock(&in->mu);
+        if (kept)
+            k->completed++;
+        else
+            k->dropped++;
         size_t i = 0;
         while (i < k->npend && !k->pend[i].naming)
             i++;
         if (i < k->npend) {
             pending_result *p = &k->pend[i];
-            if (r == 0 && job[0]) {
+            if (kept) {
                 snprintf(k->last_job, sizeof k->last_job, "%s", job);
                 snprintf(p->job, sizeof p->job, "%s", job);
                 p->naming = false;
@@ -408,6 +435,9 @@ static void deliver(scan_conn *c, conn_event *e)
                    PENDING_MAX);
         if (unknown[0])
             notice(in, serial, "RESULT of unknown job %s dropped", unknown);
+        if (!kept)
+            notice(in, serial, "scan refused by the host (%s): ABORT sent",
+                   strerror(r < 0 ? -r : EINVAL));
         break;
     }
     case EV_DROPPED:
@@ -496,6 +526,7 @@ static void *conn_main(void *arg)
     uint8_t *buf = malloc(READ_MAX);
     scan_session_cfg cfg;
     scan_session_cfg_default(&cfg);
+    cfg.defer_done_ack = true;
     cfg.scan_timeout_ms = in->opt.scan_timeout_ms;
     cfg.resend_ms = in->opt.resend_ms;
     cfg.max_model = in->opt.max_model;
@@ -742,6 +773,7 @@ static void status_of(const scan_known *k, scan_device_status *st)
 {
     memset(st, 0, sizeof *st);
     st->info = k->info;
+    st->seen = k->seen;
     st->state = k->conn ? k->state : SCAN_STATE_OFFLINE;
     st->progress_done = k->pdone;
     st->progress_total = k->ptotal;
@@ -839,6 +871,48 @@ int scan_send_result(scan_intake *in, const char *serial,
         deliver_results(in, k);
     pthread_mutex_unlock(&in->mu);
     return rc;
+}
+
+static bool valid_serial(const char *s)
+{
+    size_t n = strlen(s);
+    if (n == 0 || n > PROTO_FSP_TEXT_MAX)
+        return false;
+    for (size_t i = 0; i < n; i++)
+        if (!((s[i] >= 'a' && s[i] <= 'z') || (s[i] >= 'A' && s[i] <= 'Z') ||
+              (s[i] >= '0' && s[i] <= '9') || strchr("._:-", s[i])))
+            return false;
+    return true;
+}
+
+int scan_owe_result(scan_intake *in, const char *serial, const char *job)
+{
+    if (!valid_serial(serial) || !job[0] || strlen(job) > PROTO_FSP_TEXT_MAX)
+        return -EINVAL;
+    pthread_mutex_lock(&in->mu);
+    scan_known *k = known_find(in, serial);
+    if (!k)
+        k = known_add(in, serial);
+    int rc = k ? 0 : -ENOSPC;
+    size_t at = 0;
+    for (size_t i = 0; k && i < k->npend && rc == 0; i++) {
+        if (strcmp(k->pend[i].job, job) == 0)
+            rc = 1;
+        if (k->pend[i].prior)
+            at = i + 1;
+    }
+    if (rc == 0 && k->npend == PENDING_MAX)
+        rc = -ENOSPC;
+    if (rc == 0) {
+        memmove(k->pend + at + 1, k->pend + at,
+                (k->npend - at) * sizeof *k->pend);
+        memset(&k->pend[at], 0, sizeof k->pend[at]);
+        snprintf(k->pend[at].job, sizeof k->pend[at].job, "%s", job);
+        k->pend[at].prior = true;
+        k->npend++;
+    }
+    pthread_mutex_unlock(&in->mu);
+    return rc < 0 ? rc : 0;
 }
 
 void scan_get_metrics(scan_intake *in, scan_metrics *ret)

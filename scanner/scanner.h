@@ -57,7 +57,10 @@ const char *scan_state_name(scan_state st);
 
 /* One row of scan_list(). */
 typedef struct scan_device_status {
-    scan_device_info info;
+    scan_device_info info;   /* only serial is set while !seen */
+    bool seen;               /* INFO arrived since the intake started;
+                                false for a scanner known only from
+                                scan_owe_result */
     scan_state state;
     uint32_t progress_done, progress_total; /* last PROGRESS of the scan
                                                in progress, else 0 */
@@ -91,7 +94,10 @@ typedef struct scan_callbacks {
      * and write the id of the job made from it into ret_job (NUL-
      * terminated, 1..63 bytes): a RESULT will be owed for it and the
      * scanner's later RESULTs wait for this one. Return a negative errno
-     * to refuse the scan (no RESULT owed). */
+     * to refuse the scan (no RESULT owed). The device's SCAN_DONE is
+     * ACKed only after this returns 0 — so a caller that stores the scan
+     * here never has a scan ACKed that it then loses — and a refused scan
+     * is ended on the device with ABORT. */
     int (*on_scan_complete)(void *user, const char *serial,
                             const uint8_t *bytes, size_t len,
                             proto_format fmt, char *ret_job, size_t job_cap);
@@ -148,6 +154,17 @@ int scan_request_start(scan_intake *in, const char *serial, uint8_t mode);
  * RESULT is owed for that job, -EINVAL when r does not serialise. */
 int scan_send_result(scan_intake *in, const char *serial,
                      const proto_fsp_result *r);
+
+/* Owes the RESULT of job, made from a scan of serial before this intake
+ * started (a daemon restarted while the job waited): it goes ahead of the
+ * RESULTs of every scan this intake receives, after those owed by earlier
+ * calls, and is sent like theirs once scan_send_result gives it and the
+ * scanner is online. A serial never seen is listed as offline (seen
+ * false) until it connects. Call it right after scan_intake_start, oldest
+ * job first. 0 (also when already owed), -EINVAL for a bad serial or job
+ * id, -ENOSPC when the scanner is owed too many RESULTs or too many
+ * scanners are known. */
+int scan_owe_result(scan_intake *in, const char *serial, const char *job);
 
 /* Sums the counters. */
 void scan_get_metrics(scan_intake *in, scan_metrics *ret);

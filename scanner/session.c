@@ -12,7 +12,10 @@
  *   is the sorted, disjoint, non-adjacent list of byte ranges received,
  *   and covered is their total length;
  * - every frame queued is also in hist[] (for device NAKs); RESULT and
- *   ABORT are in await[] until ACKed. */
+ *   ABORT are in await[] until ACKed;
+ * - ack_owed (defer_done_ack only) is set from a complete scan until
+ *   scan_session_ack_done or a HELLO; last_done_valid only names a
+ *   SCAN_DONE that was ACKed, so a re-sent one is ACKed again only then. */
 #include "session.h"
 
 #include <errno.h>
@@ -95,6 +98,10 @@ struct scan_session {
     scan_state scan;
     bool last_done_valid;
     uint16_t last_done_seq;
+    /* defer_done_ack: the SCAN_DONE of a complete scan not answered yet */
+    bool ack_owed;
+    uint16_t ack_seq;
+    size_t ack_len;
 };
 
 void scan_session_cfg_default(scan_session_cfg *cfg)
@@ -419,17 +426,23 @@ static void finish_if_complete(scan_session *s, uint64_t now)
         send_seq(s, PROTO_FSP_NAK, seq, now);
         return;
     }
-    send_seq(s, PROTO_FSP_ACK, seq, now);
     uint8_t *bytes = sc->buf;
     size_t len = sc->total;
     uint8_t format = sc->done.format;
     sc->buf = NULL;
     scan_clear(sc);
     memset(s->naks, 0, sizeof s->naks);
-    s->st.scans_completed++;
-    s->st.model_bytes += len;
-    s->last_done_valid = true;
-    s->last_done_seq = seq;
+    if (s->cfg.defer_done_ack) {
+        s->ack_owed = true;
+        s->ack_seq = seq;
+        s->ack_len = len;
+    } else {
+        send_seq(s, PROTO_FSP_ACK, seq, now);
+        s->st.scans_completed++;
+        s->st.model_bytes += len;
+        s->last_done_valid = true;
+        s->last_done_seq = seq;
+    }
     if (s->ev.on_scan_complete)
         s->ev.on_scan_complete(s->ev.user, bytes, len, format);
     else
@@ -709,6 +722,7 @@ int scan_session_hello(scan_session *s, uint64_t now_ms)
     s->started = true;
     s->ready = false;
     s->last_done_valid = false;
+    s->ack_owed = false;
     s->seq_out = 0;
     s->last_rx_ms = now_ms;
     s->next_info_ms = now_ms + (uint64_t)s->cfg.info_retry_ms;
@@ -809,6 +823,23 @@ int scan_session_send_result(scan_session *s, const proto_fsp_result *r,
     int rc = emit(s, PROTO_FSP_RESULT, json, strlen(json), true, now_ms);
     free(json);
     return rc;
+}
+
+int scan_session_ack_done(scan_session *s, bool kept, uint64_t now_ms)
+{
+    if (!s->ack_owed)
+        return -ENOENT;
+    s->ack_owed = false;
+    if (!kept) {
+        s->st.scans_dropped++;
+        return emit(s, PROTO_FSP_ABORT, NULL, 0, true, now_ms);
+    }
+    send_seq(s, PROTO_FSP_ACK, s->ack_seq, now_ms);
+    s->st.scans_completed++;
+    s->st.model_bytes += s->ack_len;
+    s->last_done_valid = true;
+    s->last_done_seq = s->ack_seq;
+    return 0;
 }
 
 int scan_session_abort(scan_session *s, uint64_t now_ms)

@@ -13,7 +13,8 @@
  *   no INFO arrives;
  * - a scan: SCAN_STARTED, PROGRESS, MODEL chunks placed at their offsets
  *   (in any order; each valid one ACKed), SCAN_DONE ACKed once the whole
- *   model is present and its CRC-32 matches, or NAKed — after the third
+ *   model is present and its CRC-32 matches (with defer_done_ack, once
+ *   the caller also says it kept the scan), or NAKed — after the third
  *   NAK of SCAN_DONE the scan is dropped (the device drops it too);
  * - checks: a frame with a bad CRC, a gap in the device's sequence
  *   numbers, or a payload that fails its checks is NAKed (a missing frame
@@ -49,6 +50,11 @@ typedef struct scan_session_cfg {
                                 dropped; default 5 */
     uint32_t max_model;      /* largest model accepted, bytes; 64 MiB */
     char host_version[PROTO_FSP_TEXT_MAX + 1]; /* HELLO's "version" */
+    bool defer_done_ack;     /* false (default): a complete scan's
+                                SCAN_DONE is ACKed at once; true: only
+                                when scan_session_ack_done says the scan
+                                was kept, so that a host which must store
+                                it first never ACKs a scan it lost */
 } scan_session_cfg;
 
 /* Fills the defaults above (host_version "0.1.0"). */
@@ -78,7 +84,8 @@ typedef struct scan_session_events {
      * SCAN_STARTED was lost (mode 255, contours 0). */
     void (*on_scan_started)(void *user, uint8_t mode, uint32_t contours);
     void (*on_progress)(void *user, uint32_t done, uint32_t total);
-    /* A scan completed and was ACKed. bytes is malloc'd and now belongs
+    /* A scan completed and was ACKed (with defer_done_ack: its SCAN_DONE
+     * awaits scan_session_ack_done). bytes is malloc'd and now belongs
      * to the callee (who frees it); format is a proto_fsp_model_format. */
     void (*on_scan_complete)(void *user, uint8_t *bytes, size_t len,
                              uint8_t format);
@@ -123,6 +130,13 @@ int scan_session_start_scan(scan_session *s, uint8_t mode, uint64_t now_ms);
  * r does not serialise, -ENOMEM. */
 int scan_session_send_result(scan_session *s, const proto_fsp_result *r,
                              uint64_t now_ms);
+
+/* With defer_done_ack: answers the SCAN_DONE of the scan last completed.
+ * kept: ACK it (the scan counts as completed); else the scan counts as
+ * dropped and ABORT (re-sent until ACKed) ends it on the device. Until
+ * then a re-sent SCAN_DONE is ignored. -ENOENT when no answer is owed
+ * (none completed since, or a HELLO restarted the session), -ENOMEM. */
+int scan_session_ack_done(scan_session *s, bool kept, uint64_t now_ms);
 
 /* Drops the scan in progress, if any, and queues ABORT. -EAGAIN before
  * INFO, -ENOMEM. */

@@ -30,9 +30,13 @@ out=$("$F" cut "$M/brilliant.scan-k400.json" --plane 0.2,0.1,1,0.3 -o "$tmp/d.pl
 rc=$?
 check "a scan cut to PLY" '[ $rc -eq 0 ] && [ -s "$tmp/d.ply" ] && [[ $out == *"\"components\":1,"* ]]'
 
-"$F" cut "$M/notch-cube.json" --plane 1,1,1,-16 -o "$tmp/e.json" 2>"$tmp/err"
+out=$("$F" cut "$M/notch-cube.json" --plane 1,1,1,-16 -o "$tmp/e.json")
 rc=$?
-check "a section with a hole is bad input (exit 1)" '[ $rc -eq 1 ] && grep -q hole "$tmp/err"'
+check "a section with a hole takes two facets" '[ $rc -eq 0 ] && [[ $out == *"\"components\":1,\"new_facets\":2,"* ]]'
+check "the holed cut is a valid model" '"$F" inspect "$tmp/e.json" | grep -q "\"valid\": true"'
+"$F" cut "$M/notch-cube.json" --plane -48,0,-32,480 -o "$tmp/h.json" 2>"$tmp/err"
+rc=$?
+check "a pinch along a reflex edge is refused with the way out (exit 1)" '[ $rc -eq 1 ] && grep -q "reflex edge" "$tmp/err" && grep -q "plane\[3\]" "$tmp/err"'
 "$F" cut "$M/notch-cube.json" --plane 1,2 -o "$tmp/f.json" 2>/dev/null
 rc=$?
 check "a malformed plane is a usage error (exit 2)" '[ $rc -eq 2 ]'

@@ -42,6 +42,18 @@ check "vertex out of range is bad input" "[ $? -eq 1 ]"
     2>/dev/null
 check "malformed --to is a usage error" "[ $? -eq 2 ]"
 
+"$FACET" move "$M/brilliant.truth.json" --vertex 100 --by 7e-4,-9e-4,1.5e-3 \
+    --fit all --force -o "$tmp/all.json" >"$tmp/all-res.json"
+check "--fit all reports the moved vertex's distance from its planes" \
+    "sed -n 's/.*\"fixed_residual\": \\([^,}]*\\).*/\\1/p' '$tmp/all-res.json' | awk '{exit !(\$1 > 1e-9 && \$1 < 1e-6)}'"
+"$FACET" move "$M/brilliant.truth.json" --vertex 100 --by 1e-4,0,0 \
+    --fit loose -o "$tmp/x.json" 2>/dev/null
+check "an unknown --fit is a usage error" "[ $? -eq 2 ]"
+"$FACET" move "$M/brilliant.truth.json" --vertex 100 --by 1e-4,0,0 \
+    --schedule scaled --scaled-k s2 --log "$tmp/s2.json" -o "$tmp/y.json" \
+    >/dev/null
+check "--scaled-k s2 runs the paper's rule" "[ $? -eq 0 ] && [ -s '$tmp/s2.json' ]"
+
 "$FACET" inversion-stats "$M/brilliant.scan-k100.json" --samples 6 --seed 9 \
     --threads 1 --runs >"$tmp/s1.json"
 rc1=$?

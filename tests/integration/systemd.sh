@@ -18,7 +18,8 @@ else
 fi
 for f in bin/facetd bin/facet lib/systemd/system/facetd.service \
          lib/systemd/system/facetd.socket lib/tmpfiles.d/facetd.conf \
-         lib/sysusers.d/facetd.conf share/doc/facetd/facetd.conf.example; do
+         lib/sysusers.d/facetd.conf share/doc/facetd/facetd.conf.example \
+         lib/udev/rules.d/70-facetd-scanners.rules; do
     check "installed: $f" test -s "$root/usr/$f"
 done
 check "the unit runs the installed facetd" \
@@ -35,7 +36,7 @@ else
 fi
 for key in Type=notify WatchdogSec= ProtectSystem=strict ProtectHome=yes \
            PrivateTmp=yes NoNewPrivileges=yes RestrictAddressFamilies= \
-           DeviceAllow=char-hidraw StateDirectory=facetd; do
+           DeviceAllow=char-hidraw DeviceAllow=char-usb_device StateDirectory=facetd; do
     check "the service sets $key" grep -q "^$key" "$root/usr/lib/systemd/system/facetd.service"
 done
 

@@ -6,7 +6,9 @@
 # wait_line FILE REGEX [SECONDS]: waits until a line of FILE matches the
 # extended REGEX; fails after SECONDS (default 10).
 wait_line() {
-    local file=$1 re=$2 secs=${3:-10} i=0
+    # deadlines are generous (×MOCK_TIME_SCALE, default 4): a wait ends as
+    # soon as its line appears, and a loaded CI machine must not fail it
+    local file=$1 re=$2 secs=$(( ${3:-10} * ${MOCK_TIME_SCALE:-4} )) i=0
     while [ "$i" -lt $((secs * 20)) ]; do
         if [ -f "$file" ] && grep -qE -- "$re" "$file"; then
             return 0
@@ -24,7 +26,7 @@ count_lines() {
 
 # wait_count FILE REGEX N [SECONDS]: waits until at least N lines match.
 wait_count() {
-    local file=$1 re=$2 n=$3 secs=${4:-10} i=0
+    local file=$1 re=$2 n=$3 secs=$(( ${4:-10} * ${MOCK_TIME_SCALE:-4} )) i=0
     while [ "$i" -lt $((secs * 20)) ]; do
         [ "$(count_lines "$file" "$re")" -ge "$n" ] && return 0
         sleep 0.05

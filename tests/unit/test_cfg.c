@@ -1,6 +1,7 @@
 /* test_cfg.c — configuration precedence (defaults < file < drop-ins in
- * lexical order < flags), value forms (sizes, durations, booleans), errors
- * that name the file and line, and the reload classification. */
+ * lexical order < flags), value forms (sizes, durations, booleans,
+ * scanner lists, pipelines), errors that name the file and line, and the
+ * reload classification. */
 #include "testutil.h"
 
 #include <errno.h>
@@ -169,6 +170,84 @@ static void test_restart_only_keys_are_reported(void **state)
     assert_non_null(strstr(buf, "Jobs.Workers"));
 }
 
+static void test_scanner_lines_replace_the_default_list_then_add(
+    void **state)
+{
+    (void)state;
+    cfg c;
+    cfg_defaults(&c);
+    assert_true(c.scanners);
+    assert_int_equal(c.nscanner, 2);
+    assert_string_equal(c.scanner[0], "1d50:6150:bulk");
+    assert_string_equal(c.scanner[1], "1d50:6151:hid");
+    assert_false(c.scanner_set);
+    assert_string_equal(c.scanner_pipeline, "auto");
+    assert_false(c.scanner_pipeline_set);
+    char path[256];
+    snprintf(path, sizeof path, "%s",
+             write_file("s.conf", "[Scanners]\nScanner=1d50:6150:bulk\n"
+                                  "Scanner = 0483:5740:hid inspect\n"
+                                  "Pipeline=inspect,triangulate\n"));
+    char *argv[] = {"-c", path, "--scanner", "1234:abcd:bulk ./nope.json"};
+    geo_err err = {{0}};
+    /* a pipeline file that does not exist is an error naming it */
+    assert_int_equal(cfg_load(&c, 4, argv, &err), -EINVAL);
+    assert_non_null(strstr(err.msg, "--scanner: Scanner: ./nope.json"));
+    argv[3] = "1234:ABCD:bulk [\"inspect\"]";
+    int r = cfg_load(&c, 4, argv, &err);
+    if (r < 0)
+        fail_msg("%s", err.msg);
+    assert_int_equal(c.nscanner, 3);
+    assert_string_equal(c.scanner[1], "0483:5740:hid inspect");
+    char dev[64];
+    assert_string_equal(cfg_scanner_split(c.scanner[2], dev, sizeof dev),
+                        "[\"inspect\"]");
+    assert_string_equal(dev, "1234:ABCD:bulk");
+    assert_true(c.scanner_pipeline_set);
+    json_t *pj = cfg_pipeline_json(c.scanner_pipeline, &err);
+    assert_non_null(pj);
+    assert_int_equal(json_array_size(pj), 2);
+    json_decref(pj);
+    /* an empty line restores the default list; --no-scanners */
+    snprintf(path, sizeof path, "%s",
+             write_file("s.conf", "[Scanners]\nScanner=0483:5740:hid\n"
+                                  "Scanner=\n"));
+    char *argv2[] = {"-c", path, "--no-scanners"};
+    assert_int_equal(cfg_load(&c, 3, argv2, &err), 0);
+    assert_int_equal(c.nscanner, 2);
+    assert_false(c.scanner_set);
+    assert_false(c.scanners);
+}
+
+static void test_scanner_errors_name_the_line(void **state)
+{
+    (void)state;
+    expect_error("[Scanners]\nScanner=1d50:615:usb\n",
+                 "bad.conf:2: Scanner: \"1d50:615:usb\": transport must be");
+    expect_error("[Scanners]\nScanner=1d50:6150:bulk\nScanner=1d50:6150:hid\n",
+                 "bad.conf:3: Scanner: 1d50:6150 listed twice");
+    expect_error("[Scanners]\nScanner=1d50:6150:bulk inspekt\n",
+                 "bad.conf:2: Scanner: pipeline[0]");
+    expect_error("[Scanners]\nPipeline=[\"inspect\"\n", "bad.conf:2: Pipeline:");
+    expect_error("[Scanners]\nEnabled=perhaps\n", "expected yes or no");
+}
+
+static void test_scanner_list_needs_a_restart_pipeline_reloads(void **state)
+{
+    (void)state;
+    cfg a, b;
+    cfg_defaults(&a);
+    b = a;
+    snprintf(b.scanner_pipeline, sizeof b.scanner_pipeline, "inspect");
+    char buf[256];
+    assert_int_equal(cfg_restart_only_changes(&a, &b, buf, sizeof buf), 0);
+    b.nscanner = 1;
+    b.scanners = false;
+    assert_int_equal(cfg_restart_only_changes(&a, &b, buf, sizeof buf), 2);
+    assert_non_null(strstr(buf, "Scanners.Scanner"));
+    assert_non_null(strstr(buf, "Scanners.Enabled"));
+}
+
 static void test_help_lists_every_flag(void **state)
 {
     (void)state;
@@ -180,7 +259,8 @@ static void test_help_lists_every_flag(void **state)
     const char *flags[] = {"--listen", "--state-dir", "--workers",
                            "--queue-size", "--max-body", "--job-timeout",
                            "--retention-age", "--retention-bytes",
-                           "--api-token"};
+                           "--api-token", "--[no-]scanners", "--scanner=V",
+                           "--scanner-pipeline"};
     for (size_t i = 0; i < sizeof flags / sizeof flags[0]; i++)
         assert_non_null(strstr(buf, flags[i]));
     free(buf);
@@ -196,6 +276,9 @@ int main(void)
         T(test_explicit_missing_file_fails_flags_checked),
         T(test_token_file_is_read_and_trimmed),
         T(test_restart_only_keys_are_reported),
+        T(test_scanner_lines_replace_the_default_list_then_add),
+        T(test_scanner_errors_name_the_line),
+        T(test_scanner_list_needs_a_restart_pipeline_reloads),
         T(test_help_lists_every_flag),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -1,7 +1,7 @@
 /* test_metrics.c — the Prometheus rendering: counters by route and code,
  * histograms with cumulative buckets ending at +Inf equal to the count,
- * per-op histograms only for ops that ran, and the gauges given at scrape
- * time. */
+ * per-op histograms only for ops that ran, the gauges given at scrape
+ * time, and the scanner intake's counters. */
 #include "testutil.h"
 
 #include <stdlib.h>
@@ -105,12 +105,54 @@ static void test_gauges_come_from_the_snapshot(void **state)
     metrics_free(m);
 }
 
+static void test_scanner_counters_and_result_latency(void **state)
+{
+    (void)state;
+    metrics *m = metrics_new(routes, 2);
+    metrics_gauges g = {0};
+    g.scan.enabled = 1;
+    g.scan.intake = (scan_metrics){.frames_in = 40, .frames_out = 31,
+                                   .crc_errors = 2, .bad_frames = 1,
+                                   .seq_errors = 3, .naks_sent = 5,
+                                   .naks_received = 1,
+                                   .reassembly_failures = 4,
+                                   .devices_connected = 2,
+                                   .scans_completed = 7, .scans_dropped = 3,
+                                   .model_bytes = 123456};
+    metrics_scan_refused(m, METRICS_REFUSED_INVALID);
+    metrics_scan_result(m, 0.04);
+    metrics_scan_result(m, -1); /* not measured: counted, not observed */
+    char *t = render(m, &g);
+    expect_line(t, "facetd_scanner_intake_up 1");
+    expect_line(t, "facetd_scanner_devices_connected 2");
+    expect_line(t, "facetd_scanner_frames_total{direction=\"in\"} 40");
+    expect_line(t, "facetd_scanner_frames_total{direction=\"out\"} 31");
+    expect_line(t, "facetd_scanner_crc_errors_total 2");
+    expect_line(t, "facetd_scanner_bad_frames_total 1");
+    expect_line(t, "facetd_scanner_sequence_errors_total 3");
+    expect_line(t, "facetd_scanner_naks_total{direction=\"sent\"} 5");
+    expect_line(t, "facetd_scanner_naks_total{direction=\"received\"} 1");
+    expect_line(t, "facetd_scanner_reassembly_failures_total 4");
+    expect_line(t, "facetd_scanner_scans_total{outcome=\"completed\"} 7");
+    expect_line(t, "facetd_scanner_scans_total{outcome=\"dropped\"} 3");
+    expect_line(t, "facetd_scanner_model_bytes_total 123456");
+    expect_line(t, "facetd_scanner_scans_refused_total{reason=\"invalid_model\"} 1");
+    expect_line(t, "facetd_scanner_scans_refused_total{reason=\"store\"} 0");
+    expect_line(t, "facetd_scanner_results_total 2");
+    expect_line(t, "facetd_scanner_result_latency_seconds_bucket{le=\"0.025\"} 0");
+    expect_line(t, "facetd_scanner_result_latency_seconds_bucket{le=\"0.05\"} 1");
+    expect_line(t, "facetd_scanner_result_latency_seconds_count 1");
+    free(t);
+    metrics_free(m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_counters_by_route_and_code),
         cmocka_unit_test(test_histograms_are_cumulative),
         cmocka_unit_test(test_gauges_come_from_the_snapshot),
+        cmocka_unit_test(test_scanner_counters_and_result_latency),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

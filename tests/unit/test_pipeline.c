@@ -42,9 +42,10 @@ static void test_names_and_objects_parse_with_defaults(void **state)
     assert_int_equal(p.ops[0].kind, PROTO_OP_INSPECT);
     assert_int_equal(p.ops[1].kind, PROTO_OP_MERGE_FACETS);
     assert_true(p.ops[1].u.merge.max_angle_deg == 0.5);
-    assert_true(p.ops[1].u.merge.max_deviation == 0.005);
+    /* 0: relative to the model's size (lib/merge.h, lib/clusters.h) */
+    assert_true(p.ops[1].u.merge.max_deviation == 0);
     assert_int_equal(p.ops[1].u.merge.ngroups, 0);
-    assert_true(p.ops[2].u.collapse.radius == 0.002);
+    assert_true(p.ops[2].u.collapse.radius == 0);
     proto_pipeline_free(&p);
 }
 
@@ -53,11 +54,11 @@ static void test_auto_is_the_post_scan_correction(void **state)
     (void)state;
     proto_pipeline p;
     assert_int_equal(parse("\"auto\"", &p, NULL), 0);
-    assert_int_equal(p.nops, 4);
-    proto_op_kind want[] = {PROTO_OP_INSPECT, PROTO_OP_COLLAPSE_CLUSTERS,
-                            PROTO_OP_MERGE_FACETS, PROTO_OP_INSPECT};
-    for (int i = 0; i < 4; i++)
+    assert_int_equal(p.nops, 3);
+    proto_op_kind want[] = {PROTO_OP_INSPECT, PROTO_OP_AUTO, PROTO_OP_INSPECT};
+    for (int i = 0; i < 3; i++)
         assert_int_equal(p.ops[i].kind, want[i]);
+    assert_true(p.ops[1].u.correct.max_angle_deg == 60);
     proto_pipeline_free(&p);
 }
 
@@ -91,8 +92,11 @@ static void test_errors_name_the_place(void **state)
                  "pipeline[0].max_angle_deg: 0 out of range (0, 90]");
     expect_error("[{\"op\":\"inversion_stats\",\"magnitudes\":[1,0]}]",
                  "pipeline[0].magnitudes[1]: expected a positive number");
-    expect_error("[{\"op\":\"triangulate\",\"quad_levels\":13}]",
-                 "pipeline[0].quad_levels: 13 out of range [1, 12]");
+    expect_error("[{\"op\":\"triangulate\",\"quad_levels\":12}]",
+                 "pipeline[0].quad_levels: 12 out of range [1, 11]");
+    expect_error("[{\"op\":\"triangulate\",\"fair\":true}]",
+                 "pipeline[0].fair: expected one of \"none\", \"uniform\", "
+                 "\"length\"");
     expect_error("[{\"op\":\"fill_holes\",\"refine\":\"yes\"}]",
                  "pipeline[0].refine: expected true or false");
     expect_error("[{\"radius\":1}]",
@@ -121,7 +125,8 @@ static void test_canonical_json_round_trips(void **state)
         "{\"op\":\"move_vertex\",\"vertex\":4,\"by\":[0.1,0,0],"
         "\"schedule\":\"scaled\",\"max_steps\":50},"
         "{\"op\":\"inversion_stats\",\"samples\":10,\"magnitudes\":[1,0.1],"
-        "\"seed\":7}, {\"op\":\"triangulate\",\"fair\":false},"
+        "\"seed\":7}, {\"op\":\"triangulate\",\"fair\":\"none\","
+        "\"fill\":\"edges\"},"
         "{\"op\":\"fill_holes\",\"weight\":\"length\"}, \"stitch\","
         "{\"op\":\"cut\",\"plane\":[1,0,0,0.25]},"
         "{\"op\":\"collapse_clusters\",\"radius\":0.01}]";
@@ -140,7 +145,10 @@ static void test_canonical_json_round_trips(void **state)
     assert_int_equal(b.ops[2].u.move.schedule, PROTO_SCHED_SCALED);
     assert_int_equal(b.ops[3].u.inversion.nmagnitudes, 2);
     assert_int_equal(b.ops[3].u.inversion.seed, 7);
-    assert_false(b.ops[4].u.triangulate.fair);
+    assert_int_equal(b.ops[4].u.triangulate.fair, PROTO_FAIR_NONE);
+    assert_true(b.ops[4].u.triangulate.fill_edges);
+    assert_true(b.ops[4].u.triangulate.sharpen);
+    assert_int_equal(b.ops[4].u.triangulate.quad_levels, 9);
     assert_true(b.ops[5].u.fill_holes.weight_length);
     free(canon);
     free(canon2);

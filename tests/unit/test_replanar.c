@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "correct.h"
 #include "replanar.h"
 #include "tu_load.h"
 #include "vec.h"
@@ -151,6 +152,169 @@ static void test_local_exp_log_doubles_k_and_halves_eps_per_round(
         assert_int_equal(rounds[k], 1);
     geo_replanar_log_clear(&log);
     geo_poly_free(p);
+}
+
+/* The last S2 of each local-exp round of a run of vertex 100 of the clean
+ * stone (m = 0.01) with plane fit fit; rounds[] receives the step counts. */
+static geo_replanar_result local_exp_rounds(enum geo_replanar_fit fit,
+                                            uint32_t rounds[10],
+                                            double last_s2[10])
+{
+    geo_poly *p = tu_load_model("brilliant.truth.json");
+    assert_non_null(p);
+    double t[3];
+    move_target(p, 100, 0.01, t);
+    geo_replanar_opts o;
+    geo_replanar_opts_default(&o, GEO_REPLANAR_LOCAL_EXP);
+    o.fit = fit;
+    geo_replanar_log log = {0};
+    geo_replanar_result res;
+    assert_int_equal(geo_move_vertex(p, 100, t, GEO_REPLANAR_LOCAL_EXP, &o,
+                                     NULL, &log, &res, NULL),
+                     0);
+    assert_true(res.converged);
+    memset(rounds, 0, 10 * sizeof *rounds);
+    for (size_t i = 0; i < log.n; i++) {
+        assert_true(log.rows[i].outer < 10);
+        rounds[log.rows[i].outer]++;
+        last_s2[log.rows[i].outer] = log.rows[i].s2;
+    }
+    assert_memory_equal(p->verts[100], t, sizeof t);
+    geo_replanar_log_clear(&log);
+    geo_poly_free(p);
+    return res;
+}
+
+/* The paper's §4.3.1 table falls by a steady ×0.33–0.38 per round (one
+ * step each) to 4.4e-12: a decay that does not speed up as K doubles.
+ * Plain least-squares planes (the moved vertex pulls them only part of
+ * the way each step) give that; planes through the moved vertex converge
+ * ever faster (×~0.1 per round, to rounding) and leave no residual. */
+static void test_paper_fit_gives_the_steady_decay_of_the_paper_table(
+    void **state)
+{
+    (void)state;
+    uint32_t rounds[10];
+    double s2[10];
+    geo_replanar_result all = local_exp_rounds(GEO_REPLANAR_FIT_ALL, rounds,
+                                               s2);
+    assert_true(rounds[0] >= 20 && rounds[0] <= 45);
+    for (int k = 1; k < 10; k++) {
+        assert_int_equal(rounds[k], 1);
+        if (k >= 2) {
+            double q = s2[k] / s2[k - 1];
+            assert_true(q > 0.3 && q < 0.5);
+        }
+    }
+    assert_true(s2[9] > 1e-12);
+    /* the moved vertex is left off its planes, and that is reported */
+    assert_true(all.fixed_resid > 1e-9 && all.fixed_resid < 1e-6);
+
+    geo_replanar_result fixed = local_exp_rounds(
+        GEO_REPLANAR_FIT_THROUGH_FIXED, rounds, s2);
+    for (int k = 1; k < 10; k++)
+        assert_int_equal(rounds[k], 1);
+    assert_true(pow(s2[9] / s2[5], 0.25) < 0.2);
+    assert_true(fixed.fixed_resid < 1e-14);
+}
+
+/* Scaled schedule: each step's K is the previous step's S1/S2sum, or with
+ * GEO_REPLANAR_SCALED_K_S2 its S1/S2 (as every row of the paper's §4.3.2
+ * and §4.3.5 tables). */
+static void test_scaled_k_follows_the_chosen_rule(void **state)
+{
+    (void)state;
+    for (int rule = 0; rule < 2; rule++) {
+        geo_poly *p = tu_load_model("brilliant.truth.json");
+        assert_non_null(p);
+        double t[3];
+        move_target(p, 100, 0.01, t);
+        geo_replanar_opts o;
+        geo_replanar_opts_default(&o, GEO_REPLANAR_SCALED);
+        o.scaled_k = (enum geo_replanar_scaled_k)rule;
+        geo_replanar_log log = {0};
+        geo_replanar_result res;
+        assert_int_equal(geo_move_vertex(p, 100, t, GEO_REPLANAR_SCALED, &o,
+                                         NULL, &log, &res, NULL),
+                         0);
+        assert_true(res.converged);
+        assert_true(log.n > 2);
+        assert_true(log.rows[0].k == o.k0);
+        for (size_t i = 1; i < log.n; i++) {
+            const geo_replanar_step *a = &log.rows[i - 1];
+            double want = rule == GEO_REPLANAR_SCALED_K_S2 ? a->s1 / a->s2
+                                                            : a->s1 / a->s2sum;
+            assert_true(log.rows[i].k == want);
+        }
+        geo_replanar_log_clear(&log);
+        geo_poly_free(p);
+    }
+}
+
+static int cmp_u32(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* local-exp on 20 vertices of p (m = 0.01): the median of the round-0
+ * step counts and the most steps any later round took. */
+static void local_exp_profile(const geo_poly *p, uint32_t *ret_median0,
+                              uint32_t *ret_max_later)
+{
+    uint32_t r0[20];
+    *ret_max_later = 0;
+    for (uint32_t i = 0; i < 20; i++) {
+        uint32_t v = 5 + (uint32_t)((uint64_t)i * (p->nverts - 10) / 20);
+        geo_poly *q = geo_poly_copy(p);
+        double t[3];
+        move_target(q, v, 0.01, t);
+        geo_replanar_opts o;
+        geo_replanar_opts_default(&o, GEO_REPLANAR_LOCAL_EXP);
+        o.max_steps = 5000;
+        geo_replanar_log log = {0};
+        geo_replanar_result res;
+        assert_int_equal(geo_move_vertex(q, v, t, GEO_REPLANAR_LOCAL_EXP, &o,
+                                         NULL, &log, &res, NULL),
+                         0);
+        assert_true(res.converged);
+        uint32_t rounds[10] = {0};
+        for (size_t j = 0; j < log.n; j++)
+            rounds[log.rows[j].outer]++;
+        r0[i] = rounds[0];
+        for (int k = 1; k < 10; k++)
+            if (rounds[k] > *ret_max_later)
+                *ret_max_later = rounds[k];
+        geo_replanar_log_clear(&log);
+        geo_poly_free(q);
+    }
+    qsort(r0, 20, sizeof r0[0], cmp_u32);
+    *ret_median0 = r0[10];
+}
+
+/* The scanner's slivers (facets at hundredths of a degree) are what slows
+ * local-exp on a raw scan: once the correction merges them, the scan
+ * behaves as the paper's stones (a dozen steps, then about one per
+ * round), the raw scan needs several times more in round 0 and many in
+ * later rounds. */
+static void test_corrected_scan_converges_like_the_paper_raw_scan_does_not(
+    void **state)
+{
+    (void)state;
+    geo_poly *raw = tu_load_model("brilliant.scan-k100.json");
+    assert_non_null(raw);
+    geo_poly *fixed = geo_poly_copy(raw);
+    assert_int_equal(geo_correct_auto(fixed, NULL, NULL, NULL, NULL), 0);
+    assert_true(fixed->nverts < raw->nverts / 4);
+    uint32_t raw0, raw_later, fix0, fix_later;
+    local_exp_profile(raw, &raw0, &raw_later);
+    local_exp_profile(fixed, &fix0, &fix_later);
+    assert_true(fix0 <= 20);
+    assert_true(fix_later <= 2);
+    assert_true(raw0 >= 3 * fix0);
+    assert_true(raw_later >= 10);
+    geo_poly_free(fixed);
+    geo_poly_free(raw);
 }
 
 static void test_global_exp_multiplies_k_each_step_and_keeps_s1_total(
@@ -308,6 +472,33 @@ static void test_bad_input_rejected_naming_the_place(void **state)
                          0);
         assert_int_equal(s, k);
     }
+    o.k0 = 100;
+    o.fit = (enum geo_replanar_fit)7;
+    assert_int_equal(geo_replanarize(p, twice, 1, GEO_REPLANAR_LOCAL_EXP, &o,
+                                     NULL, NULL, &res, &err),
+                     -EINVAL);
+    o.fit = GEO_REPLANAR_FIT_ALL;
+    o.scaled_k = (enum geo_replanar_scaled_k)7;
+    assert_int_equal(geo_replanarize(p, twice, 1, GEO_REPLANAR_SCALED, &o,
+                                     NULL, NULL, &res, &err),
+                     -EINVAL);
+    enum geo_replanar_fit f;
+    enum geo_replanar_scaled_k sk;
+    assert_int_equal(geo_replanar_fit_parse("loose", &f), -EINVAL);
+    assert_int_equal(geo_replanar_scaled_k_parse("s3", &sk), -EINVAL);
+    for (int k = 0; k < 2; k++) {
+        assert_int_equal(geo_replanar_fit_parse(
+                             geo_replanar_fit_name((enum geo_replanar_fit)k),
+                             &f),
+                         0);
+        assert_int_equal(f, k);
+        assert_int_equal(geo_replanar_scaled_k_parse(
+                             geo_replanar_scaled_k_name(
+                                 (enum geo_replanar_scaled_k)k),
+                             &sk),
+                         0);
+        assert_int_equal(sk, k);
+    }
     geo_poly_free(p);
 }
 
@@ -404,6 +595,11 @@ int main(void)
         cmocka_unit_test(
             test_global_exp_multiplies_k_each_step_and_keeps_s1_total),
         cmocka_unit_test(test_active_region_run_matches_global_run),
+        cmocka_unit_test(
+            test_paper_fit_gives_the_steady_decay_of_the_paper_table),
+        cmocka_unit_test(test_scaled_k_follows_the_chosen_rule),
+        cmocka_unit_test(
+            test_corrected_scan_converges_like_the_paper_raw_scan_does_not),
         cmocka_unit_test(
             test_two_fixed_vertices_of_one_facet_stay_on_its_plane),
         cmocka_unit_test(

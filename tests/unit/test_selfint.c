@@ -433,6 +433,35 @@ static void test_nonplanar_neighbours_are_not_false_contacts(void **state)
     geo_poly_free(p);
 }
 
+static void test_nearly_coplanar_facets_apart_do_not_touch(void **state)
+{
+    (void)state;
+    /* Two new facets of a plane cut of a bumpy sphere (vertices on the
+     * plane up to rounding) and a steep triangle whose top edge lies in
+     * that plane too, 1e-3 away from the ten-gon but on a line through
+     * it: seen along that edge, the ten-gon is a sliver as thin as its
+     * non-planarity, yet the edge passes beside it. */
+    const double v[][3] = {
+        {0.04759205024934119, 0.33037707067431332, -0.80891720824489199},
+        {0.049732520267453492, 0.41868068299049033, -0.84871268316656601},
+        {2.9576554271328722e-17, 0.48302178704784227, -0.87439813184398074},
+        {-0.0057222583479405913, 0.49582476569346162, -0.87977859792612145},
+        {0.25878568090202408, -0.62476390058162212, -0.39359435913423624},
+        {0.26115469444740902, -0.62568381558009123, -0.39333414445312187},
+        {0.068692229469193636, 0.1870115297125054, -0.74589351788567582},
+        {0.068570192069692795, 0.23366834641909726, -0.76683929831364039},
+        {0.054440447279057877, 0.27369061057500271, -0.78390128657935954},
+        {0.054142613670390048, 0.30667536662188777, -0.79869557293709681},
+        {0.16509765352359723, 0.24708609966596587, -0.77909612027005948},
+        {0.11923918974792158, 0.17845405851230312, -0.80099092417877538},
+        {0.08246308291012068, 0.18088941329444197, -0.74403297868606988}};
+    const uint32_t sizes[] = {10, 3};
+    const uint32_t idx[] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12};
+    geo_poly *p = mk(v, 13, sizes, 2, idx);
+    assert_int_equal(pair(p, 0, 1), 0);
+    geo_poly_free(p);
+}
+
 static void test_closed_models_are_clean(void **state)
 {
     (void)state;
@@ -730,6 +759,7 @@ int main(void)
         cmocka_unit_test(test_large_facet_pairs),
         cmocka_unit_test(test_degenerate_facets_are_flagged_not_paired),
         cmocka_unit_test(test_nonplanar_neighbours_are_not_false_contacts),
+        cmocka_unit_test(test_nearly_coplanar_facets_apart_do_not_touch),
         cmocka_unit_test(test_closed_models_are_clean),
         cmocka_unit_test(test_pushed_sphere_vertex_intersects),
         cmocka_unit_test(test_bvh_search_matches_brute_force),

@@ -3,7 +3,8 @@
  * into arbitrary reads, NAK and re-send of a corrupted or missing MODEL
  * frame, the whole-model CRC (three NAKs then drop), the 30 s timeout,
  * bounded NAK retries, HELLO mid-scan, duplicates, out-of-order chunks,
- * RESULT re-sends and device NAKs of host frames. */
+ * RESULT re-sends and device NAKs of host frames, and a SCAN_DONE whose
+ * ACK waits for the caller to keep the scan. */
 #include "testutil.h"
 
 #include <errno.h>
@@ -73,7 +74,7 @@ static void ev_error(void *u, uint16_t code, const char *msg)
     ((env *)u)->errors++;
 }
 
-static env *env_new(size_t chunk)
+static env *env_new_cfg(size_t chunk, const scan_session_cfg *cfg)
 {
     env *e = calloc(1, sizeof *e);
     e->clock = 1000;
@@ -81,8 +82,13 @@ static env *env_new(size_t chunk)
     scan_session_events ev = {e,           ev_info,    ev_started,
                               ev_progress, ev_complete, ev_dropped,
                               ev_error};
-    e->s = scan_session_new(NULL, &ev);
+    e->s = scan_session_new(cfg, &ev);
     return e;
+}
+
+static env *env_new(size_t chunk)
+{
+    return env_new_cfg(chunk, NULL);
 }
 
 static void env_free(env *e)
@@ -511,6 +517,67 @@ static void test_result_resent_until_acked_and_device_nak_resends(
     env_free(e);
 }
 
+/* Sends a whole scan of m (total bytes) and pumps; returns SCAN_DONE's
+ * sequence number. */
+static uint16_t whole_scan(env *e, const uint8_t *m, size_t total)
+{
+    scan_started(e);
+    for (size_t off = 0; off < total; off += PROTO_FSP_MODEL_CHUNK_MAX)
+        model_frame(e, m, total, off, 0);
+    uint16_t done = scan_done(e, m, total, 0);
+    pump(e);
+    return done;
+}
+
+static void test_deferred_scan_done_is_acked_only_once_kept(void **state)
+{
+    (void)state;
+    scan_session_cfg cfg;
+    scan_session_cfg_default(&cfg);
+    cfg.defer_done_ack = true;
+    env *e = env_new_cfg(0, &cfg);
+    greet(e);
+    size_t total;
+    uint8_t *m = load_model(&total);
+    size_t from = mem_transport_sent_count(e->t);
+    uint16_t done = whole_scan(e, m, total);
+    assert_int_equal(e->completed, 1);
+    assert_memory_equal(e->model, m, total);
+    assert_false(acked(e, done, from));
+    assert_int_equal(scan_session_get_stats(e->s)->scans_completed, 0);
+    /* the device's timer re-sends SCAN_DONE meanwhile: not ACKed yet */
+    uint16_t save = e->dseq;
+    e->dseq = done;
+    scan_done(e, m, total, 0);
+    e->dseq = save;
+    pump(e);
+    assert_false(acked(e, done, from));
+    assert_int_equal(e->completed, 1);
+    assert_int_equal(scan_session_ack_done(e->s, true, e->clock), 0);
+    pump(e);
+    assert_true(acked(e, done, from));
+    assert_int_equal(scan_session_ack_done(e->s, true, e->clock), -ENOENT);
+    const scan_session_stats *st = scan_session_get_stats(e->s);
+    assert_int_equal(st->scans_completed, 1);
+    assert_int_equal(st->model_bytes, total);
+    /* a scan the caller could not keep: ABORT instead of the ACK */
+    from = mem_transport_sent_count(e->t);
+    done = whole_scan(e, m, total);
+    assert_int_equal(e->completed, 2);
+    assert_int_equal(scan_session_ack_done(e->s, false, e->clock), 0);
+    pump(e);
+    assert_false(acked(e, done, from));
+    assert_int_equal(mem_transport_count(e->t, PROTO_FSP_ABORT, from), 1);
+    assert_int_equal(st->scans_completed, 1);
+    assert_int_equal(st->scans_dropped, 1);
+    /* a HELLO forgets an unanswered SCAN_DONE */
+    whole_scan(e, m, total);
+    assert_int_equal(scan_session_hello(e->s, e->clock), 0);
+    assert_int_equal(scan_session_ack_done(e->s, true, e->clock), -ENOENT);
+    free(m);
+    env_free(e);
+}
+
 static void test_start_scan_rules(void **state)
 {
     (void)state;
@@ -581,6 +648,7 @@ int main(void)
         cmocka_unit_test(test_out_of_order_chunks_assemble),
         cmocka_unit_test(
             test_result_resent_until_acked_and_device_nak_resends),
+        cmocka_unit_test(test_deferred_scan_done_is_acked_only_once_kept),
         cmocka_unit_test(test_start_scan_rules),
         cmocka_unit_test(test_model_over_limit_is_dropped),
         cmocka_unit_test(test_sequence_jump_restarts_with_hello),

@@ -111,8 +111,8 @@ static void test_claim_takes_high_priority_first_then_oldest(void **state)
     char a[27], b[27], c[27], d[27];
     assert_int_equal(put(f->s, JOB_PRIO_NORMAL, "http", NULL, a, 10), 0);
     assert_int_equal(put(f->s, JOB_PRIO_NORMAL, "http", NULL, b, 10), 0);
-    assert_int_equal(put(f->s, JOB_PRIO_HIGH, "scanner:1", NULL, c, 10), 0);
-    assert_int_equal(put(f->s, JOB_PRIO_HIGH, "scanner:1", NULL, d, 10), 0);
+    assert_int_equal(put(f->s, JOB_PRIO_HIGH, "usb:SN-1", NULL, c, 10), 0);
+    assert_int_equal(put(f->s, JOB_PRIO_HIGH, "usb:SN-1", NULL, d, 10), 0);
     const char *order[] = {c, d, a, b};
     for (int i = 0; i < 4; i++) {
         job_rec r;
@@ -295,7 +295,7 @@ static void test_list_pages_newest_first_with_filters(void **state)
     fixture *f = *state;
     char ids[7][27];
     for (int i = 0; i < 7; i++)
-        assert_int_equal(put(f->s, JOB_PRIO_NORMAL, i % 2 ? "scanner:7" : "http",
+        assert_int_equal(put(f->s, JOB_PRIO_NORMAL, i % 2 ? "usb:SN-7" : "http",
                              NULL, ids[i], 100), 0);
     job_rec r;
     assert_int_equal(store_claim(f->s, &r, NULL), 0); /* ids[0] runs */
@@ -321,11 +321,11 @@ static void test_list_pages_newest_first_with_filters(void **state)
     for (size_t i = 0; i < n; i++)
         job_rec_clear(&v[i]);
     free(v);
-    store_filter by_source = {.state = -1, .source = "scanner:7", .limit = 10};
+    store_filter by_source = {.state = -1, .source = "usb:SN-7", .limit = 10};
     assert_int_equal(store_list(f->s, &by_source, &v, &n, NULL), 0);
     assert_int_equal(n, 3);
     for (size_t i = 0; i < n; i++) {
-        assert_string_equal(v[i].source, "scanner:7");
+        assert_string_equal(v[i].source, "usb:SN-7");
         job_rec_clear(&v[i]);
     }
     free(v);

@@ -1,0 +1,689 @@
+/* fill.c — checked hole filling on any polygon mesh (see fill.h).
+ *
+ * Invariants: `out` is p's copy with the kept patches appended, so a
+ * facet or vertex index below p's counts means the same in both and the
+ * BVH of p's facets serves every check; a patch under test is always the
+ * last facets (and vertices) of `out`, so taking it back is truncation;
+ * `kept` lists the facet ranges of the patches kept so far. */
+#include "fill.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bvh.h"
+#include "edgemap.h"
+#include "plane.h"
+#include "selfint.h"
+#include "topo.h"
+#include "vec.h"
+
+const char *geo_fill_attempt_name(enum geo_fill_attempt a)
+{
+    switch (a) {
+    case GEO_ATTEMPT_PLANAR:
+        return "planar";
+    case GEO_ATTEMPT_AS_ASKED:
+        return "as_asked";
+    case GEO_ATTEMPT_ANGLE:
+        return "angle";
+    case GEO_ATTEMPT_NO_FAIR:
+        return "no_fair";
+    case GEO_ATTEMPT_PLAIN:
+        return "plain";
+    }
+    return "unknown";
+}
+
+void geo_mesh_fill_opts_default(geo_mesh_fill_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    geo_fill_opts_default(&o->fill);
+    o->fill.max_dp_vertices = 600;
+    o->planar = true;
+    o->check = true;
+    o->fallback = true;
+}
+
+void geo_mesh_fill_report_clear(geo_mesh_fill_report *rep)
+{
+    if (!rep)
+        return;
+    free(rep->holes);
+    memset(rep, 0, sizeof *rep);
+}
+
+typedef struct kept_patch {
+    uint32_t f0, f1; /* facet range in out */
+    geo_bbox box;
+} kept_patch;
+
+typedef struct mfill {
+    const geo_poly *p;
+    const geo_topo *t;
+    geo_poly *out;
+    geo_bvh *bvh; /* p's facets */
+    kept_patch *kept;
+    size_t nkept, cap_kept;
+    const geo_ctx *ctx;
+} mfill;
+
+/* ---- the check ---- */
+
+typedef struct pair_probe {
+    const geo_poly *out;
+    uint32_t f;             /* the patch facet being tested */
+    const geo_facet_shape *sf;
+    int hit;                /* 1 intersecting, 0 not, < 0 error */
+} pair_probe;
+
+static bool probe_facet(void *user, uint32_t g)
+{
+    pair_probe *pp = user;
+    geo_facet_shape sg;
+    geo_facet_shape_of(pp->out, g, &sg);
+    int r = geo_facets_intersect(pp->out, pp->f, g, pp->sf, &sg);
+    if (r != 0) {
+        pp->hit = r < 0 ? r : 1;
+        return false;
+    }
+    return true;
+}
+
+typedef struct self_probe {
+    const geo_poly *out;
+    uint32_t f0;
+    const geo_facet_shape *shapes;
+    int hit;
+} self_probe;
+
+static bool probe_pair(void *user, uint32_t a, uint32_t b)
+{
+    self_probe *sp = user;
+    int r = geo_facets_intersect(sp->out, sp->f0 + a, sp->f0 + b,
+                                 &sp->shapes[a], &sp->shapes[b]);
+    if (r != 0) {
+        sp->hit = r < 0 ? r : 1;
+        return false;
+    }
+    return true;
+}
+
+/* 1 when facets [f0, f1) of out are degenerate, not simple, or intersect
+ * the mesh, a kept patch or each other; 0 when clean; -ENOMEM. */
+static int patch_intersects(mfill *M, uint32_t f0, uint32_t f1)
+{
+    uint32_t n = f1 - f0;
+    geo_facet_shape *sh = malloc((size_t)n * sizeof *sh);
+    geo_bbox *boxes = malloc((size_t)n * sizeof *boxes);
+    geo_bvh *own = NULL;
+    int hit = 0;
+    if (!sh || !boxes) {
+        hit = -ENOMEM;
+        goto out;
+    }
+    geo_bbox all;
+    geo_bbox_empty(&all);
+    for (uint32_t k = 0; k < n && !hit; k++) {
+        geo_facet_shape_of(M->out, f0 + k, &sh[k]);
+        if (sh[k].degenerate || !sh[k].simple)
+            hit = 1;
+        geo_poly_facet_bbox(M->out, f0 + k, &boxes[k]);
+        geo_bbox_union(&all, &boxes[k]);
+    }
+    for (uint32_t k = 0; k < n && !hit; k++) {
+        pair_probe pp = {M->out, f0 + k, &sh[k], 0};
+        if (M->bvh)
+            geo_bvh_query_box(M->bvh, &boxes[k], probe_facet, &pp);
+        for (size_t q = 0; q < M->nkept && pp.hit == 0; q++) {
+            const kept_patch *kp = &M->kept[q];
+            if (!geo_bbox_overlap(&kp->box, &boxes[k]))
+                continue;
+            for (uint32_t g = kp->f0; g < kp->f1 && pp.hit == 0; g++) {
+                geo_bbox gb;
+                geo_poly_facet_bbox(M->out, g, &gb);
+                if (geo_bbox_overlap(&gb, &boxes[k]))
+                    probe_facet(&pp, g);
+            }
+        }
+        hit = pp.hit;
+    }
+    if (!hit && n > 1) {
+        own = geo_bvh_build(boxes, n, NULL);
+        if (!own) {
+            hit = -ENOMEM;
+            goto out;
+        }
+        self_probe sp = {M->out, f0, sh, 0};
+        geo_bvh_pairs(own, 0, 0, probe_pair, &sp);
+        hit = sp.hit;
+    }
+out:
+    geo_bvh_free(own);
+    free(sh), free(boxes);
+    return hit;
+}
+
+static int keep_patch(mfill *M, uint32_t f0, uint32_t f1)
+{
+    if (M->nkept == M->cap_kept) {
+        size_t nc = M->cap_kept ? 2 * M->cap_kept : 16;
+        kept_patch *nk = realloc(M->kept, nc * sizeof *nk);
+        if (!nk)
+            return -ENOMEM;
+        M->kept = nk;
+        M->cap_kept = nc;
+    }
+    kept_patch *kp = &M->kept[M->nkept++];
+    kp->f0 = f0;
+    kp->f1 = f1;
+    geo_bbox_empty(&kp->box);
+    for (uint32_t f = f0; f < f1; f++) {
+        geo_bbox b;
+        geo_poly_facet_bbox(M->out, f, &b);
+        geo_bbox_union(&kp->box, &b);
+    }
+    return 0;
+}
+
+/* Takes back everything appended to out after nv vertices, nf facets. */
+static void truncate_out(geo_poly *out, uint32_t nv, uint32_t nf)
+{
+    out->nverts = nv;
+    out->nfacets = nf;
+}
+
+/* ---- one hole ---- */
+
+typedef struct loop_ref {
+    const uint32_t *w;  /* the patch cycle: the loop reversed */
+    const uint32_t *lc; /* the loop's corners in p (lc[k]'s edge runs
+                           against w's edge n − 2 − k mod n) */
+    uint32_t n;
+} loop_ref;
+
+/* Facet of p across w's edge j. */
+static uint32_t facet_across(const mfill *M, const loop_ref *L, uint32_t j)
+{
+    return M->t->corner_facet[L->lc[(2 * L->n - 2 - j) % L->n]];
+}
+
+/* The loop's plane and its largest deviation (INFINITY when none). */
+static double loop_planarity(const geo_poly *p, const loop_ref *L,
+                             double plane[4])
+{
+    double *pts = malloc((size_t)L->n * 3 * sizeof *pts);
+    if (!pts)
+        return INFINITY;
+    for (uint32_t k = 0; k < L->n; k++)
+        memcpy(pts + 3 * k, p->verts[L->w[k]], 3 * sizeof *pts);
+    double dev = INFINITY;
+    if (geo_plane_fit(pts, NULL, L->n, NULL, plane) == 0) {
+        dev = 0;
+        for (uint32_t k = 0; k < L->n; k++) {
+            double d = fabs(geo_plane_eval(plane, pts + 3 * k));
+            if (d > dev)
+                dev = d;
+        }
+    }
+    free(pts);
+    return dev;
+}
+
+/* Appends the loop as one facet when it is a valid planar facet. 1 kept,
+ * 0 not (out unchanged), -ENOMEM. */
+static int try_planar(mfill *M, const loop_ref *L, bool check)
+{
+    geo_poly *out = M->out;
+    uint32_t nf = out->nfacets;
+    int64_t f = geo_poly_add_facet(out, L->w, L->n);
+    if (f < 0)
+        return (int)f;
+    geo_poly_facet_fit_plane(out, nf, GEO_PLANE_UNWEIGHTED, out->planes[nf]);
+    double eps = geo_poly_eps(M->p), worst = 0;
+    for (uint32_t k = 0; k < L->n; k++) {
+        double d = fabs(geo_plane_eval(out->planes[nf], out->verts[L->w[k]]));
+        if (d > worst)
+            worst = d;
+    }
+    int bad = !(worst <= eps);
+    if (!bad) {
+        geo_facet_shape s;
+        geo_facet_shape_of(out, nf, &s);
+        bad = s.degenerate || !s.simple;
+    }
+    if (!bad && check)
+        bad = patch_intersects(M, nf, nf + 1);
+    if (bad) {
+        truncate_out(out, out->nverts, nf);
+        return bad < 0 ? bad : 0;
+    }
+    return 1;
+}
+
+typedef struct edge_sel {
+    uint32_t a, b; /* local indices of w[0], w[1] */
+} edge_sel;
+
+static bool select_edge(void *user, const uint32_t *cycle, uint32_t n)
+{
+    const edge_sel *e = user;
+    for (uint32_t k = 0; k < n; k++)
+        if (cycle[k] == e->a && cycle[(k + 1) % n] == e->b)
+            return true;
+    return false;
+}
+
+/* Runs the hole filler on the facets around the loop and appends its
+ * patch to out. *status gets the outcome; 0 or a negative errno. */
+static int try_liepa(mfill *M, const loop_ref *L, const geo_fill_opts *fo,
+                     uint8_t *status, geo_err *err)
+{
+    geo_poly *out = M->out;
+    const geo_topo *t = M->t;
+    geo_edgemap vmap = {0}, fset = {0};
+    uint32_t *glob = NULL;
+    size_t nglob = 0, cap_glob = 0;
+    geo_poly *sub = geo_poly_new();
+    geo_fill_stats st = {0};
+    int rc = -ENOMEM;
+    if (!sub || geo_edgemap_init(&vmap, 8 * (size_t)L->n) < 0 ||
+        geo_edgemap_init(&fset, 8 * (size_t)L->n) < 0)
+        goto done;
+    /* the loop vertices' facets: p's (from the topology), then those of
+     * kept patches near the loop */
+    geo_bbox lbox;
+    geo_bbox_empty(&lbox);
+    for (uint32_t k = 0; k < L->n; k++) {
+        geo_bbox_add(&lbox, out->verts[L->w[k]]);
+        if (geo_edgemap_put(&vmap, L->w[k], UINT32_MAX - 1) < 0)
+            goto done;
+    }
+    uint32_t *facets = NULL;
+    size_t nfac = 0, cap_fac = 0;
+#define PUSH_FACET(g)                                                         \
+    do {                                                                      \
+        if (geo_edgemap_get(&fset, (g)) == UINT32_MAX) {                      \
+            if (nfac == cap_fac) {                                            \
+                size_t nc_ = cap_fac ? 2 * cap_fac : 64;                      \
+                uint32_t *nf_ = realloc(facets, nc_ * sizeof *nf_);           \
+                if (!nf_)                                                     \
+                    goto done_f;                                              \
+                facets = nf_;                                                 \
+                cap_fac = nc_;                                                \
+            }                                                                 \
+            if (geo_edgemap_put(&fset, (g), 1) < 0)                           \
+                goto done_f;                                                  \
+            facets[nfac++] = (g);                                             \
+        }                                                                     \
+    } while (0)
+    for (uint32_t k = 0; k < L->n; k++) {
+        uint32_t v = L->w[k];
+        for (uint32_t c = t->vstart[v]; c < t->vstart[v + 1]; c++)
+            PUSH_FACET(t->corner_facet[t->vcorners[c]]);
+    }
+    for (size_t q = 0; q < M->nkept; q++) {
+        const kept_patch *kp = &M->kept[q];
+        if (!geo_bbox_overlap(&kp->box, &lbox))
+            continue;
+        for (uint32_t g = kp->f0; g < kp->f1; g++) {
+            const uint32_t *gv = geo_poly_facet(out, g);
+            for (uint32_t i = 0; i < geo_poly_facet_size(out, g); i++)
+                if (geo_edgemap_get(&vmap, gv[i]) != UINT32_MAX) {
+                    PUSH_FACET(g);
+                    break;
+                }
+        }
+    }
+#undef PUSH_FACET
+    /* local numbering: every vertex of those facets */
+    for (size_t q = 0; q < nfac; q++) {
+        const uint32_t *gv = geo_poly_facet(out, facets[q]);
+        uint32_t k = geo_poly_facet_size(out, facets[q]);
+        for (uint32_t i = 0; i < k; i++) {
+            uint32_t have = geo_edgemap_get(&vmap, gv[i]);
+            if (have != UINT32_MAX && have != UINT32_MAX - 1)
+                continue;
+            if (nglob == cap_glob) {
+                size_t nc = cap_glob ? 2 * cap_glob : 64;
+                uint32_t *ng = realloc(glob, nc * sizeof *ng);
+                if (!ng)
+                    goto done_f;
+                glob = ng;
+                cap_glob = nc;
+            }
+            if (geo_edgemap_put(&vmap, gv[i], (uint32_t)nglob) < 0 ||
+                geo_poly_add_vertex(sub, out->verts[gv[i]]) < 0)
+                goto done_f;
+            glob[nglob++] = gv[i];
+        }
+    }
+    uint32_t *loc = NULL;
+    for (size_t q = 0; q < nfac; q++) {
+        const uint32_t *gv = geo_poly_facet(out, facets[q]);
+        uint32_t k = geo_poly_facet_size(out, facets[q]);
+        uint32_t *nl = realloc(loc, (size_t)k * sizeof *nl);
+        if (!nl)
+            goto done_l;
+        loc = nl;
+        for (uint32_t i = 0; i < k; i++)
+            loc[i] = geo_edgemap_get(&vmap, gv[i]);
+        int64_t nf = geo_poly_add_facet(sub, loc, k);
+        if (nf < 0)
+            goto done_l;
+        memcpy(sub->planes[nf], out->planes[facets[q]], sizeof sub->planes[0]);
+    }
+    uint32_t nv_sub = sub->nverts, nf_sub = sub->nfacets;
+    edge_sel es = {geo_edgemap_get(&vmap, L->w[0]),
+                   geo_edgemap_get(&vmap, L->w[1])};
+    geo_fill_opts o = *fo;
+    o.select_loop = select_edge;
+    o.select_user = &es;
+    geo_ctx inner = {0};
+    if (M->ctx) {
+        inner.cancel = M->ctx->cancel;
+        inner.seed = M->ctx->seed;
+    }
+    rc = geo_fill_holes(sub, &o, &inner, &st, err);
+    if (rc < 0)
+        goto done_l;
+    *status = st.nholes == 1 ? st.holes[0].status : GEO_HOLE_NOT_A_LOOP;
+    if (*status != GEO_HOLE_FILLED)
+        goto done_l;
+    /* the patch: sub's vertices and facets past the copied ones */
+    uint32_t nv0 = out->nverts;
+    rc = geo_poly_reserve(out, (size_t)nv0 + (sub->nverts - nv_sub),
+                          (size_t)out->nfacets + (sub->nfacets - nf_sub),
+                          (size_t)geo_poly_ncorners(out) +
+                              (geo_poly_ncorners(sub) - sub->fstart[nf_sub]));
+    if (rc < 0)
+        goto done_l;
+    for (uint32_t v = nv_sub; v < sub->nverts; v++)
+        geo_poly_add_vertex(out, sub->verts[v]);
+    for (uint32_t f = nf_sub; f < sub->nfacets; f++) {
+        const uint32_t *sv = geo_poly_facet(sub, f);
+        uint32_t k = geo_poly_facet_size(sub, f);
+        uint32_t tri[3];
+        uint32_t *g = k <= 3 ? tri : malloc((size_t)k * sizeof *g);
+        if (!g) {
+            rc = -ENOMEM;
+            goto done_l;
+        }
+        for (uint32_t i = 0; i < k; i++)
+            g[i] = sv[i] < nv_sub ? glob[sv[i]] : nv0 + (sv[i] - nv_sub);
+        int64_t nf = geo_poly_add_facet(out, g, k);
+        if (g != tri)
+            free(g);
+        if (nf < 0) {
+            rc = (int)nf;
+            goto done_l;
+        }
+        memcpy(out->planes[nf], sub->planes[f], sizeof out->planes[0]);
+    }
+    rc = 0;
+done_l:
+    free(loc);
+done_f:
+    free(facets);
+done:
+    geo_fill_stats_clear(&st);
+    geo_poly_free(sub);
+    free(glob);
+    geo_edgemap_destroy(&vmap);
+    geo_edgemap_destroy(&fset);
+    if (rc == -ENOMEM)
+        geo_err_set(err, rc, "out of memory filling a hole");
+    return rc;
+}
+
+/* Dihedral angles at the loop and edge-length ratio of the patch
+ * [f0, f1) just kept. */
+static int patch_metrics(const mfill *M, const loop_ref *L, uint32_t f0,
+                         uint32_t f1, geo_mesh_hole *h)
+{
+    const geo_poly *out = M->out;
+    geo_edgemap he;
+    size_t nc = 0;
+    for (uint32_t f = f0; f < f1; f++)
+        nc += geo_poly_facet_size(out, f);
+    if (geo_edgemap_init(&he, nc) < 0)
+        return -ENOMEM;
+    for (uint32_t f = f0; f < f1; f++) {
+        const uint32_t *fv = geo_poly_facet(out, f);
+        uint32_t k = geo_poly_facet_size(out, f);
+        for (uint32_t i = 0; i < k; i++)
+            if (geo_edgemap_put(&he, geo_edge_key(fv[i], fv[(i + 1) % k]), f) <
+                0) {
+                geo_edgemap_destroy(&he);
+                return -ENOMEM;
+            }
+    }
+    double worst = 0;
+    for (uint32_t j = 0; j < L->n; j++) {
+        uint32_t a = L->w[j], b = L->w[(j + 1) % L->n];
+        uint32_t f = geo_edgemap_get(&he, geo_edge_key(a, b));
+        if (f == UINT32_MAX)
+            continue;
+        double n1[3], n2[3], x[3];
+        geo_poly_facet_area_vector(out, f, n1);
+        geo_poly_facet_area_vector(out, facet_across(M, L, j), n2);
+        geo_vcross(n1, n2, x);
+        double ang = atan2(geo_vlen(x), geo_vdot(n1, n2)) * 180.0 / M_PI;
+        if (ang > worst)
+            worst = ang;
+    }
+    h->max_dihedral_deg = worst;
+    /* inner edges of the patch (both directions in it), each once */
+    double in_sum = 0;
+    uint64_t in_n = 0;
+    for (uint32_t f = f0; f < f1; f++) {
+        const uint32_t *fv = geo_poly_facet(out, f);
+        uint32_t k = geo_poly_facet_size(out, f);
+        for (uint32_t i = 0; i < k; i++) {
+            uint32_t a = fv[i], b = fv[(i + 1) % k];
+            if (a < b &&
+                geo_edgemap_get(&he, geo_edge_key(b, a)) != UINT32_MAX) {
+                in_sum += geo_vdist(out->verts[a], out->verts[b]);
+                in_n++;
+            }
+        }
+    }
+    geo_edgemap_destroy(&he);
+    double around = 0;
+    uint64_t an = 0;
+    const geo_poly *p = M->p;
+    for (uint32_t j = 0; j < L->n; j++) {
+        uint32_t v = L->w[j];
+        for (uint32_t c = M->t->vstart[v]; c < M->t->vstart[v + 1]; c++) {
+            uint32_t cc = M->t->vcorners[c];
+            uint32_t nx = p->fidx[geo_topo_next(p, M->t, cc)];
+            uint32_t pv = p->fidx[geo_topo_prev(p, M->t, cc)];
+            around += geo_vdist(p->verts[v], p->verts[nx]) +
+                      geo_vdist(p->verts[v], p->verts[pv]);
+            an += 2;
+        }
+    }
+    h->edge_ratio = in_n && an && around > 0
+                        ? (in_sum / (double)in_n) / (around / (double)an)
+                        : 0.0;
+    return 0;
+}
+
+/* The attempts for a hole, in order; returns how many. */
+static int plan_attempts(const geo_mesh_fill_opts *mo, uint8_t kinds[4],
+                         geo_fill_opts fo[4])
+{
+    int n = 0;
+    kinds[n] = GEO_ATTEMPT_AS_ASKED;
+    fo[n++] = mo->fill;
+    if (!mo->check || !mo->fallback)
+        return n;
+    static const uint8_t more[3] = {GEO_ATTEMPT_ANGLE, GEO_ATTEMPT_NO_FAIR,
+                                    GEO_ATTEMPT_PLAIN};
+    for (int k = 0; k < 3; k++) {
+        geo_fill_opts o = mo->fill;
+        o.weight = GEO_FILL_ANGLE;
+        if (more[k] >= GEO_ATTEMPT_NO_FAIR)
+            o.fair = GEO_FAIR_NONE;
+        if (more[k] == GEO_ATTEMPT_PLAIN)
+            o.refine = false;
+        o.refine = o.refine && mo->fill.refine;
+        o.fair = mo->fill.fair == GEO_FAIR_NONE ? GEO_FAIR_NONE : o.fair;
+        bool dup = false;
+        for (int q = 0; q < n; q++)
+            dup |= fo[q].weight == o.weight && fo[q].refine == o.refine &&
+                   fo[q].fair == o.fair;
+        if (!dup) {
+            kinds[n] = more[k];
+            fo[n++] = o;
+        }
+    }
+    return n;
+}
+
+static int fill_one(mfill *M, const geo_mesh_fill_opts *mo, const loop_ref *L,
+                    geo_mesh_hole *h, geo_mesh_fill_report *rep, geo_err *err)
+{
+    geo_poly *out = M->out;
+    double plane[4];
+    h->planarity = loop_planarity(out, L, plane);
+    uint32_t nv0 = out->nverts, nf0 = out->nfacets;
+    if (mo->planar && h->planarity <= geo_poly_eps(M->p)) {
+        h->attempt = GEO_ATTEMPT_PLANAR;
+        int r = try_planar(M, L, mo->check);
+        if (r < 0)
+            return geo_err_set(err, r, "out of memory filling a hole");
+        if (r == 1) {
+            h->status = GEO_HOLE_FILLED_PLANAR;
+            goto kept;
+        }
+    }
+    uint8_t kinds[4];
+    geo_fill_opts fo[4];
+    int na = plan_attempts(mo, kinds, fo);
+    h->status = GEO_HOLE_NO_TRIANGULATION;
+    for (int a = 0; a < na; a++) {
+        h->attempt = kinds[a];
+        uint8_t st = GEO_HOLE_NO_TRIANGULATION;
+        int r = try_liepa(M, L, &fo[a], &st, err);
+        if (r < 0)
+            return r;
+        h->status = st;
+        if (st != GEO_HOLE_FILLED)
+            return 0; /* nothing another weight could change */
+        if (!mo->check)
+            goto kept;
+        r = patch_intersects(M, nf0, out->nfacets);
+        if (r < 0)
+            return geo_err_set(err, r, "out of memory checking a patch");
+        if (r == 0)
+            goto kept;
+        rep->nrejected++;
+        truncate_out(out, nv0, nf0);
+        h->status = GEO_HOLE_INTERSECTS;
+    }
+    return 0;
+kept:
+    h->facets_added = out->nfacets - nf0;
+    h->verts_added = out->nverts - nv0;
+    if (keep_patch(M, nf0, out->nfacets) < 0 ||
+        patch_metrics(M, L, nf0, out->nfacets, h) < 0)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    return 0;
+}
+
+int geo_fill_mesh(geo_poly *p, const geo_mesh_fill_opts *opts,
+                  const geo_ctx *ctx, geo_mesh_fill_report *rep, geo_err *err)
+{
+    geo_mesh_fill_opts mo;
+    if (opts)
+        mo = *opts;
+    else
+        geo_mesh_fill_opts_default(&mo);
+    mo.fill.select_loop = NULL;
+    mo.fill.select_user = NULL;
+    if (mo.fill.weight != GEO_FILL_AREA && mo.fill.weight != GEO_FILL_EDGES &&
+        mo.fill.weight != GEO_FILL_ANGLE)
+        return geo_err_set(err, -EINVAL, "weight: unknown");
+    int rc = geo_poly_validate_indices(p, err);
+    if (rc < 0)
+        return rc;
+    geo_mesh_fill_report R = {0};
+    mfill M = {.p = p, .ctx = ctx};
+    uint32_t *lstart = NULL, *lcorn = NULL, nloops = 0, *w = NULL;
+    geo_topo *t = geo_topo_build(p, err);
+    if (!t)
+        return -ENOMEM;
+    M.t = t;
+    rc = -ENOMEM;
+    if (geo_topo_boundary_loops(p, t, &lstart, &lcorn, &nloops) < 0)
+        goto fail;
+    R.nloops = nloops;
+    R.holes = calloc((size_t)nloops + 1, sizeof *R.holes);
+    w = malloc(((size_t)t->nboundary_edges + 1) * sizeof *w);
+    M.out = geo_poly_copy(p);
+    if (!R.holes || !w || !M.out)
+        goto fail;
+    if (nloops > 0 && mo.check && p->nfacets > 0 &&
+        !(M.bvh = geo_bvh_build_facets(p, err)))
+        goto fail;
+    for (uint32_t l = 0; l < nloops; l++) {
+        geo_mesh_hole *h = &R.holes[l];
+        uint32_t n = lstart[l + 1] - lstart[l];
+        const uint32_t *lc = lcorn + lstart[l];
+        h->nverts = n;
+        h->first_vertex = p->fidx[lc[0]];
+        h->planarity = INFINITY;
+        bool closed = n >= 1;
+        for (uint32_t k = 0; k < n && closed; k++)
+            closed = p->fidx[geo_topo_next(p, t, lc[k])] ==
+                     p->fidx[lc[(k + 1) % n]];
+        if (!closed)
+            h->status = GEO_HOLE_NOT_A_LOOP;
+        else if (n < 3)
+            h->status = GEO_HOLE_DEGENERATE;
+        else if (n > mo.fill.max_hole_vertices)
+            h->status = GEO_HOLE_TOO_LARGE;
+        else {
+            for (uint32_t k = 0; k < n; k++)
+                w[k] = p->fidx[lc[n - 1 - k]];
+            loop_ref L = {w, lc, n};
+            if ((rc = fill_one(&M, &mo, &L, h, &R, err)) < 0)
+                goto fail;
+        }
+        if (h->status == GEO_HOLE_FILLED || h->status == GEO_HOLE_FILLED_PLANAR) {
+            R.nfilled++;
+            R.nplanar += h->status == GEO_HOLE_FILLED_PLANAR;
+            R.verts_added += h->verts_added;
+            R.facets_added += h->facets_added;
+            if (h->max_dihedral_deg > R.max_dihedral_deg)
+                R.max_dihedral_deg = h->max_dihedral_deg;
+        } else {
+            R.nopen++;
+        }
+        if ((rc = geo_ctx_progress(ctx, (l + 1.0) / nloops)) < 0) {
+            geo_err_set(err, rc, "canceled");
+            goto fail;
+        }
+    }
+    geo_poly tmp = *p;
+    *p = *M.out;
+    *M.out = tmp;
+    rc = 0;
+    goto done;
+fail:
+    if (rc == -ENOMEM)
+        geo_err_set(err, rc, "out of memory");
+done:
+    geo_poly_free(M.out);
+    geo_bvh_free(M.bvh);
+    geo_topo_free(t);
+    free(M.kept);
+    free(lstart), free(lcorn), free(w);
+    if (rc < 0 || !rep)
+        geo_mesh_fill_report_clear(&R);
+    else
+        *rep = R;
+    return rc;
+}

@@ -1,0 +1,324 @@
+/* merge_groups.c — finding the groups to merge automatically, and the
+ * rounds of geo_merge_auto.
+ *
+ * A group grows from a seed facet (the largest facet not yet in a group)
+ * by adding, one at a time, the neighbour (across an edge) whose normal is
+ * closest to the group's plane, as long as (a) every member's normal stays
+ * within max_angle of the plane and (b) every vertex of the members stays
+ * within max_dev of it. The plane is the least-squares plane of the
+ * members' distinct vertices, kept as running moments (about the seed's
+ * first vertex, so the sums do not cancel) and solved with the 3×3 eigen
+ * solver for every candidate. A candidate that fails is not tried again
+ * for that group. The deviation decides, the angle only keeps steep
+ * facets apart: a K-contour scan tilts its silhouette planes by up to
+ * about 180°/K, and along every true edge it leaves bevels, narrow strips
+ * whose normals lie anywhere between the two facets that meet there, so
+ * no angle separates slivers from true facets (README "Automatic
+ * correction" has the measurements), while the vertices of one true
+ * facet's slivers stay within the scan's error, a few µm, of one plane.
+ * Cost per group O(c · (m + v)) for c candidates, m members, v vertices;
+ * groups are small. */
+#include "merge_impl.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "plane.h"
+#include "vec.h"
+
+typedef struct area_id {
+    double area;
+    uint32_t f;
+} area_id;
+
+static int cmp_area(const void *a, const void *b)
+{
+    const area_id *x = a, *y = b;
+    if (x->area != y->area)
+        return x->area > y->area ? -1 : 1;
+    return (x->f > y->f) - (x->f < y->f);
+}
+
+typedef struct grower {
+    geo_mw *w;
+    geo_edit *e;
+    double o[3];        /* origin of the moments */
+    double s[3], ss[3][3];
+    uint32_t cnt;
+    double seedn[3];
+    double plane[4];
+    uint32_t *mem, nmem, capmem;
+    uint32_t *vs, nvs, capvs;
+    uint32_t *cand, ncand, capcand;
+} grower;
+
+/* Plane of the moments plus the extra points xs[0..nx); false when the
+ * points are collinear. */
+static bool moments_plane(const grower *g, const double (*xs)[3], uint32_t nx,
+                          double ret[4])
+{
+    double s[3], ss[3][3];
+    memcpy(s, g->s, sizeof s);
+    memcpy(ss, g->ss, sizeof ss);
+    uint32_t cnt = g->cnt + nx;
+    for (uint32_t i = 0; i < nx; i++) {
+        double d[3];
+        geo_vsub(xs[i], g->o, d);
+        for (int a = 0; a < 3; a++) {
+            s[a] += d[a];
+            for (int b = a; b < 3; b++)
+                ss[a][b] += d[a] * d[b];
+        }
+    }
+    if (cnt < 3)
+        return false;
+    double mu[3], c[3][3];
+    for (int a = 0; a < 3; a++)
+        mu[a] = s[a] / cnt;
+    for (int a = 0; a < 3; a++)
+        for (int b = a; b < 3; b++)
+            c[a][b] = ss[a][b] / cnt - mu[a] * mu[b];
+    double val[3], vec[3][3];
+    geo_sym3_eigen(c, val, vec);
+    if (!(val[1] > 0))
+        return false;
+    double *n = vec[0];
+    if (geo_vdot(n, g->seedn) < 0)
+        geo_vscale(n, -1, n);
+    double p[3];
+    geo_vadd(mu, g->o, p);
+    memcpy(ret, n, 3 * sizeof *n);
+    ret[3] = -geo_vdot(n, p);
+    return true;
+}
+
+static void moments_add(grower *g, const double x[3])
+{
+    double d[3];
+    geo_vsub(x, g->o, d);
+    for (int a = 0; a < 3; a++) {
+        g->s[a] += d[a];
+        for (int b = a; b < 3; b++)
+            g->ss[a][b] += d[a] * d[b];
+    }
+    g->cnt++;
+}
+
+/* Would facet f fit the group? On success the plane is returned in
+ * ret_plane. */
+static bool fits(grower *g, uint32_t f, double cosmax, double max_dev,
+                 double ret_plane[4])
+{
+    geo_edit *e = g->e;
+    geo_mw *w = g->w;
+    uint32_t n = geo_edit_fn(e, f);
+    const uint32_t *fv = geo_edit_fv(e, f);
+    double extra[64][3];
+    uint32_t nx = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t v = fv[i];
+        if (w->vmark[v] == w->gen)
+            continue;
+        if (nx == 64)
+            return false;
+        memcpy(extra[nx++], e->verts[v], sizeof extra[0]);
+    }
+    double pl[4];
+    if (!moments_plane(g, (const double(*)[3])extra, nx, pl))
+        return false;
+    if (geo_vdot(e->planes[f], pl) < cosmax)
+        return false;
+    for (uint32_t i = 0; i < g->nmem; i++)
+        if (geo_vdot(e->planes[g->mem[i]], pl) < cosmax)
+            return false;
+    for (uint32_t i = 0; i < nx; i++)
+        if (fabs(geo_plane_eval(pl, extra[i])) > max_dev)
+            return false;
+    for (uint32_t i = 0; i < g->nvs; i++)
+        if (fabs(geo_plane_eval(pl, e->verts[g->vs[i]])) > max_dev)
+            return false;
+    memcpy(ret_plane, pl, sizeof pl);
+    return true;
+}
+
+static int add_member(grower *g, uint32_t f, uint8_t *taken)
+{
+    geo_edit *e = g->e;
+    geo_mw *w = g->w;
+    if (geo_mw_grow(&g->mem, &g->capmem, (size_t)g->nmem + 1) < 0)
+        return -ENOMEM;
+    g->mem[g->nmem++] = f;
+    taken[f] = 1;
+    w->fmark[f] = w->gen;
+    uint32_t n = geo_edit_fn(e, f);
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t v = geo_edit_fv(e, f)[i];
+        if (w->vmark[v] == w->gen)
+            continue;
+        w->vmark[v] = w->gen;
+        if (geo_mw_grow(&g->vs, &g->capvs, (size_t)g->nvs + 1) < 0)
+            return -ENOMEM;
+        g->vs[g->nvs++] = v;
+        moments_add(g, e->verts[v]);
+    }
+    /* its neighbours become candidates */
+    for (uint32_t i = 0; i < n; i++) {
+        const uint32_t *fv = geo_edit_fv(e, f);
+        uint32_t a = fv[i], b = fv[i + 1 < n ? i + 1 : 0];
+        uint32_t h = geo_edit_across(e, f, a, b);
+        if (h == GEO_NONE || taken[h] || w->fmark[h] == w->gen)
+            continue;
+        bool have = false;
+        for (uint32_t j = 0; j < g->ncand && !have; j++)
+            have = g->cand[j] == h;
+        if (have)
+            continue;
+        if (geo_mw_grow(&g->cand, &g->capcand, (size_t)g->ncand + 1) < 0)
+            return -ENOMEM;
+        g->cand[g->ncand++] = h;
+    }
+    return 0;
+}
+
+int geo_mw_find_groups(geo_mw *w, double max_angle_deg, double max_dev,
+                       uint32_t **ret_start, uint32_t **ret_facets,
+                       uint32_t *ret_n)
+{
+    geo_edit *e = w->e;
+    double cosmax = cos(max_angle_deg * M_PI / 180.0);
+    uint32_t nf = e->nfacets, nlive = 0;
+    area_id *order = malloc(((size_t)nf + 1) * sizeof *order);
+    uint8_t *taken = calloc((size_t)nf + 1, 1);
+    uint32_t *start = malloc(sizeof *start), *facets = NULL;
+    uint32_t ng = 0, nfl = 0, capstart = 1, capfacets = 0;
+    grower g;
+    memset(&g, 0, sizeof g);
+    g.w = w;
+    g.e = e;
+    int r = 0;
+    if (!order || !taken || !start)
+        goto oom;
+    for (uint32_t f = 0; f < nf; f++) {
+        if (!e->falive[f])
+            continue;
+        double a[3];
+        geo_edit_area_vector(e, f, a);
+        order[nlive].area = geo_vlen(a);
+        order[nlive++].f = f;
+    }
+    qsort(order, nlive, sizeof *order, cmp_area);
+    start[0] = 0;
+    for (uint32_t k = 0; k < nlive; k++) {
+        uint32_t seed = order[k].f;
+        if (taken[seed])
+            continue;
+        if (geo_mw_stamp(w) < 0)
+            goto oom;
+        g.nmem = g.nvs = g.ncand = g.cnt = 0;
+        memset(g.s, 0, sizeof g.s);
+        memset(g.ss, 0, sizeof g.ss);
+        memcpy(g.o, e->verts[geo_edit_fv(e, seed)[0]], sizeof g.o);
+        memcpy(g.seedn, e->planes[seed], sizeof g.seedn);
+        if (add_member(&g, seed, taken) < 0)
+            goto oom;
+        memcpy(g.plane, e->planes[seed], sizeof g.plane);
+        for (;;) {
+            /* the candidate closest in normal to the plane */
+            uint32_t bi = GEO_NONE;
+            double bd = -2;
+            for (uint32_t j = 0; j < g.ncand; j++) {
+                uint32_t h = g.cand[j];
+                double d = geo_vdot(e->planes[h], g.plane);
+                if (d > bd || (d == bd && h < g.cand[bi])) {
+                    bd = d;
+                    bi = j;
+                }
+            }
+            if (bi == GEO_NONE)
+                break;
+            uint32_t h = g.cand[bi];
+            g.cand[bi] = g.cand[--g.ncand];
+            if (taken[h] || w->fmark[h] == w->gen)
+                continue;
+            double pl[4];
+            if (bd < cosmax || !fits(&g, h, cosmax, max_dev, pl)) {
+                w->fmark[h] = w->gen; /* rejected for this group */
+                continue;
+            }
+            if (add_member(&g, h, taken) < 0)
+                goto oom;
+            memcpy(g.plane, pl, sizeof pl);
+        }
+        if (g.nmem < 2)
+            continue;
+        if (geo_mw_grow(&start, &capstart, (size_t)ng + 2) < 0 ||
+            geo_mw_grow(&facets, &capfacets, (size_t)nfl + g.nmem) < 0)
+            goto oom;
+        memcpy(facets + nfl, g.mem, g.nmem * sizeof *facets);
+        nfl += g.nmem;
+        start[++ng] = nfl;
+    }
+    *ret_start = start;
+    *ret_facets = facets;
+    *ret_n = ng;
+    start = facets = NULL;
+    goto done;
+oom:
+    r = -ENOMEM;
+done:
+    free(order), free(taken), free(start), free(facets);
+    free(g.mem), free(g.vs), free(g.cand);
+    return r;
+}
+
+int geo_mw_auto_round(geo_mw *w, double max_angle_deg, double max_dev,
+                      const geo_ctx *ctx, double frac0, double frac1,
+                      geo_merge_report *rep, uint32_t *ret_merged,
+                      geo_err *err)
+{
+    uint32_t *start = NULL, *facets = NULL, ng = 0, merged = 0;
+    int r = geo_mw_world_build(w, err);
+    if (r < 0)
+        return r;
+    if (geo_mw_find_groups(w, max_angle_deg, max_dev, &start, &facets, &ng) < 0)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    uint32_t *live = NULL, caplive = 0;
+    for (uint32_t g = 0; g < ng; g++) {
+        if ((g & 15) == 0 &&
+            geo_ctx_progress(ctx, frac0 + (frac1 - frac0) * g / ng) < 0) {
+            r = geo_err_set(err, -ECANCELED, "merge canceled");
+            break;
+        }
+        /* members merged away by an earlier group of this round drop out */
+        uint32_t n = 0;
+        if (geo_mw_grow(&live, &caplive, (size_t)start[g + 1] - start[g] + 1) < 0) {
+            r = geo_err_set(err, -ENOMEM, "out of memory");
+            break;
+        }
+        for (uint32_t k = start[g]; k < start[g + 1]; k++)
+            if (w->e->falive[facets[k]])
+                live[n++] = facets[k];
+        if (n < 2)
+            continue;
+        geo_merge_group *gr;
+        if (geo_merge_report_add(rep, live, n, &gr) < 0) {
+            r = geo_err_set(err, -ENOMEM, "out of memory");
+            break;
+        }
+        geo_err gerr;
+        r = geo_mw_merge(w, live, n, gr, &gerr);
+        if (r == 0)
+            merged++;
+        else if (r == -EINVAL)
+            r = 0;
+        else {
+            geo_err_set(err, r, "%s", gerr.msg);
+            break;
+        }
+    }
+    free(live), free(start), free(facets);
+    *ret_merged = merged;
+    return r;
+}

@@ -1,0 +1,576 @@
+/* stitch.c — seed 004's stitching of two open meshes (see stitch.h).
+ *
+ * Invariants: a loop is kept as its vertex cycle in the direction of its
+ * corners (its mesh's facets on the left seen from outside); the two
+ * lines of the bridge always run the same way, line X along loop 1 and
+ * line Y along loop 2 reversed, so a band facet uses X's edges backwards
+ * and Y's forwards; P's entries are indices into the merged output. */
+#include "stitch.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "topo.h"
+#include "vec.h"
+
+void geo_stitch_opts_default(geo_stitch_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    geo_mesh_fill_opts_default(&o->fill);
+}
+
+void geo_stitch_report_clear(geo_stitch_report *rep)
+{
+    if (!rep)
+        return;
+    geo_mesh_fill_report_clear(&rep->fill);
+    memset(rep, 0, sizeof *rep);
+}
+
+typedef struct loop {
+    uint32_t *v; /* vertex cycle, along the corners */
+    uint32_t n;
+    double c[3];  /* centre: the vertex mean, (5) */
+    double nw[3]; /* Newell normal (vector area) */
+} loop;
+
+typedef struct loops {
+    loop *l;
+    uint32_t n;
+} loops;
+
+static void loops_free(loops *L)
+{
+    for (uint32_t k = 0; k < L->n; k++)
+        free(L->l[k].v);
+    free(L->l);
+    L->l = NULL;
+    L->n = 0;
+}
+
+/* Algorithm 1 for every free-edge polyline of p: its closed loops. */
+static int find_loops(const geo_poly *p, loops *ret, geo_err *err)
+{
+    geo_topo *t = geo_topo_build(p, err);
+    uint32_t *ls = NULL, *lc = NULL, nl = 0;
+    int rc = -ENOMEM;
+    if (!t || geo_topo_boundary_loops(p, t, &ls, &lc, &nl) < 0)
+        goto out;
+    ret->l = calloc((size_t)nl + 1, sizeof *ret->l);
+    if (!ret->l)
+        goto out;
+    for (uint32_t k = 0; k < nl; k++) {
+        uint32_t n = ls[k + 1] - ls[k];
+        const uint32_t *c = lc + ls[k];
+        bool closed = n >= 3;
+        for (uint32_t q = 0; q < n && closed; q++)
+            closed = p->fidx[geo_topo_next(p, t, c[q])] ==
+                     p->fidx[c[(q + 1) % n]];
+        if (!closed)
+            continue;
+        loop *L = &ret->l[ret->n];
+        if (!(L->v = malloc((size_t)n * sizeof *L->v)))
+            goto out;
+        ret->n++;
+        L->n = n;
+        memset(L->c, 0, sizeof L->c);
+        memset(L->nw, 0, sizeof L->nw);
+        for (uint32_t q = 0; q < n; q++) {
+            L->v[q] = p->fidx[c[q]];
+            geo_vadd(L->c, p->verts[L->v[q]], L->c);
+        }
+        geo_vscale(L->c, 1.0 / n, L->c);
+        for (uint32_t q = 0; q < n; q++) {
+            const double *a = p->verts[L->v[q]], *b = p->verts[L->v[(q + 1) % n]];
+            L->nw[0] += (a[1] - b[1]) * (a[2] + b[2]);
+            L->nw[1] += (a[2] - b[2]) * (a[0] + b[0]);
+            L->nw[2] += (a[0] - b[0]) * (a[1] + b[1]);
+        }
+    }
+    rc = 0;
+out:
+    if (rc == -ENOMEM)
+        geo_err_set(err, rc, "out of memory finding free edges");
+    geo_topo_free(t);
+    free(ls), free(lc);
+    return rc;
+}
+
+/* The longest run of consecutive kept vertices of loop L (cyclically),
+ * written to ret (in loop order); returns its length. */
+static uint32_t longest_run(const loop *L, const uint8_t *keep, uint32_t *ret)
+{
+    uint32_t n = L->n, best = 0, bstart = 0, first_out = n;
+    for (uint32_t k = 0; k < n; k++)
+        if (!keep[k]) {
+            first_out = k;
+            break;
+        }
+    if (first_out == n) { /* all kept */
+        memcpy(ret, L->v, (size_t)n * sizeof *ret);
+        return n;
+    }
+    uint32_t run = 0, rs = 0;
+    for (uint32_t q = 1; q <= n; q++) {
+        uint32_t k = (first_out + q) % n;
+        if (keep[k]) {
+            if (run == 0)
+                rs = k;
+            run++;
+            if (run > best) {
+                best = run;
+                bstart = rs;
+            }
+        } else {
+            run = 0;
+        }
+    }
+    for (uint32_t q = 0; q < best; q++)
+        ret[q] = L->v[(bstart + q) % n];
+    return best;
+}
+
+/* Algorithm 2 keeps whole half-loops; where a half-loop runs towards the
+ * other mesh (along the rim of a surface cut in two) its vertices are not
+ * facing anything and straight meridians from them would fold. The arc
+ * is trimmed from both ends while the end vertex is more than twice as
+ * far from the other arc as the arc's median vertex is (the paper's
+ * intent: join the vertices spatially nearest each other). */
+static void trim_arc(const geo_poly *pa, uint32_t *arc, uint32_t *n,
+                     const geo_poly *pb, const uint32_t *other, uint32_t m)
+{
+    uint32_t k = *n;
+    double *d = malloc((size_t)k * sizeof *d), *sorted = malloc((size_t)k * sizeof *d);
+    if (!d || !sorted || k < 3) {
+        free(d), free(sorted);
+        return;
+    }
+    for (uint32_t i = 0; i < k; i++) {
+        double best = INFINITY;
+        for (uint32_t j = 0; j < m; j++) {
+            double x = geo_vdist(pa->verts[arc[i]], pb->verts[other[j]]);
+            best = x < best ? x : best;
+        }
+        d[i] = sorted[i] = best;
+    }
+    /* the median by partial selection sort is enough for loop sizes */
+    for (uint32_t i = 0; i <= k / 2; i++)
+        for (uint32_t j = i + 1; j < k; j++)
+            if (sorted[j] < sorted[i]) {
+                double t = sorted[i];
+                sorted[i] = sorted[j];
+                sorted[j] = t;
+            }
+    double lim = 2.0 * sorted[k / 2];
+    uint32_t lo = 0, hi = k;
+    while (hi - lo > 2 && d[lo] > lim)
+        lo++;
+    while (hi - lo > 2 && d[hi - 1] > lim)
+        hi--;
+    memmove(arc, arc + lo, (size_t)(hi - lo) * sizeof *arc);
+    *n = hi - lo;
+    free(d), free(sorted);
+}
+
+static double mean_edge(const geo_poly *p, uint64_t *count)
+{
+    double s = 0;
+    uint64_t n = 0;
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        const uint32_t *fv = geo_poly_facet(p, f);
+        uint32_t k = geo_poly_facet_size(p, f);
+        for (uint32_t i = 0; i < k; i++, n++)
+            s += geo_vdist(p->verts[fv[i]], p->verts[fv[(i + 1) % k]]);
+    }
+    *count = n;
+    return s;
+}
+
+/* H: the B end of each of the ncol meridians of lines of na and nb
+ * points (na ≥ nb), D_ij = |(nb−1)·i − (na−1)·j| minimal, ties to the
+ * larger j. D is V-shaped in j, so the search resumes where the last one
+ * stopped. */
+static void meridians(uint32_t na, uint32_t nb, uint32_t *jof)
+{
+    uint32_t j = 0;
+    for (uint32_t i = 0; i < na; i++) {
+        int64_t xa = (int64_t)(nb - 1) * i;
+        while (j + 1 < nb) {
+            int64_t d0 = llabs(xa - (int64_t)(na - 1) * j);
+            int64_t d1 = llabs(xa - (int64_t)(na - 1) * (j + 1));
+            if (d1 <= d0)
+                j++;
+            else
+                break;
+        }
+        jof[i] = j;
+    }
+}
+
+int geo_stitch(const geo_poly *m1, const geo_poly *m2,
+               const geo_stitch_opts *opts, const geo_ctx *ctx, geo_poly *out,
+               geo_stitch_report *rep, geo_err *err)
+{
+    geo_stitch_opts o;
+    if (opts)
+        o = *opts;
+    else
+        geo_stitch_opts_default(&o);
+    if (!(o.segment >= 0) || !isfinite(o.segment))
+        return geo_err_set(err, -EINVAL, "segment: must be ≥ 0");
+    int rc = geo_poly_validate_indices(m1, err);
+    if (rc < 0) {
+        geo_err_prefix(err, "mesh 1");
+        return rc;
+    }
+    if ((rc = geo_poly_validate_indices(m2, err)) < 0) {
+        geo_err_prefix(err, "mesh 2");
+        return rc;
+    }
+    geo_stitch_report R = {0};
+    loops L1 = {0}, L2 = {0};
+    uint32_t *X = NULL, *Y = NULL, *jof = NULL, *P = NULL;
+    uint8_t *keep = NULL;
+    geo_poly_clear(out);
+    if ((rc = find_loops(m1, &L1, err)) < 0 ||
+        (rc = find_loops(m2, &L2, err)) < 0)
+        goto fail;
+    R.loops1 = L1.n;
+    R.loops2 = L2.n;
+    if (L1.n == 0 || L2.n == 0) {
+        rc = geo_err_set(err, -EINVAL, "mesh %d has no free-edge loop "
+                         "(nothing to stitch)", L1.n == 0 ? 1 : 2);
+        goto fail;
+    }
+    /* the pair of loops with the closest centres */
+    double best = INFINITY;
+    for (uint32_t a = 0; a < L1.n; a++)
+        for (uint32_t b = 0; b < L2.n; b++) {
+            double d = geo_vdist(L1.l[a].c, L2.l[b].c);
+            if (d < best) {
+                best = d;
+                R.loop1 = a;
+                R.loop2 = b;
+            }
+        }
+    const loop *l1 = &L1.l[R.loop1], *l2 = &L2.l[R.loop2];
+    R.nloop1 = l1->n;
+    R.nloop2 = l2->n;
+    double a1[3];
+    geo_vsub(l2->c, l1->c, a1);
+    /* across a gap: mean planes within 45° of parallel, and each centre
+     * off the other's axis by less than half the smaller loop radius */
+    double n1 = geo_vlen(l1->nw), n2 = geo_vlen(l2->nw), r1 = 0, r2 = 0;
+    for (uint32_t k = 0; k < l1->n; k++)
+        r1 += geo_vdist(m1->verts[l1->v[k]], l1->c) / l1->n;
+    for (uint32_t k = 0; k < l2->n; k++)
+        r2 += geo_vdist(m2->verts[l2->v[k]], l2->c) / l2->n;
+    double lat[3], ax[3];
+    geo_vscale(l1->nw, n1 > 0 ? 1.0 / n1 : 0.0, ax);
+    geo_vmadd(a1, -geo_vdot(a1, ax), ax, lat);
+    R.band = n1 > 0 && n2 > 0 &&
+             fabs(geo_vdot(l1->nw, l2->nw)) >= sqrt(0.5) * n1 * n2 &&
+             geo_vlen(lat) < 0.5 * fmin(r1, r2);
+    /* facing loops of consistently oriented meshes run opposite ways */
+    double agree = geo_vdot(l1->nw, l2->nw);
+    R.flipped2 = R.band ? agree > 0 : agree < 0;
+    uint32_t nl2 = l2->n;
+    X = malloc((size_t)(l1->n + 1) * sizeof *X);
+    Y = malloc((size_t)(nl2 + 1) * sizeof *Y);
+    keep = calloc((size_t)(l1->n > nl2 ? l1->n : nl2) + 1, 1);
+    if (!X || !Y || !keep)
+        goto oom;
+    /* loop 2 in the direction it has once mesh 2 is as it will be merged,
+     * then backwards: Y runs like X */
+    uint32_t *l2v = malloc((size_t)nl2 * sizeof *l2v);
+    if (!l2v)
+        goto oom;
+    for (uint32_t k = 0; k < nl2; k++)
+        l2v[k] = R.flipped2 ? l2->v[nl2 - 1 - k] : l2->v[k];
+    loop l2o = *l2;
+    l2o.v = l2v;
+    uint32_t nx, ny;
+    if (R.band) {
+        memcpy(X, l1->v, (size_t)l1->n * sizeof *X);
+        nx = l1->n;
+        for (uint32_t k = 0; k < nl2; k++)
+            Y[k] = l2v[nl2 - 1 - k];
+        ny = nl2;
+    } else {
+        /* algorithm 2: the vertices on the side facing the other loop */
+        for (uint32_t k = 0; k < l1->n; k++) {
+            double d[3];
+            geo_vsub(m1->verts[l1->v[k]], l1->c, d);
+            keep[k] = geo_vdot(d, a1) > 0;
+        }
+        nx = longest_run(l1, keep, X);
+        for (uint32_t k = 0; k < nl2; k++) {
+            double d[3];
+            geo_vsub(m2->verts[l2v[k]], l2->c, d);
+            keep[k] = geo_vdot(d, a1) < 0;
+        }
+        uint32_t *tmp = malloc((size_t)nl2 * sizeof *tmp);
+        if (!tmp) {
+            free(l2v);
+            goto oom;
+        }
+        ny = longest_run(&l2o, keep, tmp);
+        for (uint32_t k = 0; k < ny; k++)
+            Y[k] = tmp[ny - 1 - k];
+        free(tmp);
+    }
+    free(l2v);
+    if (!R.band) {
+        trim_arc(m1, X, &nx, m2, Y, ny);
+        trim_arc(m2, Y, &ny, m1, X, nx);
+    }
+    R.chosen1 = nx;
+    R.chosen2 = ny;
+    if (nx < 2 || ny < 2) {
+        rc = geo_err_set(err, -EINVAL, "algorithm 2 chose %u vertices on loop "
+                         "1 and %u on loop 2: need at least 2 on each", nx, ny);
+        goto fail;
+    }
+    /* merged output: mesh 1, mesh 2 (turned over if needed), the band */
+    uint32_t off2 = m1->nverts;
+    size_t nc1 = geo_poly_ncorners(m1), nc2 = geo_poly_ncorners(m2);
+    if (geo_poly_reserve(out, (size_t)m1->nverts + m2->nverts,
+                         (size_t)m1->nfacets + m2->nfacets, nc1 + nc2) < 0)
+        goto oom;
+    for (uint32_t v = 0; v < m1->nverts; v++)
+        geo_poly_add_vertex(out, m1->verts[v]);
+    for (uint32_t v = 0; v < m2->nverts; v++)
+        geo_poly_add_vertex(out, m2->verts[v]);
+    for (uint32_t f = 0; f < m1->nfacets; f++) {
+        int64_t nf = geo_poly_add_facet(out, geo_poly_facet(m1, f),
+                                        geo_poly_facet_size(m1, f));
+        memcpy(out->planes[nf], m1->planes[f], sizeof out->planes[0]);
+    }
+    for (uint32_t f = 0; f < m2->nfacets; f++) {
+        uint32_t k = geo_poly_facet_size(m2, f);
+        const uint32_t *fv = geo_poly_facet(m2, f);
+        int64_t nf = geo_poly_add_facet(out, fv, k);
+        uint32_t *dst = out->fidx + out->fstart[nf];
+        for (uint32_t i = 0; i < k; i++)
+            dst[i] = off2 + (R.flipped2 ? fv[k - 1 - i] : fv[i]);
+        memcpy(out->planes[nf], m2->planes[f], sizeof out->planes[0]);
+        if (R.flipped2)
+            for (int q = 0; q < 4; q++)
+                out->planes[nf][q] = -out->planes[nf][q];
+    }
+    for (uint32_t k = 0; k < ny; k++)
+        Y[k] += off2;
+    /* A: the longer line (N ≥ M), B the other */
+    R.swapped = ny > nx;
+    const uint32_t *A = R.swapped ? Y : X, *B = R.swapped ? X : Y;
+    uint32_t N = R.swapped ? ny : nx, M = R.swapped ? nx : ny;
+    /* columns: N meridians; a band's lines are closed by their first
+     * point (N + 1 and M + 1 points, the last meridian the first) */
+    uint32_t ncol = N, na = R.band ? N + 1 : N, nb = R.band ? M + 1 : M;
+    jof = malloc(((size_t)na + 1) * sizeof *jof);
+    if (!jof)
+        goto oom;
+    meridians(na, nb, jof);
+    uint32_t twist = 0;
+    double total = INFINITY;
+    for (uint32_t s = 0; s < (R.band ? M : 1); s++) {
+        double sum = 0;
+        for (uint32_t i = 0; i < ncol && sum < total; i++)
+            sum += geo_vdist(out->verts[A[i]],
+                             out->verts[B[(jof[i] + s) % M]]);
+        if (sum < total) {
+            total = sum;
+            twist = s;
+        }
+        if ((s & 255) == 255 && geo_ctx_canceled(ctx)) {
+            rc = geo_err_set(err, -ECANCELED, "canceled");
+            goto fail;
+        }
+    }
+    R.twist = twist;
+    R.meridians = ncol;
+    R.meridian_length = total;
+    uint64_t e1, e2;
+    double s1 = mean_edge(m1, &e1), s2 = mean_edge(m2, &e2);
+    R.segment = o.segment > 0 ? o.segment
+                              : (e1 + e2 ? (s1 + s2) / (double)(e1 + e2) : 0);
+    double mean_len = total / ncol;
+    uint32_t segs = 1;
+    if (R.segment > 0 && mean_len / R.segment > 1.5)
+        segs = (uint32_t)fmin(lround(mean_len / R.segment), 10000.0);
+    uint32_t rows = segs + 1;
+    R.rows = rows;
+    /* P, rows × ncol; intermediate points appended as new vertices */
+    P = malloc((size_t)rows * ncol * sizeof *P);
+    if (!P)
+        goto oom;
+    for (uint32_t c = 0; c < ncol; c++) {
+        uint32_t a = A[c], b = B[(jof[c] + twist) % M];
+        P[c] = a;
+        P[(size_t)(rows - 1) * ncol + c] = b;
+        for (uint32_t r = 1; r + 1 < rows; r++) {
+            double t = (double)r / (rows - 1), x[3];
+            for (int k = 0; k < 3; k++)
+                x[k] = out->verts[a][k] +
+                       t * (out->verts[b][k] - out->verts[a][k]);
+            int64_t nv = geo_poly_add_vertex(out, x);
+            if (nv < 0)
+                goto oom;
+            P[(size_t)r * ncol + c] = (uint32_t)nv;
+            R.band_vertices++;
+        }
+    }
+    /* facets: X's edges backwards, Y's forwards */
+    uint32_t nf0 = out->nfacets;
+    for (uint32_t c = 0; c + (R.band ? 0 : 1) < ncol; c++) {
+        uint32_t c2 = (c + 1) % ncol;
+        for (uint32_t r = 0; r + 1 < rows; r++) {
+            uint32_t a = P[(size_t)r * ncol + c], b = P[(size_t)r * ncol + c2];
+            uint32_t d = P[(size_t)(r + 1) * ncol + c];
+            uint32_t e = P[(size_t)(r + 1) * ncol + c2];
+            /* quad (b, a, d, e) runs X's edge backwards when A is X */
+            uint32_t tri[2][3];
+            int nt = 0;
+            if (d == e) {
+                tri[nt][0] = b, tri[nt][1] = a, tri[nt][2] = d, nt++;
+            } else if (geo_vdist(out->verts[a], out->verts[e]) <=
+                       geo_vdist(out->verts[b], out->verts[d])) {
+                tri[nt][0] = b, tri[nt][1] = a, tri[nt][2] = e, nt++;
+                tri[nt][0] = a, tri[nt][1] = d, tri[nt][2] = e, nt++;
+            } else {
+                tri[nt][0] = b, tri[nt][1] = a, tri[nt][2] = d, nt++;
+                tri[nt][0] = b, tri[nt][1] = d, tri[nt][2] = e, nt++;
+            }
+            for (int q = 0; q < nt; q++) {
+                if (R.swapped) {
+                    uint32_t tmp = tri[q][0];
+                    tri[q][0] = tri[q][2];
+                    tri[q][2] = tmp;
+                }
+                int64_t nf = geo_poly_add_facet(out, tri[q], 3);
+                if (nf < 0)
+                    goto oom;
+                geo_poly_facet_fit_plane(out, (uint32_t)nf,
+                                         GEO_PLANE_UNWEIGHTED, out->planes[nf]);
+            }
+        }
+    }
+    R.band_facets = out->nfacets - nf0;
+    /* straight meridians between jagged lines fold where a line steps
+     * along the meridians' direction: the band's own points are faired
+     * (U² = 0, both meshes fixed), which spreads them evenly and carries
+     * the meshes' curvature across the gap */
+    if (R.band_vertices && o.fill.fill.fair != GEO_FAIR_NONE &&
+        (rc = geo_fair_vertices(out, out->nverts - R.band_vertices,
+                                &o.fill.fill, ctx, NULL, err)) < 0)
+        goto fail;
+    if ((rc = geo_ctx_progress(ctx, 0.5)) < 0) {
+        geo_err_set(err, rc, "canceled");
+        goto fail;
+    }
+    /* the openings left: the loop vertices not bridged, other loops */
+    if ((rc = geo_fill_mesh(out, &o.fill, NULL, &R.fill, err)) < 0) {
+        geo_err_prefix(err, "closing the openings");
+        goto fail;
+    }
+    rc = geo_ctx_progress(ctx, 1.0);
+    if (rc < 0) {
+        geo_err_set(err, rc, "canceled");
+        goto fail;
+    }
+    goto done;
+oom:
+    rc = geo_err_set(err, -ENOMEM, "out of memory stitching");
+fail:
+    geo_poly_clear(out);
+    geo_stitch_report_clear(&R);
+done:
+    loops_free(&L1);
+    loops_free(&L2);
+    free(X), free(Y), free(jof), free(P), free(keep);
+    if (rep)
+        *rep = R;
+    else
+        geo_stitch_report_clear(&R);
+    return rc;
+}
+
+/* Union-find root with path halving. */
+static uint32_t root(uint32_t *up, uint32_t x)
+{
+    while (up[x] != x) {
+        up[x] = up[up[x]];
+        x = up[x];
+    }
+    return x;
+}
+
+int geo_stitch_pieces(const geo_poly *p, const geo_stitch_opts *opts,
+                      const geo_ctx *ctx, geo_poly *out,
+                      geo_stitch_report *rep, geo_err *err)
+{
+    geo_poly_clear(out);
+    int rc = geo_poly_validate_indices(p, err);
+    if (rc < 0)
+        return rc;
+    uint32_t *up = malloc(((size_t)p->nverts + 1) * sizeof *up);
+    bool *keep = malloc(((size_t)p->nfacets + 1) * sizeof *keep);
+    geo_poly *a = NULL, *b = NULL;
+    if (!up || !keep) {
+        rc = geo_err_set(err, -ENOMEM, "out of memory");
+        goto out;
+    }
+    for (uint32_t v = 0; v < p->nverts; v++)
+        up[v] = v;
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        const uint32_t *fv = geo_poly_facet(p, f);
+        for (uint32_t i = 1; i < geo_poly_facet_size(p, f); i++) {
+            uint32_t x = root(up, fv[0]), y = root(up, fv[i]);
+            if (x != y)
+                up[x < y ? y : x] = x < y ? x : y;
+        }
+    }
+    /* pieces in order of their first facet */
+    uint32_t r0 = UINT32_MAX, r1 = UINT32_MAX, more = 0;
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        uint32_t r = root(up, geo_poly_facet(p, f)[0]);
+        if (r0 == UINT32_MAX || r == r0)
+            r0 = r;
+        else if (r1 == UINT32_MAX || r == r1)
+            r1 = r;
+        else
+            more = 1;
+    }
+    if (r1 == UINT32_MAX || more) {
+        rc = geo_err_set(err, -EINVAL, "stitch needs a model of exactly two "
+                         "pieces (the two open meshes); this one has %s",
+                         r0 == UINT32_MAX ? "no facets"
+                         : r1 == UINT32_MAX ? "one piece" : "more than two");
+        goto out;
+    }
+    a = geo_poly_copy(p);
+    b = geo_poly_copy(p);
+    if (!a || !b) {
+        rc = geo_err_set(err, -ENOMEM, "out of memory");
+        goto out;
+    }
+    for (uint32_t f = 0; f < p->nfacets; f++)
+        keep[f] = root(up, geo_poly_facet(p, f)[0]) == r0;
+    if ((rc = geo_poly_compact(a, keep, NULL, NULL)) < 0)
+        goto oom;
+    for (uint32_t f = 0; f < p->nfacets; f++)
+        keep[f] = !keep[f];
+    if ((rc = geo_poly_compact(b, keep, NULL, NULL)) < 0)
+        goto oom;
+    rc = geo_stitch(a, b, opts, ctx, out, rep, err);
+    goto out;
+oom:
+    rc = geo_err_set(err, -ENOMEM, "out of memory");
+out:
+    geo_poly_free(a);
+    geo_poly_free(b);
+    free(up), free(keep);
+    return rc;
+}

@@ -1,0 +1,85 @@
+#!/bin/bash
+# fill_stitch.sh — open meshes end to end: `facet fill` puts the
+# brilliant's two missing facets back (121 facets, valid, the true
+# volume), `facet stitch` joins the stone's crown and pavilion (a band of
+# facets removed between them) into one valid solid, and facetd runs
+# fill_holes on a model and stitch on a job with "meshes": [m1, m2],
+# refusing meshes it cannot stitch with 422.
+. "$(dirname "$0")/lib.sh" "$@"
+F="$BUILD/facet"
+
+out=$("$F" fill "$MODELS/brilliant.holes.json" -o "$T/filled.json" --report "$T/fill.rep")
+check "facet fill succeeds" test $? -eq 0
+check "both holes come back as one planar facet each" grep -q '"loops":2,"filled":2,"planar":2,"left_open":0' <<<"$out"
+check "the result has 121 facets and is valid" grep -q '"valid":true,"vertices":238,"facets":121' <<<"$out"
+check "the report names each hole's outcome" grep -q '"status": "filled_planar"' "$T/fill.rep"
+check "the report has the time" grep -q '"ms":' "$T/fill.rep"
+python3 - "$T/filled.json" "$MODELS/brilliant.truth.json" <<'PY' && ok "the filled stone has the true stone's volume" || not_ok "the filled stone has the true stone's volume"
+import json, sys
+def vol(path):
+    m = json.load(open(path)); v = m["vertices"]; s = 0.0
+    for f in m["facets"]:
+        idx = f["vertices"] if isinstance(f, dict) else f
+        p0 = v[idx[0]]
+        for a, b in zip(idx[1:-1], idx[2:]):
+            p1, p2 = v[a], v[b]
+            s += (p0[0] * (p1[1] * p2[2] - p1[2] * p2[1]) - p0[1] * (p1[0] * p2[2] - p1[2] * p2[0]) + p0[2] * (p1[0] * p2[1] - p1[1] * p2[0])) / 6
+    return s
+a, b = vol(sys.argv[1]), vol(sys.argv[2])
+sys.exit(0 if abs(a - b) <= 1e-9 * abs(b) else 1)
+PY
+
+# the crown and the pavilion of the true stone, the facets between
+# -0.3 < z < 0.3 (the girdle band) removed
+python3 - "$MODELS/brilliant.truth.json" "$T/top.json" "$T/bot.json" <<'PY'
+import json, sys
+m = json.load(open(sys.argv[1])); v = m["vertices"]
+def centre(f):
+    idx = f["vertices"] if isinstance(f, dict) else f
+    return sum(v[i][2] for i in idx) / len(idx)
+for path, keep in ((sys.argv[2], lambda z: z > 0.3), (sys.argv[3], lambda z: z < -0.3)):
+    fs = [f for f in m["facets"] if keep(centre(f))]
+    used = sorted({i for f in fs for i in (f["vertices"] if isinstance(f, dict) else f)})
+    ren = {o: n for n, o in enumerate(used)}
+    out = dict(m)
+    out["vertices"] = [v[i] for i in used]
+    out["facets"] = [dict(f, vertices=[ren[i] for i in f["vertices"]]) if isinstance(f, dict) else [ren[i] for i in f] for f in fs]
+    json.dump(out, open(path, "w"))
+PY
+out=$("$F" stitch "$T/top.json" "$T/bot.json" -o "$T/stitched.json" --report "$T/stitch.rep")
+check "facet stitch succeeds" test $? -eq 0
+check "the halves are joined whole as a band" grep -q '"band":true' <<<"$out"
+check "the stitched stone is valid" grep -q '"left_open":0,"valid":true' <<<"$out"
+check "the stitch report lists the meridians" grep -q '"meridians":' "$T/stitch.rep"
+"$F" stitch "$MODELS/brilliant.truth.json" "$T/bot.json" -o "$T/x.json" 2>"$T/err"
+expect_eq "a closed mesh cannot be stitched (exit 1)" 1 "$?"
+check "the error says why" grep -q "no free-edge loop" "$T/err"
+
+start_facetd --workers 1 || { not_ok "facetd starts"; finish; exit 1; }
+submit brilliant.holes.json '["fill_holes", "inspect"]'
+expect_eq "a fill_holes job is accepted" 202 "$CODE"
+wait_job "$ID"
+expect_eq "the fill_holes job succeeds" succeeded "$STATE_OF"
+check "its summary says valid, 121 facets" grep -q '"facets_after":121' "$BODY"
+check "no hole is left open" grep -q '"holes_left_open":0' "$BODY"
+
+mk_meshes() { # $1 pipeline member (may be empty) $2.. mesh files
+    local f; f=$(mktemp "$T/body.XXXXXX"); local pl=$1; shift
+    { printf '{%s"meshes":[' "${pl:+$pl,}"; local sep=""
+      for m in "$@"; do printf '%s' "$sep"; cat "$m"; sep=","; done; printf ']}'; } >"$f"
+    echo "$f"
+}
+post_json /v1/jobs "$(mk_meshes "" "$T/top.json" "$T/bot.json")"
+expect_eq "a job with two meshes is accepted" 202 "$CODE"
+ID=$(jstr id)
+wait_job "$ID"
+expect_eq "the stitch job succeeds" succeeded "$STATE_OF"
+check "the stitched model is valid" grep -q '"valid":true' "$BODY"
+req GET "/v1/jobs/$ID/stats"
+check "its stats carry the stitch report" grep -q '"op":"stitch"' "$BODY"
+post_json /v1/jobs "$(mk_meshes "" "$T/top.json")"
+expect_eq "one mesh is refused" 422 "$CODE"
+post_json /v1/jobs "$(mk_meshes '"pipeline":["inspect"]' "$T/top.json" "$T/bot.json")"
+expect_eq "meshes without a stitch first are refused" 422 "$CODE"
+check "the refusal says why" grep -q "must start with stitch" "$BODY"
+finish

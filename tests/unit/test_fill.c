@@ -1,0 +1,284 @@
+/* test_fill.c — checked hole filling on any mesh (lib/fill.h): missing
+ * planar facets come back as one facet each (the brilliant's volume
+ * exactly), holes touching at a vertex are separate loops, a large hole
+ * of a curved mesh is filled validly at the density around it, and a
+ * hole whose every patch would intersect the mesh stays open with its
+ * reason and nothing added. */
+#include "testutil.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fill.h"
+#include "gen_sphere.h"
+#include "model_io.h"
+#include "stats.h"
+#include "topo.h"
+#include "vec.h"
+
+static geo_poly *load(const char *name)
+{
+    geo_err err;
+    geo_poly *p = proto_model_read_file(tu_model_path(name), PROTO_FMT_UNKNOWN,
+                                        NULL, &err);
+    assert_non_null(p);
+    return p;
+}
+
+static bool is_valid(const geo_poly *p)
+{
+    geo_stats st;
+    assert_int_equal(geo_inspect(p, NULL, NULL, &st, NULL), 0);
+    bool v = st.valid;
+    geo_stats_clear(&st);
+    return v;
+}
+
+static void test_missing_planar_facets_come_back_as_one_facet_each(void **s)
+{
+    (void)s;
+    geo_poly *p = load("brilliant.holes.json");
+    geo_poly *truth = load("brilliant.truth.json");
+    uint32_t nv = p->nverts, nf = p->nfacets;
+    geo_mesh_fill_report rep;
+    assert_int_equal(geo_fill_mesh(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(rep.nloops, 2);
+    assert_int_equal(rep.nplanar, 2);
+    assert_int_equal(rep.nopen, 0);
+    assert_int_equal(p->nfacets, 121);
+    assert_int_equal(p->nfacets, nf + 2);
+    assert_int_equal(p->nverts, nv);
+    double v = geo_poly_volume(p), vt = geo_poly_volume(truth);
+    assert_true(fabs(v - vt) <= 1e-9 * vt);
+    assert_true(is_valid(p));
+    for (uint32_t h = 0; h < 2; h++) {
+        assert_int_equal(rep.holes[h].status, GEO_HOLE_FILLED_PLANAR);
+        assert_int_equal(rep.holes[h].facets_added, 1);
+        assert_true(rep.holes[h].max_dihedral_deg > 0);
+    }
+    geo_mesh_fill_report_clear(&rep);
+    geo_poly_free(truth);
+    geo_poly_free(p);
+}
+
+/* Two square holes in the top of a block touching at one corner vertex:
+ * the top is a 3×3 grid of unit cells at z = 0 with cells (0,0) and
+ * (1,1) missing, the block closed by four walls and a bottom at z = −1. */
+static geo_poly *block_with_touching_holes(void)
+{
+    geo_poly *p = geo_poly_new();
+    for (int j = 0; j <= 3; j++)
+        for (int i = 0; i <= 3; i++) {
+            double v[3] = {i, j, 0};
+            geo_poly_add_vertex(p, v);
+        }
+    static const double bottom[4][3] = {
+        {0, 0, -1}, {3, 0, -1}, {3, 3, -1}, {0, 3, -1}};
+    for (int k = 0; k < 4; k++)
+        geo_poly_add_vertex(p, bottom[k]);
+    for (int j = 0; j < 3; j++)
+        for (int i = 0; i < 3; i++) {
+            if ((i == 0 && j == 0) || (i == 1 && j == 1))
+                continue;
+            uint32_t a = (uint32_t)(j * 4 + i);
+            uint32_t q[4] = {a, a + 1, a + 5, a + 4};
+            geo_poly_add_facet(p, q, 4);
+        }
+    /* walls: the top border counter-clockwise seen from above, corner to
+     * corner, closed through the two bottom corners below its ends */
+    static const uint32_t side[4][4] = {
+        {0, 1, 2, 3}, {3, 7, 11, 15}, {15, 14, 13, 12}, {12, 8, 4, 0}};
+    for (int k = 0; k < 4; k++) {
+        uint32_t w[6] = {16 + (uint32_t)k, 16 + (uint32_t)(k + 1) % 4,
+                         side[k][3], side[k][2], side[k][1], side[k][0]};
+        geo_poly_add_facet(p, w, 6);
+    }
+    uint32_t under[4] = {16, 19, 18, 17};
+    geo_poly_add_facet(p, under, 4);
+    geo_poly_compute_planes(p, GEO_PLANE_UNWEIGHTED);
+    return p;
+}
+
+static void test_holes_touching_at_a_vertex_are_two_loops(void **s)
+{
+    (void)s;
+    geo_poly *p = block_with_touching_holes();
+    uint32_t nf = p->nfacets;
+    geo_topo *t = geo_topo_build(p, NULL);
+    uint32_t *ls, *lc, nl;
+    assert_int_equal(geo_topo_boundary_loops(p, t, &ls, &lc, &nl), 0);
+    assert_int_equal(nl, 2);
+    for (uint32_t l = 0; l < nl; l++) {
+        assert_int_equal(ls[l + 1] - ls[l], 4);
+        /* each loop is closed: every edge ends where the next begins */
+        for (uint32_t k = ls[l]; k < ls[l + 1]; k++) {
+            uint32_t nx = k + 1 < ls[l + 1] ? k + 1 : ls[l];
+            assert_int_equal(p->fidx[geo_topo_next(p, t, lc[k])],
+                             p->fidx[lc[nx]]);
+        }
+    }
+    free(ls), free(lc);
+    geo_topo_free(t);
+    geo_mesh_fill_report rep;
+    assert_int_equal(geo_fill_mesh(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(rep.nloops, 2);
+    assert_int_equal(rep.nplanar, 2);
+    assert_int_equal(p->nfacets, nf + 2);
+    /* each hole got its own square: the pinch is one fan again */
+    for (uint32_t h = 0; h < 2; h++)
+        assert_int_equal(rep.holes[h].nverts, 4);
+    assert_true(is_valid(p));
+    geo_mesh_fill_report_clear(&rep);
+    geo_poly_free(p);
+}
+
+/* Removes the facets whose centre has z > zcut. */
+static void cut_cap(geo_poly *p, double zcut)
+{
+    bool *keep = malloc(p->nfacets * sizeof *keep);
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        double c[3];
+        geo_poly_facet_center(p, f, c);
+        keep[f] = c[2] <= zcut;
+    }
+    assert_int_equal(geo_poly_compact(p, keep, NULL, NULL), 0);
+    free(keep);
+}
+
+static void test_large_curved_hole_filled_validly_at_mesh_density(void **s)
+{
+    (void)s;
+    geo_poly *p = gs_sphere(88, 1.0);
+    cut_cap(p, 0.5);
+    uint32_t nv0 = p->nverts;
+    geo_mesh_fill_report rep;
+    assert_int_equal(geo_fill_mesh(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(rep.nloops, 1);
+    assert_int_equal(rep.nfilled, 1);
+    const geo_mesh_hole *h = &rep.holes[0];
+    assert_true(h->nverts >= 450 && h->nverts <= 550);
+    assert_int_equal(h->status, GEO_HOLE_FILLED);
+    assert_int_equal(p->nverts, nv0 + h->verts_added);
+    assert_true(h->verts_added > 1000);
+    assert_true(h->edge_ratio > 0.5 && h->edge_ratio < 2.0);
+    assert_true(is_valid(p));
+    /* faired, not flat: the patch rises towards the sphere's pole */
+    double top = 0;
+    for (uint32_t v = nv0; v < p->nverts; v++)
+        top = p->verts[v][2] > top ? p->verts[v][2] : top;
+    assert_true(top > 0.8);
+    geo_mesh_fill_report_clear(&rep);
+    geo_poly_free(p);
+}
+
+static void test_unfillable_hole_stays_open_with_reason(void **s)
+{
+    (void)s;
+    const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    geo_poly *p = tu_box(lo, hi);
+    bool keep[6] = {true, false, true, true, true, true}; /* no top */
+    assert_int_equal(geo_poly_compact(p, keep, NULL, NULL), 0);
+    /* a closed block sticking through the opening */
+    const double blo[3] = {0.4, 0.4, 0.8}, bhi[3] = {0.6, 0.6, 1.2};
+    geo_poly *b = tu_box(blo, bhi);
+    uint32_t off = p->nverts;
+    for (uint32_t v = 0; v < b->nverts; v++)
+        geo_poly_add_vertex(p, b->verts[v]);
+    for (uint32_t f = 0; f < b->nfacets; f++) {
+        uint32_t q[4];
+        for (int k = 0; k < 4; k++)
+            q[k] = geo_poly_facet(b, f)[k] + off;
+        int64_t nf = geo_poly_add_facet(p, q, 4);
+        memcpy(p->planes[nf], b->planes[f], sizeof p->planes[0]);
+    }
+    geo_poly_free(b);
+    uint32_t nv = p->nverts, nf = p->nfacets;
+    geo_mesh_fill_report rep;
+    assert_int_equal(geo_fill_mesh(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(rep.nloops, 1);
+    assert_int_equal(rep.nfilled, 0);
+    assert_int_equal(rep.nopen, 1);
+    assert_int_equal(rep.holes[0].status, GEO_HOLE_INTERSECTS);
+    assert_int_equal(rep.holes[0].facets_added, 0);
+    assert_true(rep.nrejected >= 1);
+    assert_int_equal(p->nverts, nv);
+    assert_int_equal(p->nfacets, nf);
+    geo_mesh_fill_report_clear(&rep);
+    geo_poly_free(p);
+}
+
+/* An open cone: apex below, a ring of n points on the unit circle around
+ * it, waving up and down (a saddle-shaped loop: convex seen from above). */
+static geo_poly *open_cone(uint32_t n, double phase)
+{
+    geo_poly *p = geo_poly_new();
+    double apex[3] = {0, 0, -1};
+    geo_poly_add_vertex(p, apex);
+    for (uint32_t i = 0; i < n; i++) {
+        double a = 2 * M_PI * i / n, r = 1;
+        double v[3] = {r * cos(a), r * sin(a), 0.25 * cos(2 * a + phase)};
+        geo_poly_add_vertex(p, v);
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t t[3] = {0, 1 + (i + 1) % n, 1 + i};
+        geo_poly_add_facet(p, t, 3);
+    }
+    geo_poly_compute_planes(p, GEO_PLANE_UNWEIGHTED);
+    return p;
+}
+
+static void test_every_weight_fills_a_nonplanar_hole_validly(void **s)
+{
+    (void)s;
+    enum geo_fill_weight ws[3] = {GEO_FILL_AREA, GEO_FILL_EDGES,
+                                  GEO_FILL_ANGLE};
+    for (int wi = 0; wi < 3; wi++)
+        for (int refine = 0; refine < 2; refine++) {
+            geo_poly *p = open_cone(60, 0.3 * wi);
+            geo_mesh_fill_opts o;
+            geo_mesh_fill_opts_default(&o);
+            o.fill.weight = ws[wi];
+            o.fill.refine = refine;
+            geo_mesh_fill_report rep;
+            assert_int_equal(geo_fill_mesh(p, &o, NULL, &rep, NULL), 0);
+            assert_int_equal(rep.nfilled, 1);
+            assert_int_equal(rep.nplanar, 0);
+            assert_int_equal(rep.holes[0].status, GEO_HOLE_FILLED);
+            /* the weight asked for gave a valid patch by itself */
+            assert_int_equal(rep.holes[0].attempt, GEO_ATTEMPT_AS_ASKED);
+            assert_true(is_valid(p));
+            geo_mesh_fill_report_clear(&rep);
+            geo_poly_free(p);
+        }
+}
+
+static void test_closed_mesh_is_left_alone(void **s)
+{
+    (void)s;
+    geo_poly *p = load("brilliant.truth.json");
+    geo_poly *q = geo_poly_copy(p);
+    geo_mesh_fill_report rep;
+    assert_int_equal(geo_fill_mesh(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(rep.nloops, 0);
+    assert_int_equal(p->nfacets, q->nfacets);
+    assert_memory_equal(p->fidx, q->fidx,
+                        geo_poly_ncorners(p) * sizeof *p->fidx);
+    geo_mesh_fill_report_clear(&rep);
+    geo_poly_free(q);
+    geo_poly_free(p);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_missing_planar_facets_come_back_as_one_facet_each),
+        cmocka_unit_test(test_holes_touching_at_a_vertex_are_two_loops),
+        cmocka_unit_test(test_large_curved_hole_filled_validly_at_mesh_density),
+        cmocka_unit_test(test_unfillable_hole_stays_open_with_reason),
+        cmocka_unit_test(test_every_weight_fills_a_nonplanar_hole_validly),
+        cmocka_unit_test(test_closed_mesh_is_left_alone),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

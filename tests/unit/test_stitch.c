@@ -1,0 +1,207 @@
+/* test_stitch.c — seed 004's stitching (lib/stitch.h): two halves of a
+ * body with a band of facets removed come back as one valid closed solid
+ * close to the original, whichever way the second half is oriented,
+ * however differently the halves are sampled and wherever their loops
+ * start; meshes side by side are bridged between the vertices facing
+ * each other (algorithm 2) and the openings closed; the pipeline form
+ * takes a model of two pieces and refuses any other. */
+#include "testutil.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "gen_sphere.h"
+#include "stats.h"
+#include "stitch.h"
+#include "stone_sim.h"
+
+/* The facets of s whose centre has lo < z < hi (or, with axis 0, x). */
+static geo_poly *part(const geo_poly *s, int axis, double lo, double hi)
+{
+    geo_poly *p = geo_poly_copy(s);
+    bool *k = malloc(p->nfacets * sizeof *k);
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        double c[3];
+        geo_poly_facet_center(p, f, c);
+        k[f] = c[axis] > lo && c[axis] < hi;
+    }
+    assert_int_equal(geo_poly_compact(p, k, NULL, NULL), 0);
+    free(k);
+    return p;
+}
+
+static bool is_valid(const geo_poly *p)
+{
+    geo_stats st;
+    assert_int_equal(geo_inspect(p, NULL, NULL, &st, NULL), 0);
+    bool v = st.valid;
+    geo_stats_clear(&st);
+    return v;
+}
+
+static void test_halves_of_a_sphere_become_one_valid_solid(void **s)
+{
+    (void)s;
+    geo_poly *sp = gs_sphere(24, 1.0);
+    geo_poly *top = part(sp, 2, 0.2, 9), *bot = part(sp, 2, -9, -0.2);
+    geo_poly *out = geo_poly_new();
+    geo_stitch_report rep;
+    assert_int_equal(geo_stitch(top, bot, NULL, NULL, out, &rep, NULL), 0);
+    assert_true(rep.band);
+    assert_false(rep.flipped2);
+    assert_int_equal(rep.meridians, rep.nloop1 > rep.nloop2 ? rep.nloop1
+                                                            : rep.nloop2);
+    assert_true(rep.rows > 2); /* the 0.4 gap is several edges long */
+    assert_int_equal(out->nverts,
+                     top->nverts + bot->nverts + rep.band_vertices);
+    assert_true(is_valid(out));
+    double h = sim_hausdorff(out, sp, 500);
+    assert_true(h < 0.02);
+    assert_true(fabs(geo_poly_volume(out) - geo_poly_volume(sp)) <
+                0.01 * geo_poly_volume(sp));
+    geo_stitch_report_clear(&rep);
+    geo_poly_free(out), geo_poly_free(top), geo_poly_free(bot);
+    geo_poly_free(sp);
+}
+
+static void test_second_mesh_turned_over_is_oriented_back(void **s)
+{
+    (void)s;
+    geo_poly *st = sim_stone(SIM_BRILLIANT, 3);
+    geo_poly *top = part(st, 2, 0.3, 99), *bot = part(st, 2, -99, -0.3);
+    for (uint32_t f = 0; f < bot->nfacets; f++)
+        geo_poly_flip_facet(bot, f);
+    geo_poly *out = geo_poly_new();
+    geo_stitch_report rep;
+    assert_int_equal(geo_stitch(top, bot, NULL, NULL, out, &rep, NULL), 0);
+    assert_true(rep.flipped2);
+    assert_true(is_valid(out));
+    assert_true(geo_poly_volume(out) > 0.9 * geo_poly_volume(st));
+    geo_stitch_report_clear(&rep);
+    geo_poly_free(out), geo_poly_free(top), geo_poly_free(bot);
+    geo_poly_free(st);
+}
+
+static void test_loops_of_very_different_lengths_are_bridged(void **s)
+{
+    (void)s;
+    geo_poly *fine = gs_sphere(40, 1.0), *coarse = gs_sphere(6, 1.0);
+    geo_poly *top = part(fine, 2, 0.25, 9), *bot = part(coarse, 2, -9, -0.25);
+    geo_poly *out = geo_poly_new();
+    geo_stitch_report rep;
+    assert_int_equal(geo_stitch(top, bot, NULL, NULL, out, &rep, NULL), 0);
+    assert_true(rep.nloop1 > 5 * rep.nloop2);
+    assert_int_equal(rep.meridians, rep.nloop1);
+    assert_true(is_valid(out));
+    geo_stitch_report_clear(&rep);
+    geo_poly_free(out), geo_poly_free(top), geo_poly_free(bot);
+    geo_poly_free(fine), geo_poly_free(coarse);
+}
+
+/* The same mesh with its facets listed in rotated order: its free-edge
+ * loop starts elsewhere. */
+static geo_poly *rotate_facets(const geo_poly *p, uint32_t by)
+{
+    geo_poly *q = geo_poly_new();
+    for (uint32_t v = 0; v < p->nverts; v++)
+        geo_poly_add_vertex(q, p->verts[v]);
+    for (uint32_t k = 0; k < p->nfacets; k++) {
+        uint32_t f = (k + by) % p->nfacets;
+        int64_t nf = geo_poly_add_facet(q, geo_poly_facet(p, f),
+                                        geo_poly_facet_size(p, f));
+        memcpy(q->planes[nf], p->planes[f], sizeof q->planes[0]);
+    }
+    return q;
+}
+
+static void test_twist_is_chosen_whatever_the_loops_start(void **s)
+{
+    (void)s;
+    geo_poly *sp = gs_sphere(16, 1.0);
+    geo_poly *top = part(sp, 2, 0.2, 9), *bot = part(sp, 2, -9, -0.2);
+    double len[3];
+    for (int k = 0; k < 3; k++) {
+        geo_poly *b2 = rotate_facets(bot, (uint32_t)k * 37);
+        geo_poly *out = geo_poly_new();
+        geo_stitch_report rep;
+        assert_int_equal(geo_stitch(top, b2, NULL, NULL, out, &rep, NULL), 0);
+        len[k] = rep.meridian_length;
+        assert_true(is_valid(out));
+        geo_stitch_report_clear(&rep);
+        geo_poly_free(out), geo_poly_free(b2);
+    }
+    assert_true(fabs(len[1] - len[0]) < 1e-9 * len[0]);
+    assert_true(fabs(len[2] - len[0]) < 1e-9 * len[0]);
+    geo_poly_free(top), geo_poly_free(bot), geo_poly_free(sp);
+}
+
+static void test_side_by_side_meshes_bridge_facing_vertices(void **s)
+{
+    (void)s;
+    /* a cap of the sphere cut lengthwise: two open pieces side by side */
+    geo_poly *sp = gs_sphere(24, 1.0);
+    geo_poly *cap = part(sp, 2, 0.55, 9);
+    geo_poly *left = part(cap, 0, -9, -0.1), *right = part(cap, 0, 0.1, 9);
+    geo_poly *out = geo_poly_new();
+    geo_stitch_report rep;
+    assert_int_equal(geo_stitch(left, right, NULL, NULL, out, &rep, NULL), 0);
+    assert_false(rep.band);
+    assert_true(rep.chosen1 < rep.nloop1 && rep.chosen2 < rep.nloop2);
+    assert_true(rep.chosen1 >= 2 && rep.chosen2 >= 2);
+    /* the rest of the loops is one opening: the cap's rim, closed */
+    assert_int_equal(rep.fill.nloops, 1);
+    assert_int_equal(rep.fill.nfilled, 1);
+    assert_true(is_valid(out));
+    geo_stitch_report_clear(&rep);
+    geo_poly_free(out), geo_poly_free(left), geo_poly_free(right);
+    geo_poly_free(cap), geo_poly_free(sp);
+}
+
+static void test_pipeline_form_needs_exactly_two_pieces(void **s)
+{
+    (void)s;
+    geo_poly *sp = gs_sphere(12, 1.0);
+    geo_poly *top = part(sp, 2, 0.2, 9), *bot = part(sp, 2, -9, -0.2);
+    /* both halves in one model */
+    geo_poly *two = geo_poly_copy(top);
+    for (uint32_t v = 0; v < bot->nverts; v++)
+        geo_poly_add_vertex(two, bot->verts[v]);
+    for (uint32_t f = 0; f < bot->nfacets; f++) {
+        uint32_t q[8], k = geo_poly_facet_size(bot, f);
+        for (uint32_t i = 0; i < k; i++)
+            q[i] = geo_poly_facet(bot, f)[i] + top->nverts;
+        int64_t nf = geo_poly_add_facet(two, q, k);
+        memcpy(two->planes[nf], bot->planes[f], sizeof two->planes[0]);
+    }
+    geo_poly *out = geo_poly_new();
+    geo_stitch_report rep;
+    assert_int_equal(geo_stitch_pieces(two, NULL, NULL, out, &rep, NULL), 0);
+    assert_true(is_valid(out));
+    geo_stitch_report_clear(&rep);
+    geo_err err;
+    assert_int_equal(geo_stitch_pieces(top, NULL, NULL, out, &rep, &err),
+                     -EINVAL);
+    assert_non_null(strstr(err.msg, "one piece"));
+    assert_int_equal(out->nfacets, 0);
+    /* a closed mesh has no free edge to stitch */
+    assert_int_equal(geo_stitch(sp, bot, NULL, NULL, out, &rep, &err),
+                     -EINVAL);
+    assert_non_null(strstr(err.msg, "no free-edge loop"));
+    geo_poly_free(out), geo_poly_free(two);
+    geo_poly_free(top), geo_poly_free(bot), geo_poly_free(sp);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_halves_of_a_sphere_become_one_valid_solid),
+        cmocka_unit_test(test_second_mesh_turned_over_is_oriented_back),
+        cmocka_unit_test(test_loops_of_very_different_lengths_are_bridged),
+        cmocka_unit_test(test_twist_is_chosen_whatever_the_loops_start),
+        cmocka_unit_test(test_side_by_side_meshes_bridge_facing_vertices),
+        cmocka_unit_test(test_pipeline_form_needs_exactly_two_pieces),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
