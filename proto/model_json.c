@@ -1,15 +1,17 @@
 /* model_json.c — facet-model/1 (formats.md): the JSON form of a
- * polyhedron, read through jansson and written directly as text.
+ * polyhedron, read from text with the pull tokenizer (proto/json_pull.h)
+ * or from a jansson value, and written directly as text.
  *
- * Reading: the text is parsed with JSON_REJECT_DUPLICATES (jansson also
- * rejects NaN/Infinity literals and numbers that overflow a double), then
- * the value is validated strictly, every error naming its place
- * ("facets[12].vertices[3]: index 9001 out of range (8000 vertices)").
- * "format" is required and must be "facet-model/1": the contract is
- * versioned by that key, so a model without it cannot be told apart from
- * a later version. "units" is optional and must be "mm" when present.
- * Unknown keys are ignored. Counts are checked against the limits before
- * the model is allocated.
+ * Reading: duplicate keys, NaN/Infinity and numbers that overflow a double
+ * are JSON errors; the model is then validated strictly, every error
+ * naming its place ("facets[12].vertices[3]: index 9001 out of range
+ * (8000 vertices)"). "format" is required and must be "facet-model/1":
+ * the contract is versioned by that key, so a model without it cannot be
+ * told apart from a later version. "units" is optional and must be "mm"
+ * when present. Unknown keys are ignored. Counts are checked against the
+ * limits before the model is allocated (tree reader) or while it is
+ * filled (streaming reader, which stops storing past a limit). Both
+ * readers give the same first error for every document.
  *
  * Writing: one vertex and one facet per line, every double printed as the
  * shortest decimal that reads back to the same double, so a write/read
