@@ -148,6 +148,7 @@ static int run_merge(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
     geo_merge_opts_default(&o);
     o.max_angle_deg = op->u.merge.max_angle_deg;
     o.max_deviation = op->u.merge.max_deviation;
+    o.views = op->u.merge.views;
     geo_merge_report rep = {0};
     int r = op->u.merge.ngroups
                 ? geo_merge_groups(*model, op->u.merge.ngroups,
@@ -171,6 +172,7 @@ static int run_auto(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
     o.collapse.radius = op->u.correct.radius;
     o.merge.max_angle_deg = op->u.correct.max_angle_deg;
     o.merge.max_deviation = op->u.correct.max_deviation;
+    o.merge.views = op->u.correct.views;
     geo_correct_report rep;
     int r = geo_correct_auto(*model, &o, ctx, &rep, err);
     if (r < 0)
