@@ -41,7 +41,11 @@ int job_exec(void *user, const job_rec *job, const void *input,
         return fail(ret, r, &err);
     geo_poly *model = NULL;
     json_t *stats = NULL, *summary = NULL;
-    if (input_len >= 4 && memcmp(input, "FMB1", 4) == 0) {
+    /* a read-only pipeline's result is its (FMB1) input: the store keeps
+     * one copy (store_finish without a model) */
+    bool fmb1 = input_len >= 4 && memcmp(input, "FMB1", 4) == 0;
+    bool changes = !fmb1 || runner_changes_model(&pl);
+    if (fmb1) {
         model = proto_model_read_mem(input, input_len, PROTO_FMT_FMB1, NULL,
                                      &err);
         if (!model) {
@@ -65,9 +69,10 @@ int job_exec(void *user, const job_rec *job, const void *input,
     }
     proto_pipeline_free(&pl);
     if (r == 0) {
-        char *buf;
-        size_t len;
-        r = proto_model_write_mem(model, PROTO_FMT_FMB1, &buf, &len, &err);
+        char *buf = NULL;
+        size_t len = 0;
+        if (changes)
+            r = proto_model_write_mem(model, PROTO_FMT_FMB1, &buf, &len, &err);
         if (r == 0) {
             ret->model = buf;
             ret->model_len = len;

@@ -46,6 +46,10 @@ bool runner_op_available(proto_op_kind op);
  * "pipeline[1]: op 'cut' is not available in this build". */
 int runner_check(const proto_pipeline *p, geo_err *err);
 
+/* True when an operation of p may change the model; false for a pipeline
+ * of read-only operations (inspect), whose result is its input. */
+bool runner_changes_model(const proto_pipeline *p);
+
 /* 0 when p suits its input: a frep-object/1 input (frep true) needs an
  * operation that makes a model of it (triangulate) first and nowhere
  * else; a model input must have none. Else -EINVAL with err naming the

@@ -32,7 +32,7 @@ static const char *const op_keys[PROTO_OP_COUNT][8] = {
     [PROTO_OP_INSPECT] = {"op"},
     [PROTO_OP_COLLAPSE_CLUSTERS] = {"op", "radius"},
     [PROTO_OP_MERGE_FACETS] = {"op", "max_angle_deg", "max_deviation",
-                               "groups"},
+                               "views", "groups"},
     [PROTO_OP_CUT] = {"op", "plane"},
     [PROTO_OP_MOVE_VERTEX] = {"op", "vertex", "to", "by", "schedule",
                               "max_steps"},
@@ -42,7 +42,8 @@ static const char *const op_keys[PROTO_OP_COUNT][8] = {
                               "refine", "fair", "sharpen"},
     [PROTO_OP_FILL_HOLES] = {"op", "weight", "refine", "fair"},
     [PROTO_OP_STITCH] = {"op"},
-    [PROTO_OP_AUTO] = {"op", "radius", "max_angle_deg", "max_deviation"},
+    [PROTO_OP_AUTO] = {"op", "radius", "max_angle_deg", "max_deviation",
+                       "views"},
 };
 
 static const char *const sched_names[] = {"local-exp", "scaled",
@@ -314,6 +315,9 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
         if (r == 0)
             r = get_number(o, "max_deviation", pl, 0, 1e9, false,
                            &op->u.correct.max_deviation, err);
+        if (r == 0)
+            r = get_u32(o, "views", pl, 0, PROTO_MAX_VIEWS,
+                        &op->u.correct.views, err);
         return r;
     case PROTO_OP_MERGE_FACETS: {
         r = get_number(o, "max_angle_deg", pl, 0, 90, true,
@@ -323,6 +327,9 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
         if (r == 0)
             r = get_number(o, "max_deviation", pl, 0, 1e9, false,
                            &op->u.merge.max_deviation, err);
+        if (r == 0)
+            r = get_u32(o, "views", pl, 0, PROTO_MAX_VIEWS,
+                        &op->u.merge.views, err);
         const json_t *g = json_object_get(o, "groups");
         if (r == 0 && g)
             r = parse_groups(g, pl, op, err);
@@ -558,6 +565,7 @@ static json_t *op_to_json(const proto_op *op)
                                  json_real(op->u.merge.max_angle_deg));
         e |= json_object_set_new(o, "max_deviation",
                                  json_real(op->u.merge.max_deviation));
+        e |= json_object_set_new(o, "views", json_integer(op->u.merge.views));
         if (op->u.merge.ngroups) {
             json_t *gs = json_array();
             for (uint32_t g = 0; gs && g < op->u.merge.ngroups; g++) {
@@ -582,6 +590,8 @@ static json_t *op_to_json(const proto_op *op)
                                  json_real(op->u.correct.max_angle_deg));
         e |= json_object_set_new(o, "max_deviation",
                                  json_real(op->u.correct.max_deviation));
+        e |= json_object_set_new(o, "views",
+                                 json_integer(op->u.correct.views));
         break;
     case PROTO_OP_MOVE_VERTEX:
         e |= json_object_set_new(o, "vertex", json_integer(op->u.move.vertex));
@@ -644,4 +654,27 @@ json_t *proto_pipeline_to_json(const proto_pipeline *p)
             a = (json_decref(a), NULL);
     }
     return a;
+}
+
+int proto_pipeline_copy(const proto_pipeline *src, proto_pipeline *ret)
+{
+    /* the canonical JSON round-trips exactly (see proto_pipeline_to_json) */
+    json_t *j = proto_pipeline_to_json(src);
+    if (!j)
+        return -ENOMEM;
+    geo_err err;
+    int r = proto_pipeline_from_json(j, NULL, ret, &err);
+    json_decref(j);
+    return r < 0 ? -ENOMEM : 0;
+}
+
+void proto_pipeline_set_views(proto_pipeline *p, uint32_t views)
+{
+    for (size_t i = 0; i < p->nops; i++) {
+        proto_op *op = &p->ops[i];
+        if (op->kind == PROTO_OP_MERGE_FACETS && op->u.merge.views == 0)
+            op->u.merge.views = views;
+        else if (op->kind == PROTO_OP_AUTO && op->u.correct.views == 0)
+            op->u.correct.views = views;
+    }
 }

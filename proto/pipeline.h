@@ -11,9 +11,10 @@
  *   inspect
  *   collapse_clusters {radius ≥ 0 [0: 2e-4 × the model's size]}
  *   merge_facets {max_angle_deg in (0, 90) [60], max_deviation ≥ 0
- *                 [0: 5e-4 × the model's size], groups?: [[facet, facet,
- *                 ...], ...]}
- *   auto {radius, max_angle_deg, max_deviation: as above} — the whole
+ *                 [0: 5e-4 × the model's size], views ≥ 0 (the scanner's
+ *                 contours over 180°) [0: read off the model], groups?:
+ *                 [[facet, facet, ...], ...]}
+ *   auto {radius, max_angle_deg, max_deviation, views: as above} — the whole
  *                 post-scan correction of lib/correct.h in one op
  *   cut {plane: [a, b, c, d]} — keeps plane(p) ≤ 0; (a,b,c) non-zero,
  *                 normalised to unit length (d scaled with it)
@@ -77,7 +78,8 @@ typedef enum proto_fair {
     PROTO_FAIR_LENGTH,  /* w = edge length (gradient descent) */
 } proto_fair;
 
-enum { PROTO_PIPELINE_MAX_OPS = 64, PROTO_MAX_MAGNITUDES = 64 };
+enum { PROTO_PIPELINE_MAX_OPS = 64, PROTO_MAX_MAGNITUDES = 64,
+       PROTO_MAX_VIEWS = 100000 };
 
 typedef struct proto_op {
     proto_op_kind kind;
@@ -87,6 +89,7 @@ typedef struct proto_op {
         } collapse;
         struct {
             double max_angle_deg, max_deviation;
+            uint32_t views;      /* scanner views over 180°, 0: read off */
             uint32_t ngroups;    /* 0: find groups automatically */
             uint32_t *gstart;    /* ngroups + 1 offsets into gfacets */
             uint32_t *gfacets;   /* facet indices of every group */
@@ -96,6 +99,7 @@ typedef struct proto_op {
         } cut;
         struct {
             double radius, max_angle_deg, max_deviation;
+            uint32_t views;      /* scanner views over 180°, 0: read off */
         } correct;
         struct {
             uint32_t vertex;
@@ -141,6 +145,14 @@ int proto_pipeline_from_json(const json_t *v, const char *where,
 /* The canonical JSON (an array of op objects with every parameter), or
  * NULL on out-of-memory. Parsing it gives the same pipeline. */
 json_t *proto_pipeline_to_json(const proto_pipeline *p);
+
+/* A deep copy of src into *ret (free with proto_pipeline_free). 0 or
+ * -ENOMEM (*ret untouched). */
+int proto_pipeline_copy(const proto_pipeline *src, proto_pipeline *ret);
+
+/* Sets views (the scanner's contours over 180°) on every merge_facets and
+ * auto op of p that would otherwise read them off the model. */
+void proto_pipeline_set_views(proto_pipeline *p, uint32_t views);
 
 /* Frees the arrays of p and zeroes it; accepts NULL. */
 void proto_pipeline_free(proto_pipeline *p);

@@ -158,6 +158,31 @@ static void test_canonical_json_round_trips(void **state)
     proto_pipeline_free(&b);
 }
 
+/* A scanner job's pipeline carries the scan's contour count to every op
+ * that would otherwise read the view step off the model; an explicit
+ * "views" stays as given, and the copy leaves the original untouched. */
+static void test_views_are_set_on_a_copy_for_scanner_jobs(void **state)
+{
+    (void)state;
+    proto_pipeline p, q;
+    geo_err err = {{0}};
+    assert_int_equal(parse("[\"inspect\", \"auto\", {\"op\":\"merge_facets\","
+                           "\"views\":250}, \"merge_facets\"]", &p, &err), 0);
+    assert_int_equal(p.ops[1].u.correct.views, 0);
+    assert_int_equal(p.ops[2].u.merge.views, 250);
+    assert_int_equal(proto_pipeline_copy(&p, &q), 0);
+    proto_pipeline_set_views(&q, 400);
+    assert_int_equal(q.ops[1].u.correct.views, 400);
+    assert_int_equal(q.ops[2].u.merge.views, 250);
+    assert_int_equal(q.ops[3].u.merge.views, 400);
+    assert_int_equal(p.ops[1].u.correct.views, 0);
+    assert_int_equal(p.ops[3].u.merge.views, 0);
+    proto_pipeline_free(&q);
+    proto_pipeline_free(&p);
+    expect_error("[{\"op\":\"auto\",\"views\":-1}]",
+                 "pipeline[0].views: -1 out of range [0, 100000]");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -166,6 +191,7 @@ int main(void)
         cmocka_unit_test(test_errors_name_the_place),
         cmocka_unit_test(test_cut_plane_is_normalised),
         cmocka_unit_test(test_canonical_json_round_trips),
+        cmocka_unit_test(test_views_are_set_on_a_copy_for_scanner_jobs),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
