@@ -1648,8 +1648,9 @@ out:
 /* 1 when a facet flagged in touched has no area or meets another flagged
  * facet at an edge at a dihedral angle above 120° (the surface folds back
  * on itself there), else 0; -ENOMEM. Bends are fine: a patch faired into
- * a dome turns its rim triangles far from where the flat patch had them. */
-static int folds(const geo_poly *p, const uint8_t *touched)
+ * a dome turns its rim triangles far from where the flat patch had them.
+ * bad, when not NULL, gets 1 for every such facet (both of a fold). */
+static int folds(const geo_poly *p, const uint8_t *touched, uint8_t *bad)
 {
     geo_edgemap he;
     size_t n = 0;
@@ -1658,7 +1659,8 @@ static int folds(const geo_poly *p, const uint8_t *touched)
     if (geo_edgemap_init(&he, n) < 0)
         return -ENOMEM;
     int rc = 0;
-    for (uint32_t f = 0; f < p->nfacets && rc == 0; f++) {
+    for (uint32_t f = 0; f < p->nfacets && (rc == 0 || (rc == 1 && bad));
+         f++) {
         if (!touched[f])
             continue;
         const uint32_t *fv = geo_poly_facet(p, f);
@@ -1667,22 +1669,98 @@ static int folds(const geo_poly *p, const uint8_t *touched)
         geo_poly_facet_area_vector(p, f, nf);
         if (geo_vnormalize(nf) == 0) {
             rc = 1;
-            break;
+            if (bad)
+                bad[f] = 1;
         }
-        for (uint32_t i = 0; i < k && rc == 0; i++) {
+        for (uint32_t i = 0; i < k && rc >= 0; i++) {
             uint32_t a = fv[i], b = fv[(i + 1) % k];
             uint32_t g = geo_edgemap_get(&he, geo_edge_key(b, a));
             if (g != UINT32_MAX) {
                 double ng[3];
                 geo_poly_facet_area_vector(p, g, ng);
                 geo_vnormalize(ng);
-                rc = geo_vdot(nf, ng) < -0.5;
+                if (geo_vdot(nf, ng) < -0.5) {
+                    rc = 1;
+                    if (bad)
+                        bad[f] = bad[g] = 1;
+                }
             } else if (geo_edgemap_put(&he, geo_edge_key(a, b), f) < 0) {
                 rc = -ENOMEM;
             }
         }
     }
     geo_edgemap_destroy(&he);
+    return rc;
+}
+
+/* Solves U² = 0 for w = 1 (fair_direct, or fair_cg for a factor too
+ * large) without folds. With uniform weights the solution depends on
+ * the connectivity alone, and a free vertex in front of a tooth of a
+ * jagged rim — three of its four neighbours on the loop — is drawn over
+ * the tooth. The free corners of folded facets are then held where the
+ * unfaired patch had them, lifted along its normal as far as the
+ * solution lifted them, and the others solved again (at most four
+ * times). flat: the free vertices' unfaired positions; held: per free
+ * vertex, fixed (pinned ones on entry; changed). 1 solved without
+ * folds, 0 still folded, or a negative errno. */
+static int fair_solve(geo_poly *p, const adjacency *A, uint32_t first_free,
+                      uint8_t *held, const double (*flat)[3],
+                      const uint8_t *touches_free, geo_fill_stats *st,
+                      const geo_ctx *ctx)
+{
+    uint32_t nfree = p->nverts - first_free;
+    uint8_t *bad = malloc((size_t)p->nfacets + 1);
+    double(*vn)[3] = calloc((size_t)nfree + 1, sizeof *vn);
+    int rc = -ENOMEM;
+    if (!bad || !vn)
+        goto out;
+    /* the unfaired patch's vertex normals (planes hold the facets'
+     * Newell vectors from before) */
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        if (!touches_free[f])
+            continue;
+        const uint32_t *fv = geo_poly_facet(p, f);
+        for (uint32_t i = 0; i < geo_poly_facet_size(p, f); i++)
+            if (fv[i] >= first_free)
+                geo_vadd(vn[fv[i] - first_free], p->planes[f],
+                         vn[fv[i] - first_free]);
+    }
+    for (int round = 0; round < 4; round++) {
+        rc = fair_direct(p, A, first_free, held, st, ctx);
+        if (rc == -ERANGE || rc == -EDOM)
+            rc = fair_cg(p, A, first_free, held, st, ctx);
+        if (rc < 0)
+            goto out;
+        memset(bad, 0, p->nfacets);
+        if ((rc = folds(p, touches_free, bad)) <= 0) {
+            rc = rc == 0 ? 1 : rc;
+            goto out;
+        }
+        uint32_t nheld = 0;
+        for (uint32_t f = 0; f < p->nfacets; f++) {
+            if (!bad[f])
+                continue;
+            const uint32_t *fv = geo_poly_facet(p, f);
+            for (uint32_t i = 0; i < geo_poly_facet_size(p, f); i++) {
+                uint32_t v = fv[i], k = v - first_free;
+                if (v < first_free || held[k])
+                    continue;
+                double d[3], nrm[3];
+                geo_vsub(p->verts[v], flat[k], d);
+                memcpy(nrm, vn[k], sizeof nrm);
+                if (geo_vnormalize(nrm) == 0)
+                    nrm[0] = nrm[1] = nrm[2] = 0;
+                geo_vmadd(flat[k], geo_vdot(d, nrm), nrm, p->verts[v]);
+                held[k] = 1;
+                nheld++;
+            }
+        }
+        rc = 0;
+        if (nheld == 0)
+            break; /* the folds are among fixed vertices */
+    }
+out:
+    free(bad), free(vn);
     return rc;
 }
 
@@ -1730,17 +1808,19 @@ static int fair(geo_poly *p, uint32_t first_free, const geo_fill_opts *o,
     if (o->fair == GEO_FAIR_UNIFORM && !o->project) {
         for (uint32_t k = 0; k < nfree; k++)
             memcpy(nxt[k], p->verts[first_free + k], sizeof nxt[k]);
-        rc = fair_direct(p, &A, first_free, pinned, st, ctx);
-        if (rc == -ERANGE || rc == -EDOM)
-            rc = fair_cg(p, &A, first_free, pinned, st, ctx);
-        if (rc < 0)
-            goto out;
-        int folded = folds(p, touches_free);
-        if (folded < 0) {
-            rc = folded;
+        uint8_t *held = malloc((size_t)nfree + 1);
+        if (!held) {
+            rc = -ENOMEM;
             goto out;
         }
-        solved = folded == 0;
+        memcpy(held, pinned, nfree);
+        rc = fair_solve(p, &A, first_free, held,
+                        (const double(*)[3])nxt, touches_free, st, ctx);
+        free(held);
+        if (rc < 0)
+            goto out;
+        solved = rc == 1;
+        rc = 0;
         if (!solved)
             for (uint32_t k = 0; k < nfree; k++)
                 memcpy(p->verts[first_free + k], nxt[k], sizeof nxt[k]);

@@ -83,9 +83,15 @@
  *    fairing), assembled once and solved exactly by a sparse Cholesky
  *    factorisation (lib/spchol.h), or, when the factor would exceed
  *    16·2²⁰ entries (192 MB), by conjugate gradients to a residual of
- *    1e-4 of the first (at most 5,000 iterations); a
- *    solution that folds the surface, a dihedral angle above 120° or a
- *    collapsed facet, falls back to the sweeps below; for w = |p − p_i|
+ *    1e-4 of the first (at most 5,000 iterations). With w = 1 the
+ *    solution depends on the connectivity alone, and a free vertex in
+ *    front of a tooth of a jagged rim (three of its four neighbours on
+ *    the loop) can be drawn over the tooth: when the solution folds the
+ *    surface (a dihedral angle above 120° or a collapsed facet), the
+ *    free corners of the folded facets are held at their unfaired place
+ *    lifted along the unfaired normal as far as the solution lifted
+ *    them, and the others are solved again, at most four times; if it
+ *    still folds, the sweeps below run instead; for w = |p − p_i|
  *    (GEO_FAIR_LENGTH) |U²(p)| is minimised by steepest descent with a
  *    line search by quadratic interpolation through three points. Both
  *    sweep over all free vertices (Jacobi) for fair_iterations sweeps or
@@ -209,8 +215,8 @@ typedef struct geo_fill_stats {
     uint32_t nsplits;         /* centroid splits */
     uint32_t nflips;          /* edge restorations */
     uint32_t nhard_splits;    /* hard edges split */
-    uint32_t nfair_sweeps;    /* fairing sweeps run (or CG iterations, or
-                                 1 for the direct solve) */
+    uint32_t nfair_sweeps;    /* fairing sweeps run (or CG iterations, and
+                                 1 per direct solve) */
 } geo_fill_stats;
 
 /* Fills every hole of p as described above. 0 or a negative errno (see
