@@ -1118,12 +1118,6 @@ typedef struct adjacency {
     uint32_t *nb;    /* sorted, unique neighbours */
 } adjacency;
 
-static int cmp_u32(const void *a, const void *b)
-{
-    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
-    return x < y ? -1 : x > y;
-}
-
 static int build_adjacency(const geo_poly *p, adjacency *A)
 {
     uint32_t nv = p->nverts;
@@ -1159,7 +1153,13 @@ static int build_adjacency(const geo_poly *p, adjacency *A)
     uint32_t out = 0;
     for (uint32_t v = 0; v < nv; v++) {
         uint32_t s0 = A->start[v], s1 = A->start[v + 1];
-        qsort(A->nb + s0, s1 - s0, sizeof *A->nb, cmp_u32);
+        /* a vertex has a handful of neighbours: insertion sort */
+        for (uint32_t i = s0 + 1; i < s1; i++) {
+            uint32_t x = A->nb[i], j = i;
+            for (; j > s0 && A->nb[j - 1] > x; j--)
+                A->nb[j] = A->nb[j - 1];
+            A->nb[j] = x;
+        }
         A->start[v] = out;
         for (uint32_t i = s0; i < s1; i++)
             if (i == s0 || A->nb[i] != A->nb[i - 1])
