@@ -331,11 +331,13 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
         double *pv = op->u.cut.plane;
         if ((r = get_vec(p, "plane", pl, 4, pv, err)) < 0)
             return r;
+        /* not normalised here: rounding would move the plane off the
+         * vertices exactly on it, and a second parse of the canonical
+         * JSON would round again */
         double n = sqrt(pv[0] * pv[0] + pv[1] * pv[1] + pv[2] * pv[2]);
         if (!(n > 0) || !isfinite(n))
-            return FAIL(pl, "plane", "normal (a, b, c) must be non-zero");
-        for (int i = 0; i < 4; i++)
-            pv[i] /= n;
+            return FAIL(pl, "plane", "normal (a, b, c) must be non-zero "
+                        "with a finite length");
         return 0;
     }
     case PROTO_OP_MOVE_VERTEX: {

@@ -15,8 +15,10 @@
  *                 ...], ...]}
  *   auto {radius, max_angle_deg, max_deviation: as above} — the whole
  *                 post-scan correction of lib/correct.h in one op
- *   cut {plane: [a, b, c, d]} — keeps plane(p) ≤ 0; (a,b,c) non-zero,
- *                 normalised to unit length (d scaled with it)
+ *   cut {plane: [a, b, c, d]} — keeps plane(p) ≤ 0; (a,b,c) non-zero
+ *                 with a finite length, kept as given (the cut decides
+ *                 sides on these coefficients, as `facet cut` does, and
+ *                 the canonical JSON parses back to the same bits)
  *   move_vertex {vertex, to: [x,y,z] | by: [dx,dy,dz], schedule
  *                 "local-exp"|"scaled"|"global-exp" ["local-exp"],
  *                 max_steps ≥ 1 [10000]}
@@ -82,7 +84,7 @@ typedef struct proto_op {
             uint32_t *gfacets;   /* facet indices of every group */
         } merge;
         struct {
-            double plane[4];     /* unit normal, offset */
+            double plane[4];     /* a, b, c, d as given */
         } cut;
         struct {
             double radius, max_angle_deg, max_deviation;
