@@ -170,7 +170,13 @@ int scanners_new(const cfg *c, scanners **ret, geo_err *err)
     pthread_rwlock_init(&sc->plk, NULL);
     pthread_mutex_init(&sc->pool_mu, NULL);
     pthread_mutex_init(&sc->mu, NULL);
-    pthread_cond_init(&sc->cv, NULL);
+    /* the sender's deadlines are CLOCK_MONOTONIC: on the default
+     * (realtime) clock every wait returned at once and it spun a core */
+    pthread_condattr_t ca;
+    pthread_condattr_init(&ca);
+    pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
+    pthread_cond_init(&sc->cv, &ca);
+    pthread_condattr_destroy(&ca);
     *ret = sc;
     if (!c->scanners) {
         snprintf(sc->why, sizeof sc->why, "[Scanners] Enabled=no");
