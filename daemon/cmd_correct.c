@@ -30,11 +30,16 @@ static const char USAGE[] =
     "                       and after)\n"
     "  --max-angle DEG      merge: default 60\n"
     "  --max-deviation D    merge: mm; default 5e-4 of the model's size\n"
+    "  --views K            merge: the scanner's views over 180°; default read\n"
+    "                       off the scan's facet normals\n"
+    "  --noise D            merge: the scan's surface noise, mm; default\n"
+    "                       measured on the scan\n"
     "  --radius R           clusters: mm; default 2e-4 of the model's size\n"
     "  --no-collapse        do not collapse clusters\n"
     "\n"
     "Prints one line of JSON: vertices and facets before and after,\n"
-    "groups_merged, groups_failed, clusters_collapsed, hausdorff (mm),\n"
+    "groups_merged, groups_failed, clusters_collapsed, views and noise (mm)\n"
+    "the automatic groups used, hausdorff (mm),\n"
     "volume_before, volume_after, valid.\n"
     "exit status: 0 success, 1 bad input (e.g. a model that is not closed),\n"
     "2 usage error\n";
@@ -66,6 +71,7 @@ int cmd_correct(int argc, char **argv)
         } else if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0 ||
                    strcmp(a, "--report") == 0 || strcmp(a, "--max-angle") == 0 ||
                    strcmp(a, "--max-deviation") == 0 ||
+                   strcmp(a, "--views") == 0 || strcmp(a, "--noise") == 0 ||
                    strcmp(a, "--radius") == 0) {
             if (i + 1 == argc)
                 return cli_usage_error("correct", "%s needs a value", a);
@@ -81,6 +87,16 @@ int cmd_correct(int argc, char **argv)
                     return cli_usage_error("correct", "--max-deviation: "
                                            "expected a positive length in mm, "
                                            "got '%s'", v);
+            } else if (strcmp(a, "--views") == 0) {
+                double k;
+                if (parse_number(v, 1e5, &k) < 0 || k != floor(k) || k < 2)
+                    return cli_usage_error("correct", "--views: expected a "
+                                           "whole number of views, got '%s'", v);
+                o.merge.views = (uint32_t)k;
+            } else if (strcmp(a, "--noise") == 0) {
+                if (parse_number(v, 1e9, &o.merge.noise) < 0)
+                    return cli_usage_error("correct", "--noise: expected a "
+                                           "positive length in mm, got '%s'", v);
             } else if (strcmp(a, "--radius") == 0) {
                 if (parse_number(v, 1e9, &o.collapse.radius) < 0)
                     return cli_usage_error("correct", "--radius: expected a "
@@ -126,11 +142,13 @@ int cmd_correct(int argc, char **argv)
     }
     printf("{\"vertices_before\":%u,\"facets_before\":%u,\"vertices_after\":%u,"
            "\"facets_after\":%u,\"groups_merged\":%u,\"groups_failed\":%u,"
-           "\"clusters_collapsed\":%u,\"hausdorff\":%.6g,\"volume_before\":%.17g,"
+           "\"clusters_collapsed\":%u,\"views\":%u,\"noise\":%.6g,"
+           "\"hausdorff\":%.6g,\"volume_before\":%.17g,"
            "\"volume_after\":%.17g,\"valid\":%s}\n",
            rep.vertices_before, rep.facets_before, rep.vertices_after,
            rep.facets_after, rep.merge.merged, rep.merge.failed,
-           rep.clusters_collapsed, rep.hausdorff, rep.volume_before,
+           rep.clusters_collapsed, rep.views, rep.noise, rep.hausdorff,
+           rep.volume_before,
            rep.volume_after, rep.after.valid ? "true" : "false");
     geo_correct_report_clear(&rep);
     geo_poly_free(p);

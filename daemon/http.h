@@ -31,6 +31,7 @@ typedef struct http_waiter {
     char id[JOB_ID_LEN + 1];
     int64_t deadline;        /* monotonic ms */
     bool progress;           /* progress-only changes wake it too */
+    uint64_t seq;            /* http_hub_seq(id) before the store was read */
     bool in_hub;             /* under the hub lock */
     struct http_waiter *next, *prev;
 } http_waiter;
@@ -40,10 +41,16 @@ typedef struct http_hub http_hub;
 http_hub *http_hub_new(void);
 /* Resumes everyone and stops the timer; accepts NULL; returns NULL. */
 http_hub *http_hub_free(http_hub *h);
+/* The change count of id's bucket. A caller takes it into w->seq before
+ * reading the job from the store, so that a change notified between that
+ * read and the suspend is not lost (http_hub_suspend then says -ESTALE). */
+uint64_t http_hub_seq(http_hub *h, const char *id);
 /* Suspends w->conn until w->id changes, w->deadline passes or the hub
  * closes. Must be called from the connection's access handler or content
- * reader. 0 when suspended; -EAGAIN when limit waiters are already
- * suspended; -ESHUTDOWN when the hub is closed (answer now). */
+ * reader. 0 when suspended; -ESTALE when a job of w->id's bucket changed
+ * since w->seq was taken (read the store again); -EAGAIN when limit
+ * waiters are already suspended; -ESHUTDOWN when the hub is closed
+ * (answer now). */
 int http_hub_suspend(http_hub *h, http_waiter *w, unsigned limit);
 void http_hub_notify(http_hub *h, const char *id, bool progress_only);
 /* Resumes everyone; later suspends fail with -ESHUTDOWN. */

@@ -89,7 +89,10 @@ static ssize_t sse_read(void *cls, uint64_t pos, char *buf, size_t max)
         return MHD_CONTENT_READER_END_OF_STREAM;
     job_rec j;
     geo_err err;
-    int rc = store_get(s->env->s, s->id, &j, &err);
+    int rc;
+again:
+    s->w.seq = http_hub_seq(s->srv->hub, s->id);
+    rc = store_get(s->env->s, s->id, &j, &err);
     if (rc == -ENOENT) {
         s->done = true;
         if (set_pending(s, strdup("event: gone\ndata: {}\n\n")) < 0)
@@ -125,6 +128,8 @@ static ssize_t sse_read(void *cls, uint64_t pos, char *buf, size_t max)
                           atomic_load(&s->env->max_waiters));
     if (rc == 0)
         return 0;
+    if (rc == -ESTALE)
+        goto again;
     /* Shutting down, or out of waiter slots: end the stream; the client
      * reconnects with Last-Event-ID and loses nothing. */
     return MHD_CONTENT_READER_END_OF_STREAM;

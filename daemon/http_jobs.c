@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "frep_json.h"
 #include "job_submit.h"
 #include "log.h"
 #include "model_io.h"
@@ -42,8 +43,11 @@ static enum MHD_Result reply_job(http_req *r, unsigned status, job_rec *j,
     return http_reply_json(r, status, o, headers);
 }
 
-static enum MHD_Result malformed(http_req *r, const json_error_t *je)
+static enum MHD_Result malformed(http_req *r, const proto_jerror *je)
 {
+    if (je->code == -ENOMEM)
+        return http_problem(r, 500, "out-of-memory", "Internal Server Error",
+                            NULL, NULL, "out of memory reading the body");
     json_t *errors = json_pack("[{s:s, s:s, s:i, s:i}]", "path", "",
                                "message", je->text, "line",
                                (json_int_t)je->line, "column",
@@ -51,6 +55,82 @@ static enum MHD_Result malformed(http_req *r, const json_error_t *je)
     return http_problem(r, 400, "malformed-json", "Bad Request", errors, NULL,
                         "line %d, column %d: %s", je->line, je->column,
                         je->text);
+}
+
+/* The body of POST /v1/jobs, read in one pass of the pull tokenizer: the
+ * model goes straight into a geo_poly (no tree of its 10,000s of
+ * numbers), every other member becomes a jansson value parsed from its
+ * own text (already checked), in document order. */
+typedef struct job_body {
+    bool is_object;
+    json_t *members;         /* every member but "model"; "model": true */
+    geo_poly *model;         /* NULL: absent, or invalid (model_err) */
+    geo_err model_err;
+    proto_read_report rep;
+} job_body;
+
+/* 0, or -1 with j->error set (bad JSON, or out of memory). */
+static int read_job_body(http_req *r, proto_jpull *j, job_body *b)
+{
+    const char *text = r->body ? r->body : "";
+    proto_jpull_init(j, text, r->len);
+    memset(b, 0, sizeof *b);
+    proto_jtok t = proto_jpull_next(j);
+    if (t == PROTO_JT_ERROR)
+        return -1;
+    if (t != PROTO_JT_OBJECT)
+        return proto_jpull_skip(j) == PROTO_JT_ERROR ||
+                       proto_jpull_next(j) == PROTO_JT_ERROR ? -1 : 0;
+    b->is_object = true;
+    b->members = json_object();
+    if (!b->members)
+        goto oom;
+    while ((t = proto_jpull_next(j)) == PROTO_JT_KEY) {
+        char key[64];
+        bool is_model = strcmp(j->str, "model") == 0;
+        json_t *v;
+        char *long_key = NULL;
+        if (j->str_len < sizeof key)
+            memcpy(key, j->str, j->str_len + 1);
+        else if (!(long_key = strdup(j->str)))
+            goto oom;
+        if (is_model) {
+            bool syntax;
+            b->model = proto_model_from_jpull(j, proto_jpull_next(j), NULL,
+                                              "model", &b->rep, &syntax,
+                                              &b->model_err);
+            if (syntax)
+                return -1;
+            v = json_true();
+        } else {
+            proto_jpull_next(j);
+            size_t start = j->tok_start;
+            if (proto_jpull_skip(j) == PROTO_JT_ERROR) {
+                free(long_key);
+                return -1;
+            }
+            v = json_loadb(text + start, j->tok_end - start,
+                           JSON_DECODE_ANY | JSON_REJECT_DUPLICATES, NULL);
+        }
+        int e = !v || json_object_set_new(b->members,
+                                          long_key ? long_key : key, v) < 0;
+        free(long_key);
+        if (e)
+            goto oom;
+    }
+    if (t == PROTO_JT_ERROR || proto_jpull_next(j) == PROTO_JT_ERROR)
+        return -1;
+    return 0;
+oom:
+    j->error.code = -ENOMEM;
+    return -1;
+}
+
+static void job_body_clear(job_body *b, proto_jpull *j)
+{
+    json_decref(b->members);
+    geo_poly_free(b->model);
+    proto_jpull_clear(j);
 }
 
 static void add_error(json_t *errors, const char *path, const char *fmt, ...)
@@ -137,16 +217,19 @@ enum MHD_Result http_post_job(http_req *r)
         return http_problem(r, 400, "bad-idempotency-key", "Bad Request",
                             NULL, NULL, "Idempotency-Key must be 1 to 255 "
                             "visible ASCII characters");
-    json_error_t je;
-    json_t *root = json_loadb(r->body ? r->body : "", r->len,
-                              JSON_REJECT_DUPLICATES, &je);
-    if (!root)
-        return malformed(r, &je);
-    if (!json_is_object(root)) {
-        json_decref(root);
+    proto_jpull j;
+    job_body jb;
+    if (read_job_body(r, &j, &jb) < 0) {
+        enum MHD_Result res = malformed(r, &j.error);
+        job_body_clear(&jb, &j);
+        return res;
+    }
+    if (!jb.is_object) {
+        job_body_clear(&jb, &j);
         return http_problem(r, 422, "invalid-job", "Unprocessable Content",
                             NULL, NULL, "the body must be a JSON object");
     }
+    json_t *root = jb.members;
     json_t *errors = json_array();
     static const char *const known[] = {"model", "frep", "meshes", "pipeline",
                                         "priority", "label"};
@@ -158,33 +241,35 @@ enum MHD_Result http_post_job(http_req *r)
             ok |= strcmp(key, known[i]) == 0;
         if (!ok)
             add_error(errors, key, "unknown member (expected model, "
-                      "pipeline, priority, label)");
+                      "frep, pipeline, priority, label)");
     }
     const json_t *model = json_object_get(root, "model");
-    int inputs = !!model + !!json_object_get(root, "frep") +
-                 !!json_object_get(root, "meshes");
+    const json_t *frep = json_object_get(root, "frep");
+    int inputs = !!model + !!frep + !!json_object_get(root, "meshes");
     if (inputs == 0)
-        add_error(errors, "model", "required: the facet-model/1 to process");
+        add_error(errors, "model", "required: the facet-model/1 to process "
+                  "(or a frep-object/1 as 'frep')");
     else if (inputs > 1)
         add_error(errors, "", "give exactly one of model, frep, meshes");
-    if (json_object_get(root, "frep"))
-        add_error(errors, "frep", "input 'frep' is not available in this "
-                  "build");
     const json_t *meshes = json_object_get(root, "meshes");
     if (meshes && json_array_size(meshes) != 2)
         add_error(errors, "meshes", "expected an array of two facet-model/1 "
                   "objects (the open meshes to stitch)");
     proto_pipeline pl = {0};
     json_t *pv = json_object_get(root, "pipeline");
-    /* two meshes are stitched first; by default then inspected */
-    json_t *pdefault = pv ? NULL
+    /* without a pipeline: the post-scan correction of a model, the
+     * triangulation (at its defaults) of a frep; two meshes are stitched
+     * first, then inspected */
+    json_t *pdefault = pv       ? NULL
+                       : frep   ? json_pack("[s]", "triangulate")
                        : meshes ? json_pack("[s, s]", "stitch", "inspect")
                                 : json_string("auto");
     geo_err err = {{0}};
     bool have_pipeline = false;
     if (proto_pipeline_from_json(pv ? pv : pdefault, "pipeline", &pl, &err) < 0)
         add_geo_error(errors, &err);
-    else if (runner_check(&pl, &err) < 0)
+    else if (runner_check(&pl, &err) < 0 ||
+             (inputs == 1 && runner_check_input(&pl, frep != NULL, &err) < 0))
         add_geo_error(errors, &err);
     else
         have_pipeline = true;
@@ -193,6 +278,13 @@ enum MHD_Result http_post_job(http_req *r)
         add_error(errors, "pipeline", "a job with meshes must start with "
                   "stitch (it joins the two meshes into one model)");
     json_decref(pdefault);
+    if (frep) {
+        /* validated here, stored as JSON (job_submit.h) */
+        geo_frep *f = proto_frep_from_json(frep, NULL, "frep", &err);
+        if (!f)
+            add_geo_error(errors, &err);
+        geo_frep_free(f);
+    }
     job_priority prio = JOB_PRIO_NORMAL;
     const json_t *pr = json_object_get(root, "priority");
     if (pr) {
@@ -212,15 +304,14 @@ enum MHD_Result http_post_job(http_req *r)
             add_error(errors, "label", "longer than %d bytes",
                       JOB_LABEL_MAX - 1);
     }
-    geo_poly *poly = NULL;
-    proto_read_report rep = {0};
-    if (model) {
-        poly = proto_model_from_json_ex(model, NULL, "model", &rep, &err);
-        if (!poly)
-            add_geo_error(errors, &err);
-    } else if (meshes && json_array_size(meshes) == 2) {
+    /* the model read in place (now owned here), or the union of meshes */
+    geo_poly *poly = jb.model;
+    proto_read_report rep = jb.rep;
+    jb.model = NULL;
+    if (model && !poly)
+        add_geo_error(errors, &jb.model_err);
+    else if (meshes && json_array_size(meshes) == 2)
         poly = meshes_union(meshes, &rep, errors);
-    }
     enum MHD_Result res;
     if (json_array_size(errors) > 0) {
         const json_t *first = json_array_get(errors, 0);
@@ -235,9 +326,11 @@ enum MHD_Result http_post_job(http_req *r)
         goto out;
     }
     job_request rq = {
-        .model = poly, .pipeline = &pl, .priority = prio, .source = "http",
+        .model = poly, .frep = frep, .pipeline = &pl, .priority = prio,
+        .source = "http",
         .label = label, .idem_key = idem,
-        .idem_hash = job_hash64(r->body ? r->body : "", r->len),
+        /* only a keyed request is ever compared: no other hashes 464 KB */
+        .idem_hash = idem ? job_hash64(r->body ? r->body : "", r->len) : 0,
     };
     job_rec job;
     bool replayed = false;
@@ -265,10 +358,14 @@ enum MHD_Result http_post_job(http_req *r)
         json_t *extra = NULL;
         if (rep.plane_mismatches)
             extra = json_pack("{s:[s]}", "warnings", rep.first);
-        if (!replayed)
+        if (!replayed && poly)
             log_msg(LOG_INFO, job.id, "queued (%u vertices, %u facets, "
                     "%zu ops, priority %s)", poly->nverts, poly->nfacets,
                     pl.nops, prio == JOB_PRIO_HIGH ? "high" : "normal");
+        else if (!replayed)
+            log_msg(LOG_INFO, job.id, "queued (frep-object, %zu ops, "
+                    "priority %s)", pl.nops,
+                    prio == JOB_PRIO_HIGH ? "high" : "normal");
         res = reply_job(r, 202, &job, h, extra);
         job_rec_clear(&job);
     }
@@ -277,7 +374,7 @@ out:
     geo_poly_free(poly);
     if (have_pipeline || pl.ops)
         proto_pipeline_free(&pl);
-    json_decref(root);
+    job_body_clear(&jb, &j);
     return res;
 }
 
@@ -308,7 +405,10 @@ enum MHD_Result http_get_job(http_req *r)
     }
     job_rec j;
     geo_err err;
-    int rc = store_get(r->env->s, r->id, &j, &err);
+    int rc;
+again:
+    r->w.seq = http_hub_seq(r->srv->hub, r->id);
+    rc = store_get(r->env->s, r->id, &j, &err);
     if (rc < 0)
         return store_failure(r, rc, &err);
     if (!job_state_terminal(j.state) && job_mono_ms() < r->w.deadline) {
@@ -322,6 +422,11 @@ enum MHD_Result http_get_job(http_req *r)
         if (rc == 0) {
             job_rec_clear(&j);
             return MHD_YES;
+        }
+        if (rc == -ESTALE) {
+            r->waiting = !first;
+            job_rec_clear(&j);
+            goto again;
         }
         if (rc == -EAGAIN && first) {
             job_rec_clear(&j);

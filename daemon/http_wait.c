@@ -12,7 +12,12 @@
  *   its own locks during normal operation; at shutdown the hub is closed
  *   (everyone resumed) before MHD_stop_daemon.
  * - The timer sleeps until the earliest deadline (re-checking at least
- *   every second, so a waiter added while it slept is never late). */
+ *   every second, so a waiter added while it slept is never late).
+ * - No lost wake-up: every notify bumps its bucket's seq under the lock,
+ *   and a suspend whose seq (taken before the caller read the store) is
+ *   out of date is refused, so a change that lands between the read and
+ *   the suspend makes the caller read again instead of sleeping through
+ *   it. */
 #include "http.h"
 
 #include <errno.h>
@@ -27,6 +32,7 @@ struct http_hub {
     pthread_mutex_t lock;
     pthread_cond_t cv;
     http_waiter *buckets[NBUCKETS];
+    uint64_t seq[NBUCKETS];
     unsigned count;
     bool closed, stop;
     pthread_t timer;
@@ -140,12 +146,22 @@ http_hub *http_hub_free(http_hub *h)
     return NULL;
 }
 
+uint64_t http_hub_seq(http_hub *h, const char *id)
+{
+    pthread_mutex_lock(&h->lock);
+    uint64_t s = h->seq[bucket_of(id)];
+    pthread_mutex_unlock(&h->lock);
+    return s;
+}
+
 int http_hub_suspend(http_hub *h, http_waiter *w, unsigned limit)
 {
     pthread_mutex_lock(&h->lock);
     int r = 0;
     if (h->closed)
         r = -ESHUTDOWN;
+    else if (h->seq[bucket_of(w->id)] != w->seq)
+        r = -ESTALE;
     else if (h->count >= limit)
         r = -EAGAIN;
     if (r == 0) {
@@ -161,6 +177,7 @@ int http_hub_suspend(http_hub *h, http_waiter *w, unsigned limit)
 void http_hub_notify(http_hub *h, const char *id, bool progress_only)
 {
     pthread_mutex_lock(&h->lock);
+    h->seq[bucket_of(id)]++;
     http_waiter *w = h->buckets[bucket_of(id)];
     while (w) {
         http_waiter *nx = w->next;

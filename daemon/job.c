@@ -205,3 +205,21 @@ uint64_t job_hash64(const void *data, size_t n)
     }
     return h;
 }
+
+uint64_t job_digest64(const void *data, size_t n)
+{
+    const unsigned char *p = data;
+    uint64_t h = 0x9E3779B97F4A7C15u ^ n;
+    size_t i = 0;
+    for (; i + 8 <= n; i += 8) {
+        uint64_t w;
+        memcpy(&w, p + i, 8);
+        h = (h ^ w) * 0xff51afd7ed558ccdu;
+        h ^= h >> 29;
+    }
+    uint64_t tail = 0;
+    for (; i < n; i++)
+        tail = tail << 8 | p[i];
+    h = (h ^ tail) * 0xc4ceb9fe1a85ec53u;
+    return h ^ h >> 32;
+}

@@ -55,7 +55,10 @@ typedef struct job_rec {
     bool cancel_requested;
     int attempts;      /* times a worker took it */
     uint64_t input_bytes, result_bytes; /* sizes of the kept blobs */
-    uint64_t result_hash; /* FNV-1a 64 of the result model, 0 if none */
+    uint64_t result_hash; /* names the result for ETags: job_digest64 of the
+                             result model, or of the id when the result is
+                             the input (FNV-1a 64 of the model for jobs
+                             finished by older versions), 0 if none */
     uint64_t idem_hash;   /* hash of the request that created it */
 } job_rec;
 
@@ -88,7 +91,12 @@ void job_time_format(int64_t ms, char *buf, size_t size);
  * NULL on out-of-memory. The caller owns the result. */
 json_t *job_to_json(const job_rec *r);
 
-/* FNV-1a 64-bit hash of n bytes (for ETags and idempotency checks). */
+/* FNV-1a 64-bit hash of n bytes (idempotency checks; stored, so it never
+ * changes). */
 uint64_t job_hash64(const void *data, size_t n);
+
+/* A 64-bit digest of n bytes taken 8 at a time (several times faster than
+ * job_hash64), for the ETags of results. */
+uint64_t job_digest64(const void *data, size_t n);
 
 #endif

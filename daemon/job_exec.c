@@ -1,11 +1,14 @@
 /* job_exec.c — one job: stored bytes in, stored bytes out (job_exec.h).
- * Every failure leaves a message naming its place in ret->error. */
+ * The stored input is an FMB1 model or a frep-object/1 JSON text
+ * (job_submit.h). Every failure leaves a message naming its place in
+ * ret->error. */
 #include "job_exec.h"
 
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "frep_json.h"
 #include "model_io.h"
 #include "runner.h"
 
@@ -36,20 +39,40 @@ int job_exec(void *user, const job_rec *job, const void *input,
     json_decref(pj);
     if (r < 0)
         return fail(ret, r, &err);
-    geo_poly *model = proto_model_read_mem(input, input_len, PROTO_FMT_FMB1,
-                                           NULL, &err);
-    if (!model) {
-        geo_err_prefix(&err, "stored input");
-        proto_pipeline_free(&pl);
-        return fail(ret, -EINVAL, &err);
-    }
+    geo_poly *model = NULL;
     json_t *stats = NULL, *summary = NULL;
-    r = runner_run(&pl, &model, ctx, op_timer, user, &stats, &summary, &err);
+    /* a read-only pipeline's result is its (FMB1) input: the store keeps
+     * one copy (store_finish without a model) */
+    bool fmb1 = input_len >= 4 && memcmp(input, "FMB1", 4) == 0;
+    bool changes = !fmb1 || runner_changes_model(&pl);
+    if (fmb1) {
+        model = proto_model_read_mem(input, input_len, PROTO_FMT_FMB1, NULL,
+                                     &err);
+        if (!model) {
+            geo_err_prefix(&err, "stored input");
+            proto_pipeline_free(&pl);
+            return fail(ret, -EINVAL, &err);
+        }
+        r = runner_run(&pl, &model, ctx, op_timer, user, &stats, &summary,
+                       &err);
+    } else {
+        /* a frep-object/1, stored as JSON text (job_submit.h) */
+        geo_frep *f = proto_frep_read_mem(input, input_len, NULL, &err);
+        if (!f) {
+            geo_err_prefix(&err, "stored input");
+            proto_pipeline_free(&pl);
+            return fail(ret, -EINVAL, &err);
+        }
+        r = runner_run_frep(&pl, f, &model, ctx, op_timer, user, &stats,
+                            &summary, &err);
+        geo_frep_free(f);
+    }
     proto_pipeline_free(&pl);
     if (r == 0) {
-        char *buf;
-        size_t len;
-        r = proto_model_write_mem(model, PROTO_FMT_FMB1, &buf, &len, &err);
+        char *buf = NULL;
+        size_t len = 0;
+        if (changes)
+            r = proto_model_write_mem(model, PROTO_FMT_FMB1, &buf, &len, &err);
         if (r == 0) {
             ret->model = buf;
             ret->model_len = len;

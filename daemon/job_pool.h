@@ -36,7 +36,8 @@
 typedef struct job_outcome {
     char *error;     /* for a failure: what went wrong, naming the place */
     char *summary;   /* JSON text of the job summary */
-    void *model;     /* result model bytes (facet-model/1 JSON) */
+    void *model;     /* result model bytes (FMB1); NULL on success means
+                        the result is the input unchanged (store_finish) */
     size_t model_len;
     void *stats;     /* statistics JSON bytes */
     size_t stats_len;

@@ -13,6 +13,8 @@ int job_submit(store *s, job_pool *pool, unsigned queue_size,
                geo_err *err)
 {
     int r = runner_check(rq->pipeline, err);
+    if (r == 0)
+        r = runner_check_input(rq->pipeline, rq->frep != NULL, err);
     if (r < 0)
         return r;
     json_t *pj = proto_pipeline_to_json(rq->pipeline);
@@ -24,10 +26,19 @@ int job_submit(store *s, job_pool *pool, unsigned queue_size,
         r = geo_err_set(err, -ENOMEM, "out of memory");
         goto out;
     }
-    r = proto_model_write_mem(rq->model, PROTO_FMT_FMB1, &input, &input_len,
-                              err);
-    if (r < 0)
-        goto out;
+    if (rq->frep) {
+        input = json_dumps(rq->frep, JSON_COMPACT | JSON_REAL_PRECISION(17));
+        if (!input) {
+            r = geo_err_set(err, -ENOMEM, "out of memory");
+            goto out;
+        }
+        input_len = strlen(input);
+    } else {
+        r = proto_model_write_mem(rq->model, PROTO_FMT_FMB1, &input,
+                                  &input_len, err);
+        if (r < 0)
+            goto out;
+    }
     char id[JOB_ID_LEN + 1];
     int64_t now = job_now_ms();
     job_id_new(id, now);

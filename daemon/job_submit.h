@@ -3,16 +3,20 @@
  * store, so the checks (operations available, queue bound, idempotency)
  * and the stored form are the same for all.
  *
- * The input is stored as FMB1 (the scanner's binary model, proto/
+ * A model input is stored as FMB1 (the scanner's binary model, proto/
  * model_io.h): a worker decodes it in microseconds instead of parsing JSON
- * again, and it keeps every double bit for bit. The pipeline is stored in
- * canonical JSON (every parameter explicit), so a job's record says
- * exactly what ran. */
+ * again, and it keeps every double bit for bit. A frep-object/1 input is
+ * stored as its compact JSON text (jansson prints doubles exactly); the
+ * executor tells the two apart by FMB1's magic "FMB1", which JSON text
+ * cannot start with. The pipeline is stored in canonical JSON (every
+ * parameter explicit), so a job's record says exactly what ran. */
 #ifndef FACETD_JOB_SUBMIT_H
 #define FACETD_JOB_SUBMIT_H
 
 #include <stdbool.h>
 #include <stdint.h>
+
+#include <jansson.h>
 
 #include "job.h"
 #include "job_pool.h"
@@ -22,6 +26,8 @@
 
 typedef struct job_request {
     const geo_poly *model;          /* the validated input (borrowed) */
+    const json_t *frep;             /* or a validated frep-object/1
+                                       (borrowed); exactly one is set */
     const proto_pipeline *pipeline; /* parsed pipeline (borrowed) */
     job_priority priority;
     const char *source;             /* "http", "usb:SERIAL" */

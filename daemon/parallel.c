@@ -1,6 +1,7 @@
 /* parallel.c — the thread pool behind par_for: workers sleep on a
  * condition variable, take indices from an atomic counter while a loop is
- * active, and the last one to finish wakes the caller. */
+ * active, and the last one to finish wakes the caller. One loop uses the
+ * pool at a time; a concurrent caller runs its loop itself. */
 #include "parallel.h"
 
 #include <errno.h>
@@ -118,12 +119,16 @@ void par_for(void *pool_user, size_t n, void (*fn)(void *arg, size_t i),
              void *arg)
 {
     par_pool *p = pool_user;
-    if (!p || p->nthreads <= 1 || n <= 1) {
+    /* A loop that finds the pool busy with another caller's loop runs in
+     * the calling thread: the pool's threads are working for that caller,
+     * so waiting would leave this thread idle (facetd's job workers share
+     * one pool). */
+    if (!p || p->nthreads <= 1 || n <= 1 ||
+        pthread_mutex_trylock(&p->serial) != 0) {
         for (size_t i = 0; i < n; i++)
             fn(arg, i);
         return;
     }
-    pthread_mutex_lock(&p->serial);
     pthread_mutex_lock(&p->lock);
     /* a worker that woke late for the previous loop may still be reading
      * its fields: let it leave before they change */

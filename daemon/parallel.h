@@ -5,8 +5,10 @@
  * par_for(pool, n, fn, arg) runs fn(arg, i) for every i in [0, n) on the
  * pool's threads plus the calling thread and returns when all are done.
  * Indices are handed out dynamically (an atomic counter), so results must
- * not depend on which thread ran which index. One par_for at a time per
- * pool (calls from several threads are serialised by a mutex). */
+ * not depend on which thread ran which index. One par_for at a time uses
+ * the pool's threads: a call made while another thread's loop runs there
+ * runs all its indices in the calling thread (so nested calls and
+ * concurrent callers never wait for each other). */
 #ifndef FACET_PARALLEL_H
 #define FACET_PARALLEL_H
 

@@ -12,12 +12,18 @@
 #include "clusters.h"
 #include "correct.h"
 #include "correct_json.h"
+#include "cut.h"
 #include "fill.h"
 #include "fill_json.h"
+#include "inversion.h"
 #include "merge.h"
+#include "replanar.h"
+#include "replanar_json.h"
 #include "stats.h"
 #include "stats_json.h"
 #include "stitch.h"
+#include "tri_report_json.h"
+#include "triangulate.h"
 
 /* Runs one operation on *model (may replace it, freeing the old one).
  * Adds its report to *ret_report (a new object it creates) and summary
@@ -25,9 +31,16 @@
 typedef int (*op_fn)(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
                      json_t **ret_report, json_t *summary, geo_err *err);
 
+/* An operation that makes the model from a frep input f (*model is NULL
+ * on entry); otherwise like op_fn. */
+typedef int (*frep_fn)(const proto_op *op, const geo_frep *f,
+                       geo_poly **model, const geo_ctx *ctx,
+                       json_t **ret_report, json_t *summary, geo_err *err);
+
 typedef struct op_entry {
     op_fn run;
     bool changes_model; /* false for read-only ops such as inspect */
+    frep_fn run_frep;   /* set (and run NULL) for ops taking a frep */
 } op_entry;
 
 /* inspect (lib/stats.h): every statistic of the model, unchanged. */
@@ -54,6 +67,47 @@ static int run_inspect(const proto_op *op, geo_poly **model,
         return geo_err_set(err, -ENOMEM, "out of memory");
     }
     *ret_report = rep;
+    return 0;
+}
+
+/* triangulate (lib/triangulate.h): the frep input to a closed mesh; the
+ * report is the quality report (proto/tri_report_json.h). */
+static int run_triangulate(const proto_op *op, const geo_frep *f,
+                           geo_poly **model, const geo_ctx *ctx,
+                           json_t **ret_report, json_t *summary, geo_err *err)
+{
+    geo_tri_opts o;
+    geo_tri_opts_default(&o);
+    o.quad_levels = op->u.triangulate.quad_levels;
+    o.binary_levels = op->u.triangulate.binary_levels;
+    o.fill = op->u.triangulate.fill_edges ? GEO_FILL_EDGES : GEO_FILL_AREA;
+    o.refine = op->u.triangulate.refine;
+    o.sharpen = op->u.triangulate.sharpen;
+    o.fair = op->u.triangulate.fair == PROTO_FAIR_LENGTH    ? GEO_FAIR_LENGTH
+             : op->u.triangulate.fair == PROTO_FAIR_UNIFORM ? GEO_FAIR_UNIFORM
+                                                            : GEO_FAIR_NONE;
+    geo_tri_report rep;
+    geo_poly *m = NULL;
+    int r = geo_frep_triangulate(f, &o, ctx, &m, &rep, err);
+    if (r < 0)
+        return r;
+    json_t *j = proto_tri_report_to_json(&rep);
+    const geo_frep_metrics *q = &rep.quality;
+    int e = !j;
+    e |= json_object_set_new(summary, "closed",
+                             json_boolean(q->boundary_edges == 0 &&
+                                          q->nonmanifold_edges == 0));
+    e |= json_object_set_new(summary, "self_intersections",
+                             json_integer((json_int_t)rep.self_intersections));
+    geo_tri_report_clear(&rep);
+    if (e) {
+        json_decref(j);
+        geo_poly_free(m);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    geo_poly_free(*model);
+    *model = m;
+    *ret_report = j;
     return 0;
 }
 
@@ -94,6 +148,7 @@ static int run_merge(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
     geo_merge_opts_default(&o);
     o.max_angle_deg = op->u.merge.max_angle_deg;
     o.max_deviation = op->u.merge.max_deviation;
+    o.views = op->u.merge.views;
     geo_merge_report rep = {0};
     int r = op->u.merge.ngroups
                 ? geo_merge_groups(*model, op->u.merge.ngroups,
@@ -117,6 +172,7 @@ static int run_auto(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
     o.collapse.radius = op->u.correct.radius;
     o.merge.max_angle_deg = op->u.correct.max_angle_deg;
     o.merge.max_deviation = op->u.correct.max_deviation;
+    o.merge.views = op->u.correct.views;
     geo_correct_report rep;
     int r = geo_correct_auto(*model, &o, ctx, &rep, err);
     if (r < 0)
@@ -192,18 +248,186 @@ static int run_stitch(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
     return 0;
 }
 
+/* cut (lib/cut.h, seed 000 §3): keeps plane(p) ≤ 0 and closes the
+ * section; an unchanged or empty result is reported, not an error. */
+static int run_cut(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
+                   json_t **ret_report, json_t *summary, geo_err *err)
+{
+    (void)summary;
+    geo_poly *out = geo_poly_new();
+    if (!out)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    geo_cut_report rep;
+    int r = geo_cut(*model, op->u.cut.plane, NULL, ctx, out, &rep, err);
+    if (r < 0) {
+        geo_poly_free(out);
+        return r;
+    }
+    json_t *o = json_pack(
+        "{s:[ffff], s:I, s:I, s:I, s:I, s:I, s:I, s:I, s:I, s:b, s:b, s:f, "
+        "s:f, s:I, s:I}", "plane", op->u.cut.plane[0], op->u.cut.plane[1],
+        op->u.cut.plane[2], op->u.cut.plane[3], "components",
+        (json_int_t)rep.components, "new_facets", (json_int_t)rep.new_facets,
+        "split_facets", (json_int_t)rep.split_facets, "pieces",
+        (json_int_t)rep.pieces, "removed_facets",
+        (json_int_t)rep.removed_facets, "new_vertices",
+        (json_int_t)rep.new_vertices, "removed_vertices",
+        (json_int_t)rep.removed_vertices, "hanging_dropped",
+        (json_int_t)rep.hanging_dropped, "unchanged", rep.unchanged, "empty",
+        rep.empty, "volume_before", rep.volume_before, "volume_after",
+        rep.volume_after, "vertices", (json_int_t)out->nverts, "facets",
+        (json_int_t)out->nfacets);
+    if (!o) {
+        geo_poly_free(out);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    geo_poly_free(*model);
+    *model = out;
+    *ret_report = o;
+    return 0;
+}
+
+static enum geo_replanar_schedule schedule_of(proto_schedule s)
+{
+    return s == PROTO_SCHED_SCALED       ? GEO_REPLANAR_SCALED
+           : s == PROTO_SCHED_GLOBAL_EXP ? GEO_REPLANAR_GLOBAL_EXP
+                                         : GEO_REPLANAR_LOCAL_EXP;
+}
+
+/* move_vertex (lib/replanar.h, seed 000 §4): places the vertex and
+ * re-planarises. A result that is not a valid polyhedron (no convergence
+ * within max_steps, a self-intersection, an inverted facet) fails the
+ * job, as `facet move` refuses to write it: nothing invalid is passed on.
+ * The report has the run's summary and its iteration log. */
+static int run_move_vertex(const proto_op *op, geo_poly **model,
+                           const geo_ctx *ctx, json_t **ret_report,
+                           json_t *summary, geo_err *err)
+{
+    (void)summary;
+    geo_poly *p = *model;
+    uint32_t v = op->u.move.vertex;
+    if (v >= p->nverts)
+        return geo_err_set(err, -EINVAL, "vertex: %u out of range (%u "
+                           "vertices)", v, p->nverts);
+    double to[3];
+    for (int k = 0; k < 3; k++)
+        to[k] = op->u.move.xyz[k] + (op->u.move.relative ? p->verts[v][k] : 0);
+    enum geo_replanar_schedule s = schedule_of(op->u.move.schedule);
+    geo_replanar_opts o;
+    geo_replanar_opts_default(&o, s);
+    o.max_steps = op->u.move.max_steps;
+    geo_replanar_log log = {0};
+    geo_replanar_result res;
+    int r = geo_move_vertex(p, v, to, s, &o, ctx, &log, &res, err);
+    if (r < 0) {
+        geo_replanar_log_clear(&log);
+        return r;
+    }
+    if (!geo_replanar_result_valid(&res)) {
+        geo_replanar_log_clear(&log);
+        return geo_err_set(err, -EINVAL, "moving vertex %u does not give a "
+                           "valid polyhedron (%s after %u steps, S2 %.3g mm)",
+                           v, !res.converged ? "no convergence"
+                              : res.nselfint > 0 ? "self-intersections"
+                              : res.ninverted > 0 ? "inverted facets"
+                                                  : "volume not positive",
+                           res.steps, res.s2);
+    }
+    json_t *rep = json_object();
+    int e = !rep;
+    if (rep) {
+        e |= json_object_set_new(rep, "vertex", json_integer(v));
+        e |= json_object_set_new(rep, "to", json_pack("[fff]", to[0], to[1],
+                                                       to[2]));
+        e |= json_object_set_new(rep, "result",
+                                 proto_replanar_result_to_json(&res, s));
+        e |= json_object_set_new(rep, "log", proto_replanar_log_to_json(&log));
+    }
+    geo_replanar_log_clear(&log);
+    if (e) {
+        json_decref(rep);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    *ret_report = rep;
+    return 0;
+}
+
+/* inversion_stats (lib/inversion.h, seed 000 §4.3.4): the model is only
+ * read; the runs go through ctx's parallel_for (the daemon's pool), the
+ * op's seed replaces the job's. */
+static int run_inversion_stats(const proto_op *op, geo_poly **model,
+                               const geo_ctx *ctx, json_t **ret_report,
+                               json_t *summary, geo_err *err)
+{
+    (void)summary;
+    geo_inversion_opts o;
+    geo_inversion_opts_default(&o);
+    o.samples = op->u.inversion.samples;
+    o.nmagnitudes = op->u.inversion.nmagnitudes;
+    memcpy(o.magnitudes, op->u.inversion.magnitudes,
+           o.nmagnitudes * sizeof o.magnitudes[0]);
+    o.schedule = schedule_of(op->u.inversion.schedule);
+    geo_replanar_opts_default(&o.replanar, o.schedule);
+    geo_ctx c = {0};
+    if (ctx)
+        c = *ctx;
+    c.seed = op->u.inversion.seed;
+    geo_inversion_stats st = {0};
+    int r = geo_inversion_stats_run(*model, &o, &c, &st, err);
+    if (r < 0)
+        return r;
+    json_t *rep = proto_inversion_stats_to_json(&st);
+    geo_inversion_stats_clear(&st);
+    if (!rep)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    *ret_report = rep;
+    return 0;
+}
+
 static const op_entry ops[PROTO_OP_COUNT] = {
     [PROTO_OP_INSPECT] = {run_inspect, false},
     [PROTO_OP_COLLAPSE_CLUSTERS] = {run_collapse, true},
     [PROTO_OP_MERGE_FACETS] = {run_merge, true},
+    [PROTO_OP_TRIANGULATE] = {NULL, true, run_triangulate},
     [PROTO_OP_FILL_HOLES] = {run_fill_holes, true},
     [PROTO_OP_STITCH] = {run_stitch, true},
     [PROTO_OP_AUTO] = {run_auto, true},
+    [PROTO_OP_CUT] = {run_cut, true},
+    [PROTO_OP_MOVE_VERTEX] = {run_move_vertex, true},
+    [PROTO_OP_INVERSION_STATS] = {run_inversion_stats, false},
 };
 
 bool runner_op_available(proto_op_kind op)
 {
-    return (unsigned)op < PROTO_OP_COUNT && ops[op].run != NULL;
+    return (unsigned)op < PROTO_OP_COUNT &&
+           (ops[op].run != NULL || ops[op].run_frep != NULL);
+}
+
+int runner_check_input(const proto_pipeline *p, bool frep, geo_err *err)
+{
+    for (size_t i = 0; i < p->nops; i++) {
+        proto_op_kind k = p->ops[i].kind;
+        bool takes_frep = (unsigned)k < PROTO_OP_COUNT && ops[k].run_frep;
+        if (takes_frep && (!frep || i > 0))
+            return geo_err_set(err, -EINVAL,
+                               "pipeline[%zu]: op '%s' needs a 'frep' input "
+                               "and must come first", i, proto_op_name(k));
+        if (frep && i == 0 && !takes_frep)
+            return geo_err_set(err, -EINVAL,
+                               "pipeline[0]: op '%s' cannot take a 'frep' "
+                               "input; start with 'triangulate'",
+                               proto_op_name(k));
+    }
+    return 0;
+}
+
+bool runner_changes_model(const proto_pipeline *p)
+{
+    for (size_t i = 0; i < p->nops; i++)
+        if (!runner_op_available(p->ops[i].kind) ||
+            ops[p->ops[i].kind].changes_model)
+            return true;
+    return false;
 }
 
 int runner_check(const proto_pipeline *p, geo_err *err)
@@ -248,11 +472,15 @@ static int add_counts(json_t *summary, const char *suffix, const geo_poly *p)
            json_object_set_new(summary, k2, json_integer(p->nfacets));
 }
 
-int runner_run(const proto_pipeline *p, geo_poly **model, const geo_ctx *ctx,
-               runner_op_timer timer, void *timer_user, json_t **ret_stats,
-               json_t **ret_summary, geo_err *err)
+static int run_pipeline(const proto_pipeline *p, const geo_frep *frep,
+                        geo_poly **model, const geo_ctx *ctx,
+                        runner_op_timer timer, void *timer_user,
+                        json_t **ret_stats, json_t **ret_summary,
+                        geo_err *err)
 {
     int r = runner_check(p, err);
+    if (r == 0)
+        r = runner_check_input(p, frep != NULL, err);
     if (r < 0)
         return r;
     json_t *stats = json_object(), *list = json_array(),
@@ -260,7 +488,8 @@ int runner_run(const proto_pipeline *p, geo_poly **model, const geo_ctx *ctx,
     json_t *before = NULL, *after = NULL;
     bool changed = false;
     double t_start = mono_seconds();
-    if (!stats || !list || !summary || add_counts(summary, "before", *model)) {
+    if (!stats || !list || !summary ||
+        (*model && add_counts(summary, "before", *model))) {
         r = geo_err_set(err, -ENOMEM, "out of memory");
         goto fail;
     }
@@ -279,7 +508,10 @@ int runner_run(const proto_pipeline *p, geo_poly **model, const geo_ctx *ctx,
         }
         json_t *report = NULL;
         double t0 = mono_seconds();
-        r = ops[op->kind].run(op, model, &sub, &report, summary, err);
+        r = ops[op->kind].run_frep
+                ? ops[op->kind].run_frep(op, frep, model, &sub, &report,
+                                         summary, err)
+                : ops[op->kind].run(op, model, &sub, &report, summary, err);
         double secs = mono_seconds() - t0;
         if (timer)
             timer(timer_user, op->kind, secs);
@@ -333,5 +565,29 @@ fail:
     json_decref(summary);
     json_decref(before);
     json_decref(after);
+    return r;
+}
+
+int runner_run(const proto_pipeline *p, geo_poly **model, const geo_ctx *ctx,
+               runner_op_timer timer, void *timer_user, json_t **ret_stats,
+               json_t **ret_summary, geo_err *err)
+{
+    return run_pipeline(p, NULL, model, ctx, timer, timer_user, ret_stats,
+                        ret_summary, err);
+}
+
+int runner_run_frep(const proto_pipeline *p, const geo_frep *f,
+                    geo_poly **ret_model, const geo_ctx *ctx,
+                    runner_op_timer timer, void *timer_user,
+                    json_t **ret_stats, json_t **ret_summary, geo_err *err)
+{
+    geo_poly *m = NULL;
+    int r = run_pipeline(p, f, &m, ctx, timer, timer_user, ret_stats,
+                         ret_summary, err);
+    if (r < 0) {
+        geo_poly_free(m);
+        m = NULL;
+    }
+    *ret_model = m;
     return r;
 }

@@ -19,7 +19,12 @@
  * Summary (embedded in the job): {"vertices_before", "facets_before",
  * "vertices_after", "facets_after", "ms"} plus what the operations add
  * (inspect adds "valid", "closed", "orientation", "self_intersections"
- * of the model it saw; a later inspect overwrites an earlier one's).
+ * of the model it saw; a later inspect overwrites an earlier one's;
+ * triangulate adds "closed" and "self_intersections" of its mesh).
+ *
+ * Inputs: a polyhedron (runner_run) or a frep-object/1 (runner_run_frep),
+ * which only triangulate takes, as the first operation; its report is the
+ * triangulation report of proto/tri_report_json.h.
  *
  * Thread safety: reentrant; concurrent runs on different models are fine. */
 #ifndef FACETD_RUNNER_H
@@ -30,6 +35,7 @@
 #include <jansson.h>
 
 #include "ctx.h"
+#include "frep.h"
 #include "pipeline.h"
 #include "poly.h"
 
@@ -39,6 +45,17 @@ bool runner_op_available(proto_op_kind op);
 /* 0 when every operation of p is available; else -ENOTSUP with err
  * "pipeline[1]: op 'cut' is not available in this build". */
 int runner_check(const proto_pipeline *p, geo_err *err);
+
+/* True when an operation of p may change the model; false for a pipeline
+ * of read-only operations (inspect), whose result is its input. */
+bool runner_changes_model(const proto_pipeline *p);
+
+/* 0 when p suits its input: a frep-object/1 input (frep true) needs an
+ * operation that makes a model of it (triangulate) first and nowhere
+ * else; a model input must have none. Else -EINVAL with err naming the
+ * place ("pipeline[0]: op 'inspect' cannot take a 'frep' input; start
+ * with 'triangulate'"). */
+int runner_check_input(const proto_pipeline *p, bool frep, geo_err *err);
 
 /* Called after each operation with its run time (for metrics). */
 typedef void (*runner_op_timer)(void *user, proto_op_kind op, double seconds);
@@ -52,5 +69,15 @@ typedef void (*runner_op_timer)(void *user, proto_op_kind op, double seconds);
 int runner_run(const proto_pipeline *p, geo_poly **model, const geo_ctx *ctx,
                runner_op_timer timer, void *timer_user, json_t **ret_stats,
                json_t **ret_summary, geo_err *err);
+
+/* Runs p on the functionally defined object f (finished, borrowed): the
+ * first operation makes the model, the others work on it as in
+ * runner_run. On success *ret_model is the result (the caller frees it)
+ * and the summary has no *_before counts; on failure *ret_model is NULL.
+ * Errors and statistics as runner_run. */
+int runner_run_frep(const proto_pipeline *p, const geo_frep *f,
+                    geo_poly **ret_model, const geo_ctx *ctx,
+                    runner_op_timer timer, void *timer_user,
+                    json_t **ret_stats, json_t **ret_summary, geo_err *err);
 
 #endif

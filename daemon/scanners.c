@@ -46,6 +46,8 @@ typedef struct attached {
     scan_device_info info;
     int64_t scan_t0_us;  /* the first PROGRESS of the scan under way, 0
                             when none (for the intake's throughput) */
+    uint32_t scan_contours; /* contours of the scan under way (its
+                               PROGRESS total), 0 when unknown */
 } attached;
 
 /* One configured pipeline, as run and as shown. */
@@ -170,8 +172,8 @@ int scanners_new(const cfg *c, scanners **ret, geo_err *err)
     pthread_rwlock_init(&sc->plk, NULL);
     pthread_mutex_init(&sc->pool_mu, NULL);
     pthread_mutex_init(&sc->mu, NULL);
-    /* the sender's deadlines are CLOCK_MONOTONIC: on the default
-     * (realtime) clock every wait returned at once and it spun a core */
+    /* the sender's deadlines are CLOCK_MONOTONIC times: with the default
+     * (realtime) clock every wait would end at once and the sender spin */
     pthread_condattr_t ca;
     pthread_condattr_init(&ca);
     pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
@@ -484,12 +486,13 @@ static attached *attached_find(scanners *sc, const char *serial)
 static void on_progress(void *user, const char *serial, uint32_t done,
                         uint32_t total)
 {
-    (void)total;
     scanners *sc = user;
     pthread_mutex_lock(&sc->mu);
     attached *a = attached_find(sc, serial);
     if (a && (done == 0 || !a->scan_t0_us))
         a->scan_t0_us = mono_us();
+    if (a)
+        a->scan_contours = total;
     pthread_mutex_unlock(&sc->mu);
 }
 
@@ -525,12 +528,15 @@ static int on_scan_complete(void *user, const char *serial,
     scan_device_info info;
     memset(&info, 0, sizeof info);
     int64_t began = 0;
+    uint32_t contours = 0;
     pthread_mutex_lock(&sc->mu);
     attached *a = attached_find(sc, serial);
     if (a) {
         info = a->info;
         began = a->scan_t0_us;
+        contours = a->scan_contours ? a->scan_contours : a->info.contours;
         a->scan_t0_us = 0;
+        a->scan_contours = 0;
     }
     pthread_mutex_unlock(&sc->mu);
     int64_t t_parsed = mono_us();
@@ -544,15 +550,27 @@ static int on_scan_complete(void *user, const char *serial,
     if (!pp) {
         r = geo_err_set(&err, -ENODEV, "not a configured scanner model");
     } else {
-        job_request rq = {
-            .model = p,
-            .pipeline = &pp->pl,
-            .priority = JOB_PRIO_HIGH,
-            .source = source,
-        };
-        pthread_mutex_lock(&sc->pool_mu);
-        r = job_submit(sc->s, sc->pool, UINT_MAX, &rq, &job, &replayed, &err);
-        pthread_mutex_unlock(&sc->pool_mu);
+        /* the correction reads the view step off the scan; the scanner
+         * knows it exactly (the scan's contours, else INFO's), so its
+         * jobs carry it */
+        proto_pipeline pl = {0};
+        r = proto_pipeline_copy(&pp->pl, &pl);
+        if (r < 0) {
+            geo_err_set(&err, r, "out of memory");
+        } else {
+            proto_pipeline_set_views(&pl, contours);
+            job_request rq = {
+                .model = p,
+                .pipeline = &pl,
+                .priority = JOB_PRIO_HIGH,
+                .source = source,
+            };
+            pthread_mutex_lock(&sc->pool_mu);
+            r = job_submit(sc->s, sc->pool, UINT_MAX, &rq, &job, &replayed,
+                           &err);
+            pthread_mutex_unlock(&sc->pool_mu);
+            proto_pipeline_free(&pl);
+        }
     }
     pthread_rwlock_unlock(&sc->plk);
     unsigned nv = p->nverts, nf = p->nfacets;

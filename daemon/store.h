@@ -46,8 +46,9 @@ typedef struct store_new_job {
 } store_new_job;
 
 typedef enum store_blob {
-    STORE_BLOB_INPUT = 0,  /* the submitted model (facet-model/1 JSON) */
-    STORE_BLOB_MODEL = 1,  /* the result model (facet-model/1 JSON) */
+    STORE_BLOB_INPUT = 0,  /* the submitted model (FMB1) */
+    STORE_BLOB_MODEL = 1,  /* the result model (FMB1); the input when the
+                              pipeline left the model unchanged */
     STORE_BLOB_STATS = 2,  /* the statistics JSON */
 } store_blob;
 
@@ -120,8 +121,12 @@ int store_progress(store *s, const char *id, double progress,
                    int *ret_cancel, geo_err *err);
 
 /* Ends a running job in a terminal state with an optional error text,
- * summary JSON and result blobs (copied; NULL/0 for none). -EBUSY when the
- * job is not running. */
+ * summary JSON and result blobs (copied; NULL/0 for none). A succeeded job
+ * without a model blob has the input as its result (a pipeline that only
+ * inspects): no second copy is kept, store_get_blob(STORE_BLOB_MODEL)
+ * gives the input, and result_hash is the digest of the job's id (it
+ * only has to name the result, which never changes). -EBUSY when the job
+ * is not running. */
 int store_finish(store *s, const char *id, job_state state,
                  const char *error, const char *summary, const void *model,
                  size_t model_len, const void *stats, size_t stats_len,

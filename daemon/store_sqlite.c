@@ -8,23 +8,31 @@
  *   IMMEDIATE transactions, so our own threads never meet SQLITE_BUSY and
  *   its backoff sleeps; busy_timeout covers other processes (the sqlite3
  *   shell).
- * - store_put and store_cancel commit with synchronous=FULL (the WAL is
- *   fsynced before the caller answers 202/200); other changes commit with
- *   synchronous=NORMAL, which survives a crash of the process, and after a
- *   power loss at worst re-runs a job (store_recover).
+ * - store_put returns only once its commit is on disk (the caller
+ *   answers 202 after it), by group commit: the transaction commits with
+ *   synchronous=NORMAL under the write lock, then, outside it, one thread
+ *   fdatasyncs the WAL for every commit made so far while later ones
+ *   wait for it (wait_durable) — what synchronous=FULL does at each
+ *   commit, but concurrent submissions share one sync and the write lock
+ *   is not held during it. store_cancel commits with synchronous=FULL;
+ *   other changes commit with synchronous=NORMAL, which survives a crash
+ *   of the process, and after a power loss at worst re-runs a job
+ *   (store_recover).
  * - A lock file (flock) keeps a second facetd off the same directory: the
  *   store assumes it is the only node, so its recover can requeue every
  *   running job.
  * - Schema versioned by PRAGMA user_version and migrated step by step at
  *   open; a newer version than this code knows is refused.
  * - Blobs live in their own table keyed by seq*4 + kind, so the jobs
- *   table stays small and dense for listing and claiming. */
+ *   table stays small and dense for listing and claiming. A succeeded job
+ *   without a model blob (seq*4+1) has its input (seq*4) as result. */
 #include "store.h"
 
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/file.h>
@@ -81,9 +89,11 @@ static const char *const sql[NSTMT] = {
     [S_SEQ_STATE] = "SELECT seq,state FROM jobs WHERE id=?1",
     [S_DELETE_JOB] = "DELETE FROM jobs WHERE seq=?1",
     [S_DELETE_BLOBS] = "DELETE FROM blobs WHERE key BETWEEN ?1*4 AND ?1*4+3",
+    /* a succeeded job without a model blob has its input as result */
     [S_GET_BLOB] =
-        "SELECT data FROM blobs WHERE key=(SELECT seq FROM jobs WHERE id=?1)"
-        "*4+?2",
+        "SELECT b.data FROM jobs j JOIN blobs b ON b.key IN (j.seq*4+?2, "
+        "CASE WHEN ?2=1 AND j.state=2 THEN j.seq*4 END) WHERE j.id=?1 "
+        "ORDER BY b.key DESC LIMIT 1",
     [S_LIST] =
         "SELECT " COLS " FROM jobs WHERE (?1<0 OR state=?1) AND "
         "(?2 IS NULL OR source=?2) AND (?3 IS NULL OR id<?3) "
@@ -152,6 +162,14 @@ typedef struct sq_store {
     pthread_mutex_t conns_lock; /* guards conns */
     conn *conns;
     pthread_mutex_t write_lock; /* one write transaction at a time */
+    /* group commit (wait_durable) */
+    char wal[PATH_MAX + 8];     /* the WAL file, path + "-wal" */
+    atomic_uint_fast64_t committed; /* durable commits made so far */
+    pthread_mutex_t sync_lock;  /* guards the fields below */
+    pthread_cond_t sync_done;
+    uint64_t synced;            /* commits known to be on disk */
+    bool syncing;               /* a thread is syncing the WAL */
+    bool dir_synced;            /* the directory entry of the WAL is */
 } sq_store;
 
 static int db_err(sqlite3 *db, geo_err *err, const char *what)
@@ -391,11 +409,66 @@ static int insert_blob(conn *c, int64_t seq, store_blob kind,
     return rc == SQLITE_DONE ? 0 : db_err(c->db, err, "insert blob");
 }
 
+/* Puts the WAL (and, the first time, the directory holding it) on disk. */
+static int sync_wal(sq_store *s, geo_err *err)
+{
+    int fd = open(s->wal, O_RDONLY | O_CLOEXEC);
+    if (fd < 0 || fdatasync(fd) < 0) {
+        int e = errno;
+        if (fd >= 0)
+            close(fd);
+        return geo_err_set(err, -EIO, "store: syncing %s: %s", s->wal,
+                           strerror(e));
+    }
+    close(fd);
+    if (!s->dir_synced) {
+        char dir[PATH_MAX];
+        snprintf(dir, sizeof dir, "%s", s->path);
+        char *slash = strrchr(dir, '/');
+        if (slash)
+            *slash = '\0';
+        int dfd = open(slash ? dir : ".", O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+        if (dfd >= 0) {
+            if (fsync(dfd) == 0)
+                s->dir_synced = true;
+            close(dfd);
+        }
+    }
+    return 0;
+}
+
+/* Returns once commit number seq (counted after its COMMIT returned) is
+ * on disk: a thread that finds no sync running syncs the WAL for every
+ * commit counted so far; the others wait for it, and one of them syncs
+ * again if their commit came too late for it. */
+static int wait_durable(sq_store *s, uint64_t seq, geo_err *err)
+{
+    int r = 0;
+    pthread_mutex_lock(&s->sync_lock);
+    while (s->synced < seq && r == 0) {
+        if (s->syncing) {
+            pthread_cond_wait(&s->sync_done, &s->sync_lock);
+            continue;
+        }
+        s->syncing = true;
+        uint64_t target = atomic_load(&s->committed);
+        pthread_mutex_unlock(&s->sync_lock);
+        r = sync_wal(s, err);
+        pthread_mutex_lock(&s->sync_lock);
+        s->syncing = false;
+        if (r == 0 && target > s->synced)
+            s->synced = target;
+        pthread_cond_broadcast(&s->sync_done);
+    }
+    pthread_mutex_unlock(&s->sync_lock);
+    return r;
+}
+
 static int sq_put(store *s, const store_new_job *j, unsigned max_queued,
                   job_rec *ret_existing, geo_err *err)
 {
     CONN_OR_FAIL(s, c, err);
-    int r = begin_write(S(s), c, true, err);
+    int r = begin_write(S(s), c, false, err);
     if (r < 0)
         return r;
     sqlite3_stmt *st;
@@ -458,7 +531,11 @@ static int sq_put(store *s, const store_new_job *j, unsigned max_queued,
     r = insert_blob(c, sqlite3_last_insert_rowid(c->db), STORE_BLOB_INPUT,
                     j->input, j->input_len, err);
 out:
-    return end_write(S(s), c, r, err);
+    r = end_write(S(s), c, r, err);
+    if (r == 0)
+        r = wait_durable(S(s), atomic_fetch_add(&S(s)->committed, 1) + 1,
+                         err);
+    return r;
 }
 
 static int sq_claim(store *s, job_rec *ret, geo_err *err)
@@ -551,7 +628,12 @@ static int sq_finish(store *s, const char *id, job_state state,
         sqlite3_bind_text(st, 5, summary, -1, SQLITE_STATIC);
     sqlite3_bind_int64(st, 6, (int64_t)((model ? model_len : 0) +
                                         (stats ? stats_len : 0)));
-    sqlite3_bind_int64(st, 7, model ? (int64_t)job_hash64(model, model_len) : 0);
+    /* a result that is the input is named by its job: a job's results
+     * never change, so the id serves the ETags as well as a digest */
+    uint64_t hash = model ? job_digest64(model, model_len)
+                    : state == JOB_SUCCEEDED ? job_digest64(id, strlen(id))
+                                             : 0;
+    sqlite3_bind_int64(st, 7, (int64_t)hash);
     int rc = sqlite3_step(st);
     int64_t seq = rc == SQLITE_ROW ? sqlite3_column_int64(st, 0) : 0;
     done(st);
@@ -898,6 +980,8 @@ static void sq_close(store *base)
     pthread_key_delete(s->key);
     pthread_mutex_destroy(&s->conns_lock);
     pthread_mutex_destroy(&s->write_lock);
+    pthread_mutex_destroy(&s->sync_lock);
+    pthread_cond_destroy(&s->sync_done);
     if (s->lock_fd >= 0)
         close(s->lock_fd);
     free(s);
@@ -1000,6 +1084,10 @@ store *store_sqlite_open(const char *dir, geo_err *err)
     }
     pthread_mutex_init(&s->conns_lock, NULL);
     pthread_mutex_init(&s->write_lock, NULL);
+    pthread_mutex_init(&s->sync_lock, NULL);
+    pthread_cond_init(&s->sync_done, NULL);
+    atomic_init(&s->committed, 0);
+    snprintf(s->wal, sizeof s->wal, "%s-wal", s->path);
     conn *c = my_conn(s, err);
     if (!c || migrate(c, s->path, err) < 0) {
         sq_close(&s->base);

@@ -65,6 +65,8 @@ static int append_pass(geo_merge_report *all, const geo_merge_report *pass)
     all->failed += pass->failed;
     all->rounds += pass->rounds;
     all->statement_violations += pass->statement_violations;
+    all->views = pass->views;
+    all->noise = pass->noise;
     return 0;
 }
 
@@ -124,6 +126,20 @@ int geo_correct_auto(geo_poly *p, const geo_correct_opts *opts,
         sub = *ctx;
         sub.progress = NULL;
     }
+    /* the scan's view step and surface noise, read once off the input:
+     * merged facets no longer show them */
+    if (o.merge.views == 0 &&
+        (r = geo_merge_view_grid(q, &o.merge.views, NULL)) < 0) {
+        r = geo_err_set(err, r, "out of memory");
+        goto done;
+    }
+    if (o.merge.noise == 0 &&
+        (r = geo_merge_surface_noise(q, &o.merge, &o.merge.noise, err)) < 0)
+        goto done;
+    if (o.merge.noise == 0)
+        o.merge.noise = -1; /* nothing to measure it on: no noise test */
+    rep->views = o.merge.views;
+    rep->noise = o.merge.noise > 0 ? o.merge.noise : 0;
     uint32_t rounds = o.max_rounds ? o.max_rounds : 1;
     for (uint32_t k = 0; k < rounds; k++) {
         if (geo_ctx_progress(ctx, 0.1 + 0.7 * k / rounds) < 0) {

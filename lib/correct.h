@@ -52,6 +52,10 @@ typedef struct geo_correct_report {
     uint32_t clusters_found, clusters_collapsed, clusters_rolled_back;
     double cluster_max_displacement; /* mm */
     uint32_t reoriented_facets; /* facets flipped by geo_orient_repair */
+    uint32_t views;             /* the scanner's views used by the
+                                   automatic groups (0: none known) */
+    double noise;               /* the scan's surface noise they used, mm
+                                   (0: no noise test) */
     uint32_t rounds;
     uint32_t vertices_before, facets_before, vertices_after, facets_after;
     double volume_before, volume_after; /* mm³ */

@@ -732,3 +732,77 @@ uint32_t geo_frep_pieces_at(const geo_frep *f, const double p[3], double tol,
     }
     return n;
 }
+
+bool geo_frep_project_pieces(const geo_frep *f, const uint32_t *pieces,
+                             uint32_t n, double p[3], double tol,
+                             double max_step)
+{
+    if (n < 1 || n > 3)
+        return false;
+    for (uint32_t i = 0; i < n; i++)
+        if (pieces[i] >= f->nops)
+            return false;
+    double x[3] = {p[0], p[1], p[2]};
+    bool done = false;
+    for (int it = 0; it < 16 && !done; it++) {
+        double g[3][3], v[3], G[3][3];
+        done = true;
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t r = pieces[i], s = f->ops[r].start;
+            v[i] = geo_frep_run_grad(f, f->ops + s, r - s + 1, x, g[i]);
+            double gl = sqrt(g[i][0] * g[i][0] + g[i][1] * g[i][1] +
+                             g[i][2] * g[i][2]);
+            if (!(gl > 0))
+                return false;
+            done &= fabs(v[i]) <= tol * gl;
+        }
+        if (done)
+            break;
+        /* Gram matrix G = J·Jᵀ; the least-norm step is Jᵀ·G⁻¹·v */
+        for (uint32_t i = 0; i < n; i++)
+            for (uint32_t j = 0; j < n; j++)
+                G[i][j] = g[i][0] * g[j][0] + g[i][1] * g[j][1] +
+                          g[i][2] * g[j][2];
+        double lam[3];
+        if (n == 1) {
+            lam[0] = v[0] / G[0][0];
+        } else if (n == 2) {
+            double det = G[0][0] * G[1][1] - G[0][1] * G[1][0];
+            if (!(det > 1e-6 * G[0][0] * G[1][1]))
+                return false;
+            lam[0] = (G[1][1] * v[0] - G[0][1] * v[1]) / det;
+            lam[1] = (G[0][0] * v[1] - G[1][0] * v[0]) / det;
+        } else {
+            double c0 = G[1][1] * G[2][2] - G[1][2] * G[2][1];
+            double c1 = G[1][2] * G[2][0] - G[1][0] * G[2][2];
+            double c2 = G[1][0] * G[2][1] - G[1][1] * G[2][0];
+            double det = G[0][0] * c0 + G[0][1] * c1 + G[0][2] * c2;
+            if (!(det > 1e-6 * G[0][0] * G[1][1] * G[2][2]))
+                return false;
+            double inv[3][3] = {
+                {c0, G[0][2] * G[2][1] - G[0][1] * G[2][2],
+                 G[0][1] * G[1][2] - G[0][2] * G[1][1]},
+                {c1, G[0][0] * G[2][2] - G[0][2] * G[2][0],
+                 G[0][2] * G[1][0] - G[0][0] * G[1][2]},
+                {c2, G[0][1] * G[2][0] - G[0][0] * G[2][1],
+                 G[0][0] * G[1][1] - G[0][1] * G[1][0]}};
+            for (int i = 0; i < 3; i++)
+                lam[i] = (inv[i][0] * v[0] + inv[i][1] * v[1] +
+                          inv[i][2] * v[2]) / det;
+        }
+        for (uint32_t i = 0; i < n; i++)
+            for (int k = 0; k < 3; k++)
+                x[k] -= lam[i] * g[i][k];
+    }
+    if (!done)
+        return false;
+    double dx = x[0] - p[0], dy = x[1] - p[1], dz = x[2] - p[2];
+    if (!(dx * dx + dy * dy + dz * dz <= max_step * max_step))
+        return false;
+    double g[3], v = geo_frep_eval_grad(f, x, g);
+    double gl = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    if (!(gl > 0) || !(fabs(v) <= 1e3 * tol * gl))
+        return false;
+    memcpy(p, x, sizeof x);
+    return true;
+}

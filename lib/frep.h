@@ -161,6 +161,19 @@ uint32_t geo_frep_pieces_at(const geo_frep *f, const double p[3], double tol,
 double geo_frep_project(const geo_frep *f, double p[3], double tol,
                         double max_step);
 
+/* Moves p onto the part of the surface where the smooth pieces
+ * pieces[0..n) (n = 1, 2 or 3; roots in the program as returned by
+ * geo_frep_pieces_at) all vanish: on one piece by Newton steps along its
+ * gradient, on the crease of two or the corner of three by least-norm
+ * Gauss–Newton steps (at most 16), until every piece's |G|/|∇G| ≤ tol.
+ * The result must also lie on the surface itself (|F|/|∇F| ≤ 1000·tol:
+ * no other piece cuts that part away) and within max_step of the start.
+ * Returns true with p moved, or false with p unchanged (no convergence,
+ * nearly parallel pieces, off the surface, too far). */
+bool geo_frep_project_pieces(const geo_frep *f, const uint32_t *pieces,
+                             uint32_t n, double p[3], double tol,
+                             double max_step);
+
 /* An enclosure [ret_range[0], ret_range[1]] of F over the box [lo, hi]
  * with the whole program (after geo_frep_finish). Allocates 16 bytes per
  * instruction of scratch; on out-of-memory the enclosure is (−∞, +∞),

@@ -36,7 +36,8 @@ static double corner_angle(const double *a, const double *b, const double *c)
 }
 
 int geo_frep_mesh_metrics(const geo_frep *f, const geo_poly *m,
-                          geo_frep_metrics *ret, geo_err *err)
+                          const geo_ctx *ctx, geo_frep_metrics *ret,
+                          geo_err *err)
 {
     geo_frep_metrics r = {.nverts = m->nverts, .nfacets = m->nfacets};
     uint32_t nv = m->nverts;
@@ -57,9 +58,14 @@ int geo_frep_mesh_metrics(const geo_frep *f, const geo_poly *m,
     /* vertex normals, pieces, edges, areas */
     double esum = 0, esq = 0, asum = 0, asq = 0;
     uint64_t ne = 0;
-    for (uint32_t v = 0; v < nv; v++)
+    for (uint32_t v = 0; v < nv; v++) {
+        if ((v & 65535) == 0 && geo_ctx_canceled(ctx))
+            goto canceled;
         geo_frep_run_piece(f, prog, nprog, m->verts[v], NULL, &piece[v]);
+    }
     for (uint32_t fc = 0; fc < m->nfacets; fc++) {
+        if ((fc & 65535) == 0 && geo_ctx_canceled(ctx))
+            goto canceled;
         const uint32_t *fv = geo_poly_facet(m, fc);
         uint32_t k = geo_poly_facet_size(m, fc);
         double a = geo_poly_facet_area(m, fc);
@@ -98,6 +104,8 @@ int geo_frep_mesh_metrics(const geo_frep *f, const geo_poly *m,
     size_t na = 0, ns = 0, nd = 0;
     double dsum = 0, dsq = 0, nsum = 0, ssum = 0;
     for (uint32_t v = 0; v < nv; v++) {
+        if ((v & 65535) == 0 && geo_ctx_canceled(ctx))
+            goto canceled;
         if (!used[v])
             continue;
         double g[3], val = geo_frep_eval_grad(f, m->verts[v], g);
@@ -134,6 +142,8 @@ int geo_frep_mesh_metrics(const geo_frep *f, const geo_poly *m,
         r.sdev_mean = ssum / (double)ns;
         r.sdev_p95 = percentile(smooth, ns, 0.95);
     }
+    if (geo_ctx_canceled(ctx))
+        goto canceled;
     t = geo_topo_build(m, err);
     if (!t) {
         rc = -ENOMEM;
@@ -150,6 +160,9 @@ int geo_frep_mesh_metrics(const geo_frep *f, const geo_poly *m,
     r.volume = geo_poly_volume(m);
     r.area = geo_poly_area(m);
     *ret = r;
+    goto out;
+canceled:
+    rc = geo_err_set(err, -ECANCELED, "canceled");
 out:
     geo_topo_free(t);
     free(vn), free(piece), free(mixed), free(used), free(all), free(smooth);

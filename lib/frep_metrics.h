@@ -42,8 +42,10 @@ typedef struct geo_frep_metrics {
 } geo_frep_metrics;
 
 /* Measures mesh m (facets of any size; normals use their fan triangles)
- * against f. 0 or -ENOMEM (err set). */
+ * against f. 0, -ENOMEM or -ECANCELED (ctx, checked every 65536 vertices
+ * or facets; may be NULL) with err set. */
 int geo_frep_mesh_metrics(const geo_frep *f, const geo_poly *m,
-                          geo_frep_metrics *ret, geo_err *err);
+                          const geo_ctx *ctx, geo_frep_metrics *ret,
+                          geo_err *err);
 
 #endif

@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "edgemap.h"
 #include "trimesh.h"
 #include "vec.h"
 
@@ -26,7 +27,9 @@ typedef struct sharpener {
     uint32_t (*ps)[3]; /* piece set per vertex */
     size_t cap_ps;
     double *s;         /* mean edge length per original vertex */
-    double tol, L;
+    double tol, L, lo[3];
+    geo_edgemap corners; /* quantised position → corner vertex */
+    geo_tmesh_probe probe;
     geo_sharpen_stats st;
 } sharpener;
 
@@ -223,6 +226,41 @@ static bool crease_point(sharpener *S, uint32_t a, uint32_t b, double ret[3],
     return found;
 }
 
+/* A point of the surface between the ends of edge a–b, which share no
+ * piece and no crease of theirs passes the checks: the ends lie on two
+ * pieces that do not meet there, with a third piece between them — the
+ * typical case is a wall parallel to the rays, whose top and bottom ends
+ * lie on the pieces above and below a face the rays never hit. The
+ * paper's point S is moved onto F = 0 by Newton steps along ∇F; it must
+ * land on a piece neither end lies on, over the edge's interior and near
+ * it. Splitting there turns one edge that cannot be recovered into two
+ * that span a real crease each. */
+static bool middle_point(sharpener *S, uint32_t a, uint32_t b, double ret[3],
+                         uint32_t ret_set[3])
+{
+    const double *pa = S->m.v[a], *pb = S->m.v[b];
+    double sa = S->s[a] > 0 ? S->s[a] : 1, sb = S->s[b] > 0 ? S->s[b] : 1;
+    double x[3], ab[3], ax[3], d[3];
+    for (int k = 0; k < 3; k++)
+        x[k] = (sa * pb[k] + sb * pa[k]) / (sa + sb);
+    geo_vsub(pb, pa, ab);
+    double len2 = geo_vdot(ab, ab);
+    if (geo_frep_project(S->f, x, S->tol, sqrt(len2)) > S->tol)
+        return false;
+    uint32_t set[3] = {NOPIECE, NOPIECE, NOPIECE};
+    geo_frep_run_piece(S->f, S->prog, S->nprog, x, NULL, &set[0]);
+    if (share(set, S->ps[a]) || share(set, S->ps[b]))
+        return false;
+    geo_vsub(x, pa, ax);
+    double t = geo_vdot(ax, ab) / len2;
+    geo_vmadd(pa, t, ab, d);
+    if (!(t > 0.1 && t < 0.9) || geo_vdist(d, x) > 0.75 * sqrt(len2))
+        return false;
+    memcpy(ret, x, sizeof x);
+    memcpy(ret_set, set, sizeof set);
+    return true;
+}
+
 /* Whether splitting edge a–b at x leaves fair triangles on both sides. */
 static bool split_is_fair(const sharpener *S, uint32_t a, uint32_t b,
                           const double x[3])
@@ -242,10 +280,71 @@ static bool split_is_fair(const sharpener *S, uint32_t a, uint32_t b,
     return true;
 }
 
-static int edge_pass(sharpener *S, uint32_t *changed)
+/* Whether replacing triangles old[0..nold) by newt[0..nnew) (see
+ * geo_tmesh_clashes) leaves the surface free of contacts within two rings
+ * of them: every operation is checked exactly before it is applied, so
+ * recovery never folds the mesh onto itself. 1 clear, 0 not, or
+ * -ENOMEM. */
+static int clear_of(sharpener *S, const uint32_t *old, uint32_t nold,
+                    const uint32_t (*newt)[3], uint32_t nnew, uint32_t moved,
+                    const double x[3])
+{
+    int rc = geo_tmesh_clashes(&S->m, &S->probe, old, nold, newt, nnew, moved,
+                               x, 2);
+    return rc < 0 ? rc : !rc;
+}
+
+/* Splits edge a–b at x (pieces set) when the four new triangles are fair
+ * and clear. 1 split, 0 refused, or -ENOMEM. */
+static int split_at(sharpener *S, uint32_t a, uint32_t b, const double x[3],
+                    const uint32_t set[3])
+{
+    if (!split_is_fair(S, a, b, x))
+        return 0;
+    uint32_t h1 = geo_tmesh_find(&S->m, a, b), h2 = geo_tmesh_find(&S->m, b, a);
+    uint32_t c = geo_tmesh_opposite(&S->m, h1),
+             d = geo_tmesh_opposite(&S->m, h2), X = GEO_TMESH_NEWV;
+    uint32_t old[2] = {h1 / 3, h2 / 3};
+    uint32_t nt[4][3] = {{a, X, c}, {X, b, c}, {b, X, d}, {X, a, d}};
+    int ok = clear_of(S, old, 2, (const uint32_t(*)[3])nt, 4, UINT32_MAX, x);
+    if (ok <= 0)
+        return ok;
+    int v = add_vertex(S, x, set, 0.5 * (S->s[a] + S->s[b]));
+    if (v < 0)
+        return v;
+    int rc = geo_tmesh_split_edge(&S->m, a, b, (uint32_t)v);
+    return rc < 0 ? rc : 1;
+}
+
+/* Moves vertex v (neighbour b) to x when its triangles stay fair and
+ * clear. 1 moved, 0 refused, or -ENOMEM. */
+static int move_to(sharpener *S, uint32_t v, uint32_t b, const double x[3])
+{
+    if (!can_move(S, v, b, x))
+        return 0;
+    uint32_t old[64], nt[64][3], n = 0, w = b;
+    do {
+        uint32_t h = geo_tmesh_find(&S->m, v, w);
+        if (h == UINT32_MAX || n == 64)
+            return 0;
+        old[n] = h / 3;
+        memcpy(nt[n], S->m.t[h / 3], sizeof nt[n]);
+        n++;
+        w = geo_tmesh_opposite(&S->m, h);
+    } while (w != b);
+    int ok = clear_of(S, old, n, (const uint32_t(*)[3])nt, n, v, x);
+    if (ok <= 0)
+        return ok;
+    memcpy(S->m.v[v], x, sizeof S->m.v[0]);
+    return 1;
+}
+
+static int edge_pass(sharpener *S, uint32_t *changed, const geo_ctx *ctx)
 {
     uint32_t nt = S->m.nt;
-    for (uint32_t t = 0; t < nt; t++)
+    for (uint32_t t = 0; t < nt; t++) {
+        if ((t & 4095) == 0 && geo_ctx_canceled(ctx))
+            return -ECANCELED;
         for (int k = 0; k < 3 && !S->m.dead[t]; k++) {
             uint32_t a = S->m.t[t][k], b = S->m.t[t][(k + 1) % 3];
             if (a > b || share(S->ps[a], S->ps[b]) ||
@@ -253,8 +352,18 @@ static int edge_pass(sharpener *S, uint32_t *changed)
                 continue;
             double x[3];
             uint32_t set[3];
+            int rc;
             if (!crease_point(S, a, b, x, set)) {
-                S->st.nrejected++;
+                rc = middle_point(S, a, b, x, set) ? split_at(S, a, b, x, set)
+                                                   : 0;
+                if (rc < 0)
+                    return rc;
+                if (rc) {
+                    S->st.nmiddle_splits++;
+                    (*changed)++;
+                } else {
+                    S->st.nrejected++;
+                }
                 continue;
             }
             double ax[3], ab[3];
@@ -262,38 +371,104 @@ static int edge_pass(sharpener *S, uint32_t *changed)
             geo_vsub(S->m.v[b], S->m.v[a], ab);
             double tt = geo_vdot(ax, ab) / geo_vdot(ab, ab);
             uint32_t mv = UINT32_MAX;
-            if (tt < 0.25 && set_size(S->ps[a]) == 1 && can_move(S, a, b, x))
+            rc = 0;
+            if (tt < 0.25 && set_size(S->ps[a]) == 1 &&
+                (rc = move_to(S, a, b, x)) > 0)
                 mv = a;
-            else if (tt > 0.75 && set_size(S->ps[b]) == 1 &&
-                     can_move(S, b, a, x))
+            else if (rc >= 0 && tt > 0.75 && set_size(S->ps[b]) == 1 &&
+                     (rc = move_to(S, b, a, x)) > 0)
                 mv = b;
+            if (rc < 0)
+                return rc;
             if (mv != UINT32_MAX) {
-                memcpy(S->m.v[mv], x, sizeof S->m.v[0]);
                 memcpy(S->ps[mv], set, sizeof S->ps[0]);
                 S->st.nsnaps++;
                 (*changed)++;
                 continue;
             }
-            if (!split_is_fair(S, a, b, x)) {
-                S->st.nrejected++;
-                continue;
-            }
-            int v = add_vertex(S, x, set, 0.5 * (S->s[a] + S->s[b]));
-            if (v < 0)
-                return v;
-            int rc = geo_tmesh_split_edge(&S->m, a, b, (uint32_t)v);
-            if (rc < 0)
+            if ((rc = split_at(S, a, b, x, set)) < 0)
                 return rc;
-            S->st.nedge_splits++;
-            (*changed)++;
+            if (rc) {
+                S->st.nedge_splits++;
+                (*changed)++;
+            } else {
+                S->st.nrejected++;
+            }
         }
+    }
     return 0;
 }
 
-static int corner_pass(sharpener *S, uint32_t *changed)
+/* Corners are found once each: several triangles may span the same
+ * corner (four or more pieces can meet at one point, so even different
+ * triples of pieces give the same point), and a second vertex there would
+ * touch the first. Positions are hashed on a grid of 2⁻²⁰ of the bounds,
+ * and the 27 cells around a point are looked up. */
+static uint64_t corner_key(const sharpener *S, const double x[3], int dx,
+                           int dy, int dz)
+{
+    int d[3] = {dx, dy, dz};
+    uint64_t key = 0;
+    for (int k = 0; k < 3; k++) {
+        double q = floor((x[k] - S->lo[k]) / S->L * 1048576.0) + d[k];
+        uint64_t c = q < 0 ? 0 : q > 2097151.0 ? 2097151u : (uint64_t)q;
+        key = key << 21 | c;
+    }
+    return key;
+}
+
+static uint32_t corner_find(const sharpener *S, const double x[3])
+{
+    for (int dx = -1; dx <= 1; dx++)
+        for (int dy = -1; dy <= 1; dy++)
+            for (int dz = -1; dz <= 1; dz++) {
+                uint32_t v = geo_edgemap_get(&S->corners,
+                                             corner_key(S, x, dx, dy, dz));
+                if (v != UINT32_MAX &&
+                    geo_vdist(S->m.v[v], x) <= 1e3 * S->tol)
+                    return v;
+            }
+    return UINT32_MAX;
+}
+
+/* Triangle t spans a corner that already has vertex cx: when cx is the
+ * vertex opposite one of t's edges in the neighbouring triangle, that
+ * edge is flipped so that t's corners connect to cx (both new triangles
+ * must be fair and clear). 1 flipped, 0 not, or -ENOMEM. */
+static int flip_to_corner(sharpener *S, uint32_t t, uint32_t cx)
+{
+    geo_tmesh *m = &S->m;
+    for (int k = 0; k < 3; k++) {
+        uint32_t a = m->t[t][k], b = m->t[t][(k + 1) % 3],
+                 c = m->t[t][(k + 2) % 3];
+        uint32_t h = geo_tmesh_find(m, b, a);
+        if (h == UINT32_MAX || geo_tmesh_opposite(m, h) != cx)
+            continue;
+        double e1[3], e2[3], n0[3];
+        geo_vsub(m->v[b], m->v[a], e1);
+        geo_vsub(m->v[c], m->v[a], e2);
+        geo_vcross(e1, e2, n0);
+        /* flipping a–b turns (a,b,c), (b,a,cx) into (a,cx,c), (b,c,cx) */
+        if (!fair_tri(m->v[a], m->v[cx], m->v[c], n0) ||
+            !fair_tri(m->v[b], m->v[c], m->v[cx], n0))
+            return 0;
+        uint32_t old[2] = {t, h / 3};
+        uint32_t nt[2][3] = {{a, cx, c}, {b, c, cx}};
+        int ok = clear_of(S, old, 2, (const uint32_t(*)[3])nt, 2, UINT32_MAX,
+                          m->v[cx]);
+        if (ok <= 0)
+            return ok;
+        return geo_tmesh_flip(m, a, b) == 0;
+    }
+    return 0;
+}
+
+static int corner_pass(sharpener *S, uint32_t *changed, const geo_ctx *ctx)
 {
     uint32_t nt = S->m.nt;
     for (uint32_t t = 0; t < nt; t++) {
+        if ((t & 4095) == 0 && geo_ctx_canceled(ctx))
+            return -ECANCELED;
         if (S->m.dead[t])
             continue;
         const uint32_t *tv = S->m.t[t];
@@ -333,10 +508,37 @@ static int corner_pass(sharpener *S, uint32_t *changed)
         geo_vsub(S->m.v[tv[2]], S->m.v[tv[0]], e2);
         geo_vcross(e1, e2, n0);
         if (!solve3(S, u, x) || !on_surface(S, x) ||
-            geo_vdist(x, c) > emax ||
-            !fair_tri(S->m.v[tv[0]], S->m.v[tv[1]], x, n0) ||
+            geo_vdist(x, c) > emax) {
+            S->st.nrejected++;
+            continue;
+        }
+        uint32_t cx = corner_find(S, x);
+        if (cx != UINT32_MAX) {
+            int rc = flip_to_corner(S, t, cx);
+            if (rc < 0)
+                return rc;
+            if (rc) {
+                S->st.ncorner_flips++;
+                (*changed)++;
+            } else {
+                S->st.nrejected++;
+            }
+            continue;
+        }
+        if (!fair_tri(S->m.v[tv[0]], S->m.v[tv[1]], x, n0) ||
             !fair_tri(S->m.v[tv[1]], S->m.v[tv[2]], x, n0) ||
             !fair_tri(S->m.v[tv[2]], S->m.v[tv[0]], x, n0)) {
+            S->st.nrejected++;
+            continue;
+        }
+        uint32_t X = GEO_TMESH_NEWV;
+        uint32_t nt3[3][3] = {{tv[0], tv[1], X}, {tv[1], tv[2], X},
+                              {tv[2], tv[0], X}};
+        int ok = clear_of(S, &t, 1, (const uint32_t(*)[3])nt3, 3, UINT32_MAX,
+                          x);
+        if (ok < 0)
+            return ok;
+        if (!ok) {
             S->st.nrejected++;
             continue;
         }
@@ -345,6 +547,9 @@ static int corner_pass(sharpener *S, uint32_t *changed)
         if (v < 0)
             return v;
         int rc = geo_tmesh_split_tri(&S->m, t, (uint32_t)v);
+        if (rc == 0)
+            rc = geo_edgemap_put(&S->corners, corner_key(S, x, 0, 0, 0),
+                                 (uint32_t)v);
         if (rc < 0)
             return rc;
         S->st.ncorners++;
@@ -375,21 +580,30 @@ int geo_frep_sharpen(const geo_frep *f, geo_poly *m, uint8_t **tags,
     geo_frep_bounds(f, lo, hi);
     S.L = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
     S.tol = 1e-12 * S.L;
+    memcpy(S.lo, lo, sizeof S.lo);
     S.cap_ps = (size_t)m->nverts + 64;
     S.ps = malloc(S.cap_ps * sizeof *S.ps);
     S.s = calloc(S.cap_ps, sizeof *S.s);
     uint32_t *cnt = calloc((size_t)m->nverts + 1, sizeof *cnt);
     geo_poly *q = NULL;
     uint8_t *ntags = NULL;
-    if (!S.ps || !S.s || !cnt || geo_tmesh_init(&S.m, &m->verts[0][0],
-                                                m->nverts) < 0)
+    if (!S.ps || !S.s || !cnt || geo_edgemap_init(&S.corners, 64) < 0 ||
+        geo_tmesh_init(&S.m, &m->verts[0][0], m->nverts) < 0)
         goto oom;
     for (uint32_t v = 0; v < m->nverts; v++) {
+        if ((v & 65535) == 0 && geo_ctx_canceled(ctx)) {
+            rc = geo_err_set(err, -ECANCELED, "canceled");
+            goto done;
+        }
         S.ps[v][1] = S.ps[v][2] = NOPIECE;
         geo_frep_run_piece(f, S.prog, S.nprog, m->verts[v], NULL,
                            &S.ps[v][0]);
     }
     for (uint32_t fc = 0; fc < m->nfacets; fc++) {
+        if ((fc & 65535) == 0 && geo_ctx_canceled(ctx)) {
+            rc = geo_err_set(err, -ECANCELED, "canceled");
+            goto done;
+        }
         const uint32_t *fv = geo_poly_facet(m, fc);
         for (int k = 0; k < 3; k++) {
             double l = geo_vdist(m->verts[fv[k]], m->verts[fv[(k + 1) % 3]]);
@@ -409,14 +623,19 @@ int geo_frep_sharpen(const geo_frep *f, geo_poly *m, uint8_t **tags,
         if (cnt[v])
             S.s[v] /= cnt[v];
     for (int round = 0; round < 4; round++) {
-        if (geo_ctx_canceled(ctx)) {
-            rc = geo_err_set(err, -ECANCELED, "canceled");
+        if ((rc = geo_ctx_progress(ctx, round / 4.0)) < 0) {
+            geo_err_set(err, rc, "canceled");
             goto done;
         }
         uint32_t changed = 0;
-        if ((rc = edge_pass(&S, &changed)) < 0 ||
-            (rc = corner_pass(&S, &changed)) < 0)
+        if ((rc = edge_pass(&S, &changed, ctx)) < 0 ||
+            (rc = corner_pass(&S, &changed, ctx)) < 0) {
+            if (rc == -ECANCELED) {
+                geo_err_set(err, rc, "canceled");
+                goto done;
+            }
             goto oom;
+        }
         S.st.nrounds++;
         if (changed == 0)
             break;
@@ -441,7 +660,13 @@ int geo_frep_sharpen(const geo_frep *f, geo_poly *m, uint8_t **tags,
         if (ntags)
             ntags[nf] = S.m.tag[t];
     }
-    geo_poly_compute_planes(q, GEO_PLANE_UNWEIGHTED);
+    for (uint32_t fc = 0; fc < q->nfacets; fc++) {
+        if ((fc & 65535) == 0 && geo_ctx_canceled(ctx)) {
+            rc = geo_err_set(err, -ECANCELED, "canceled");
+            goto done;
+        }
+        geo_poly_facet_fit_plane(q, fc, GEO_PLANE_UNWEIGHTED, q->planes[fc]);
+    }
     if (ntags) {
         free(*tags);
         *tags = ntags;
@@ -458,6 +683,8 @@ oom:
 done:
     geo_poly_free(q);
     geo_tmesh_destroy(&S.m);
+    geo_edgemap_destroy(&S.corners);
+    geo_tmesh_probe_destroy(&S.probe);
     free(S.ps), free(S.s), free(cnt), free(ntags);
     return rc;
 }

@@ -14,9 +14,22 @@
  * edge is then split at X, each of its triangles into two (fig. 12), or,
  * when X is within a quarter of the edge from an end that lies on one
  * piece only, that end is moved onto X if none of its triangles turns over.
+ * When the two pieces have no crease there — the edge jumps over a third
+ * piece the rays never hit, as a wall parallel to the rays does over a
+ * vertical facet — S is moved onto F = 0 along ∇F instead; landing on a
+ * piece neither end lies on, it splits the edge into two that each span a
+ * real crease, recovered in the next round (seed 001's faces
+ * perpendicular to the camera plane: without this they stay chamfered,
+ * and refining them folds the mesh).
  * A triangle whose corners lie on three pieces pairwise sharing a crease
  * spans a corner of the object: it is split at the point where the three
- * pieces meet (Newton on three equations), under the same checks. Rounds
+ * pieces meet (Newton on three equations), under the same checks; each
+ * corner gets one vertex (four or more pieces may meet at one point), a
+ * later triangle spanning the same corner being flipped onto it. Every
+ * operation is checked exactly before it is applied: its new triangles
+ * must not touch or cross any triangle within two rings of it
+ * (geo_tmesh_clashes, lib/selfint.h's definition), so recovery never
+ * folds the mesh onto itself; refused operations are counted. Rounds
  * repeat (at most 4) until no edge spans two pieces. Edges along a
  * recovered crease join points on it, so the crease is represented by
  * mesh edges lying on it exactly (to rounding) instead of a chamfer.
@@ -24,7 +37,8 @@
  * Ownership: m is modified in place (vertices appended or moved, facets
  * rewritten as triangles in a new order); it must be a triangle mesh. 0,
  * -EINVAL (a non-triangle facet), -ENOMEM or -ECANCELED (m unchanged on
- * error). Not thread-safe for one m. */
+ * error). Progress runs 0 → 1 over the rounds; cancellation is checked
+ * every few thousand triangles. Not thread-safe for one m. */
 #ifndef GEO_FREP_SHARPEN_H
 #define GEO_FREP_SHARPEN_H
 
@@ -38,7 +52,9 @@ typedef struct geo_sharpen_stats {
     uint32_t nedge_splits;  /* edges split at a crease point */
     uint32_t nsnaps;        /* vertices moved onto a crease */
     uint32_t ncorners;      /* triangles split at a corner point */
-    uint32_t nrejected;     /* crease points refused by the checks */
+    uint32_t nmiddle_splits; /* edges split at a piece between their ends */
+    uint32_t ncorner_flips; /* edges flipped onto an existing corner */
+    uint32_t nrejected;     /* operations refused by the checks */
     uint32_t nrounds;
 } geo_sharpen_stats;
 

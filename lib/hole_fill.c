@@ -429,18 +429,45 @@ typedef struct refiner {
     uint64_t budget;     /* vertices refinement may still add */
     double cos_hard;
     geo_edgemap hard;    /* undirected hard edges (found once, see below) */
+    geo_tmesh_probe probe;
     geo_fill_stats *st;
 } refiner;
 
-/* Adds vertex p (projected) with desired length sv. Returns its index,
- * -ERANGE when the budget is spent, or -ENOMEM. */
-static int64_t new_vertex(refiner *R, const double p[3], double sv)
+/* Moves point p, made from the nfrom vertices from[], onto the surface
+ * (opts.place, or opts.project). 0, or -EDOM when place refuses it. */
+static int place_point(const refiner *R, double p[3], const uint32_t *from,
+                       uint32_t nfrom)
+{
+    if (R->o.place) {
+        const double *fp[3];
+        for (uint32_t k = 0; k < nfrom; k++)
+            fp[k] = R->m.v[from[k]];
+        return R->o.place(R->o.project_user, p, fp, nfrom) ? 0 : -EDOM;
+    }
+    if (R->o.project)
+        R->o.project(R->o.project_user, p);
+    return 0;
+}
+
+/* Whether replacing region triangles old[0..nold) by newt[0..nnew)
+ * (GEO_TMESH_NEWV standing at x) keeps the surface free of contacts
+ * within two rings of them (geo_tmesh_clashes; the tmesh holds the
+ * facets outside the region too, so contacts with them are seen). 1
+ * clear, 0 not, or -ENOMEM. */
+static int clear_of(refiner *R, const uint32_t *old, uint32_t nold,
+                    const uint32_t (*newt)[3], uint32_t nnew, const double x[3])
+{
+    int rc = geo_tmesh_clashes(&R->m, &R->probe, old, nold, newt, nnew,
+                               UINT32_MAX, x, 2);
+    return rc < 0 ? rc : !rc;
+}
+
+/* Adds vertex q (already placed) with desired length sv. Returns its
+ * index, -ERANGE when the budget is spent, or -ENOMEM. */
+static int64_t new_vertex(refiner *R, const double q[3], double sv)
 {
     if (R->budget == 0)
         return -ERANGE;
-    double q[3] = {p[0], p[1], p[2]};
-    if (R->o.project)
-        R->o.project(R->o.project_user, q);
     if (R->m.nv >= R->cap_s) {
         size_t nc = 2 * R->cap_s + 64;
         double *ns = realloc(R->s, nc * sizeof *ns);
@@ -474,9 +501,11 @@ static int relax(refiner *R, uint32_t a, uint32_t b)
 {
     geo_tmesh *m = &R->m;
     uint32_t h1 = geo_tmesh_find(m, a, b), h2 = geo_tmesh_find(m, b, a);
-    if (h1 == UINT32_MAX || h2 == UINT32_MAX)
+    if (h1 == UINT32_MAX || h2 == UINT32_MAX || !m->tag[h1 / 3] ||
+        !m->tag[h2 / 3])
         return 0; /* the region's boundary stays fixed */
     uint32_t c = geo_tmesh_opposite(m, h1), d = geo_tmesh_opposite(m, h2);
+    uint32_t old[2] = {h1 / 3, h2 / 3};
     const double *pa = m->v[a], *pb = m->v[b], *pc = m->v[c], *pd = m->v[d];
     if (geo_edgemap_get(&R->hard, geo_edge_ukey(a, b)) != UINT32_MAX) {
         double sa = R->s[a], sb = R->s[b];
@@ -486,6 +515,13 @@ static int relax(refiner *R, uint32_t a, uint32_t b)
         double S[3];
         for (int k = 0; k < 3; k++)
             S[k] = (sa * pb[k] + sb * pa[k]) / (sa + sb);
+        uint32_t ends[2] = {a, b}, X = GEO_TMESH_NEWV;
+        if (R->budget == 0 || place_point(R, S, ends, 2) < 0)
+            return 0;
+        uint32_t nt[4][3] = {{a, X, c}, {X, b, c}, {b, X, d}, {X, a, d}};
+        int ok = clear_of(R, old, 2, (const uint32_t(*)[3])nt, 4, S);
+        if (ok <= 0)
+            return ok;
         int64_t x = new_vertex(R, S, 0.5 * (sa + sb));
         if (x < 0)
             return x == -ERANGE ? 0 : (int)x;
@@ -523,10 +559,18 @@ static int relax(refiner *R, uint32_t a, uint32_t b)
     geo_vcross(e1, e2, t2);
     if (!(geo_vdot(t1, ns) > 0 && geo_vdot(t2, ns) > 0))
         return 0;
-    /* nor bend more than a hard edge would */
+    /* nor bend more than a hard edge would, unless the pair bent even
+     * more before (slivers along a silhouette) */
     if (geo_vnormalize(t1) == 0 || geo_vnormalize(t2) == 0 ||
-        geo_vdot(t1, t2) < R->cos_hard)
+        geo_vdot(t1, t2) < fmin(R->cos_hard, geo_vdot(n1, n2)))
         return 0;
+    if (geo_tmesh_find(m, c, d) != UINT32_MAX ||
+        geo_tmesh_find(m, d, c) != UINT32_MAX)
+        return 0;
+    uint32_t nt[2][3] = {{a, d, c}, {b, c, d}};
+    int ok = clear_of(R, old, 2, (const uint32_t(*)[3])nt, 2, pa);
+    if (ok <= 0)
+        return ok;
     int rc = geo_tmesh_flip(m, a, b);
     if (rc == -EEXIST)
         return 0;
@@ -542,7 +586,7 @@ static int relax_all(refiner *R)
     for (int sweep = 0; sweep < 64; sweep++) {
         uint32_t changed = 0, nt = R->m.nt;
         for (uint32_t t = 0; t < nt; t++)
-            for (int k = 0; k < 3 && !R->m.dead[t]; k++) {
+            for (int k = 0; k < 3 && !R->m.dead[t] && R->m.tag[t]; k++) {
                 uint32_t a = R->m.t[t][k], b = R->m.t[t][(k + 1) % 3];
                 if (a > b)
                     continue;
@@ -571,7 +615,7 @@ static int refine_passes(refiner *R, const geo_ctx *ctx)
             return -ECANCELED;
         uint32_t nsplit = 0, nt = R->m.nt;
         for (uint32_t t = 0; t < nt && R->budget > 0; t++) {
-            if (R->m.dead[t])
+            if (R->m.dead[t] || !R->m.tag[t])
                 continue;
             uint32_t v[3] = {R->m.t[t][0], R->m.t[t][1], R->m.t[t][2]};
             double c[3] = {0, 0, 0}, sc = 0;
@@ -587,6 +631,16 @@ static int refine_passes(refiner *R, const geo_ctx *ctx)
                 split = d > sc && d > R->s[v[k]];
             }
             if (!split)
+                continue;
+            if (place_point(R, c, v, 3) < 0)
+                continue;
+            uint32_t X = GEO_TMESH_NEWV;
+            uint32_t nt3[3][3] = {{v[0], v[1], X}, {v[1], v[2], X},
+                                  {v[2], v[0], X}};
+            int ok = clear_of(R, &t, 1, (const uint32_t(*)[3])nt3, 3, c);
+            if (ok < 0)
+                return ok;
+            if (!ok)
                 continue;
             int64_t x = new_vertex(R, c, sc);
             if (x == -ERANGE)
@@ -646,7 +700,7 @@ static int desired_lengths(refiner *R, const geo_poly *p,
     if (ntotal == 0) {
         /* no outside at all: the region's own mean edge length */
         for (uint32_t t = 0; t < R->m.nt; t++)
-            for (int k = 0; k < 3; k++) {
+            for (int k = 0; k < 3 && R->m.tag[t]; k++) {
                 total += geo_vdist(R->m.v[R->m.t[t][k]],
                                    R->m.v[R->m.t[t][(k + 1) % 3]]);
                 ntotal++;
@@ -656,6 +710,8 @@ static int desired_lengths(refiner *R, const geo_poly *p,
     for (int sweep = 0; sweep < 32; sweep++) {
         uint32_t filled = 0, missing = 0;
         for (uint32_t t = 0; t < R->m.nt; t++) {
+            if (!R->m.tag[t])
+                continue;
             const uint32_t *tv = R->m.t[t];
             double sum = 0;
             uint32_t known = 0;
@@ -692,7 +748,7 @@ static int write_back(geo_poly *p, const uint8_t *in_region,
     geo_poly *q = geo_poly_new();
     uint32_t live = 0;
     for (uint32_t t = 0; t < m->nt; t++)
-        live += !m->dead[t];
+        live += !m->dead[t] && m->tag[t];
     if (!q || geo_poly_reserve(q, m->nv, (size_t)p->nfacets + live,
                                geo_poly_ncorners(p) + 3 * (size_t)live) < 0)
         goto oom;
@@ -709,7 +765,7 @@ static int write_back(geo_poly *p, const uint8_t *in_region,
         memcpy(q->planes[nf], p->planes[f], sizeof q->planes[0]);
     }
     for (uint32_t t = 0; t < m->nt; t++) {
-        if (m->dead[t])
+        if (m->dead[t] || !m->tag[t])
             continue;
         int64_t nf = geo_poly_add_facet(q, m->t[t], 3);
         if (nf < 0)
@@ -734,8 +790,9 @@ static int refine(geo_poly *p, uint8_t *in_region, const geo_fill_opts *o,
     R.cos_hard = cos(o->hard_angle_deg * M_PI / 180.0);
     int rc = -ENOMEM;
     uint64_t nreg = 0;
+    uint8_t *near = NULL;
     if (geo_tmesh_init(&R.m, &p->verts[0][0], p->nverts) < 0 ||
-        geo_edgemap_init(&R.outside, geo_poly_ncorners(p)) < 0)
+        geo_edgemap_init(&R.outside, 64) < 0)
         goto out;
     for (uint32_t f = 0; f < p->nfacets; f++) {
         if (!in_region[f])
@@ -749,15 +806,50 @@ static int refine(geo_poly *p, uint8_t *in_region, const geo_fill_opts *o,
         else
             nreg++;
     }
+    /* outside triangles near the region join the tmesh as fixed context
+     * (tag 0), so the contact checks (two rings around each operation)
+     * see them: those with a vertex within one edge of a region vertex.
+     * Non-triangles and facets that would repeat a directed edge are left
+     * out of it. */
+    near = calloc((size_t)p->nverts + 1, 1);
+    if (!near)
+        goto out;
+    for (uint32_t t = 0; t < R.m.nt; t++)
+        for (int k = 0; k < 3; k++)
+            near[R.m.t[t][k]] = 2;
     for (uint32_t f = 0; f < p->nfacets; f++) {
         if (in_region[f])
             continue;
         const uint32_t *fv = geo_poly_facet(p, f);
         uint32_t k = geo_poly_facet_size(p, f);
+        bool touches = false;
+        for (uint32_t i = 0; i < k; i++)
+            touches |= near[fv[i]] == 2;
+        for (uint32_t i = 0; i < k && touches; i++)
+            if (!near[fv[i]])
+                near[fv[i]] = 1;
+    }
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        if (in_region[f])
+            continue;
+        const uint32_t *fv = geo_poly_facet(p, f);
+        uint32_t k = geo_poly_facet_size(p, f);
+        bool touches = false;
+        for (uint32_t i = 0; i < k; i++)
+            touches |= near[fv[i]] != 0;
+        if (!touches)
+            continue;
+        /* an edge between region vertices belongs to such a facet */
         for (uint32_t i = 0; i < k; i++)
             if (geo_edgemap_put(&R.outside,
                                 geo_edge_ukey(fv[i], fv[(i + 1) % k]), 1) < 0)
                 goto out;
+        if (k == 3 && geo_tmesh_add(&R.m, fv[0], fv[1], fv[2], 0) == -ENOMEM)
+            goto out;
+    }
+    if (geo_ctx_canceled(ctx)) {
+        rc = -ECANCELED;
+        goto out;
     }
     st->nregion_facets = (uint32_t)nreg;
     R.cap_s = (size_t)p->nverts + 64;
@@ -772,10 +864,10 @@ static int refine(geo_poly *p, uint8_t *in_region, const geo_fill_opts *o,
     if (geo_edgemap_init(&R.hard, 16) < 0)
         goto out;
     for (uint32_t t = 0; t < R.m.nt; t++)
-        for (int k = 0; k < 3; k++) {
+        for (int k = 0; k < 3 && R.m.tag[t]; k++) {
             uint32_t a = R.m.t[t][k], b = R.m.t[t][(k + 1) % 3];
             uint32_t h2 = geo_tmesh_find(&R.m, b, a);
-            if (a > b || h2 == UINT32_MAX)
+            if (a > b || h2 == UINT32_MAX || !R.m.tag[h2 / 3])
                 continue;
             double n1[3], n2[3];
             if (o->hard_edge) {
@@ -799,7 +891,9 @@ out:
     geo_tmesh_destroy(&R.m);
     geo_edgemap_destroy(&R.outside);
     geo_edgemap_destroy(&R.hard);
+    geo_tmesh_probe_destroy(&R.probe);
     free(R.s);
+    free(near);
     return rc;
 }
 
@@ -1291,8 +1385,13 @@ static int fair(geo_poly *p, uint32_t first_free, const geo_fill_opts *o,
                 solve_uniform(p, &A, v, nxt[k]);
             else
                 solve_length(p, &A, v, nxt[k]);
-            if (o->project)
+            if (o->place) {
+                const double *fp[1] = {p->verts[v]};
+                if (!o->place(o->project_user, nxt[k], fp, 1))
+                    memcpy(nxt[k], p->verts[v], sizeof nxt[k]);
+            } else if (o->project) {
                 o->project(o->project_user, nxt[k]);
+            }
         }
         /* apply, then undo the moves of every triangle that would turn
          * over or collapse (a fold, e.g. across a crease of the surface) */
@@ -1473,6 +1572,10 @@ int geo_fill_holes(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
         geo_edgemap_init(&F.edges, geo_poly_ncorners(p)) < 0)
         goto oom;
     for (uint32_t f = 0; f < p->nfacets; f++) {
+        if ((f & 65535) == 0 && geo_ctx_canceled(ctx)) {
+            rc = -ECANCELED;
+            goto fail;
+        }
         const uint32_t *fv = geo_poly_facet(p, f);
         uint32_t k = geo_poly_facet_size(p, f);
         for (uint32_t i = 0; i < k; i++)

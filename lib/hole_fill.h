@@ -52,6 +52,9 @@
  *    S = (s(P)·Q + s(Q)·P)/(s(P)+s(Q)) when √2·|PQ| > (s(P)+s(Q))/2, each
  *    of its two triangles into two (fig. 12). Passes repeat until no
  *    triangle splits. The region's boundary edges and vertices stay fixed.
+ *    Every split and flip is checked exactly before it is applied: its
+ *    new triangles must not touch or cross any triangle within two rings
+ *    (region or not; lib/trimesh.h geo_tmesh_clashes), else it is skipped.
  * 4. Fairing (opts.fair) moves only the vertices refinement added. With
  *    U¹(p) = −p + Σ w(p,i)·p_i / Σ w(p,i) and U²(p) = −U¹(p) +
  *    Σ w(p,i)·U¹(p_i) / Σ w(p,i): for w = 1 (GEO_FAIR_UNIFORM) U²(p) = 0 is
@@ -67,8 +70,9 @@
  *    line search by quadratic interpolation through three points. Both
  *    sweep over all free vertices (Jacobi) for fair_iterations sweeps or
  *    until no vertex moves by more than 10⁻⁴ of the local edge length.
- * Every new or moved vertex is passed through opts.project when set (the
- * F-rep triangulator projects onto F = 0).
+ * Every new or moved vertex is passed through opts.place or, without it,
+ * opts.project when set (the F-rep triangulator keeps it on the smooth
+ * piece or the crease its sources share).
  *
  * Orientation: a patch is oriented like the facets around its hole (each
  * boundary edge is used once more, in the opposite direction). Output:
@@ -136,6 +140,16 @@ typedef struct geo_fill_opts {
      * points where the construction puts them. Called from the calling
      * thread only. */
     void (*project)(void *user, double p[3]);
+    /* Places point p on the surface knowing which vertices it is made
+     * from (from[0..n): the three corners of a triangle split at its
+     * centroid, the two ends of a hard edge split at S, or, for a vertex
+     * moved by fairing, its position before the move); false refuses it
+     * (the triangle or edge is not split, the vertex does not move). A
+     * surface with hard edges needs this to keep each new point on the
+     * smooth piece or crease its sources lie on. NULL: project is used.
+     * Pointers are valid only during the call. */
+    bool (*place)(void *user, double p[3], const double *const *from,
+                  uint32_t n);
     /* Whether the segment p–q lies along a hard edge (a feature line) of
      * that surface; NULL means unknown, and then an edge is hard when the
      * dihedral angle of its two triangles exceeds hard_angle_deg. */

@@ -23,6 +23,8 @@ void geo_merge_opts_default(geo_merge_opts *o)
     o->max_angle_deg = 60.0;
     o->max_deviation = 0;
     o->rel_deviation = 5e-4;
+    o->views = 0;
+    o->noise = 0;
     o->max_rounds = 16;
 }
 
@@ -536,6 +538,40 @@ double geo_merge_max_deviation(const geo_merge_opts *o, const geo_poly *p)
                                 : o->rel_deviation * geo_poly_size(p);
 }
 
+static int check_auto_opts(const geo_merge_opts *o, geo_err *err)
+{
+    if (!(o->max_angle_deg > 0 && o->max_angle_deg < 90) || !(o->max_deviation >= 0) ||
+        !(o->rel_deviation >= 0) || isnan(o->noise))
+        return geo_err_set(err, -EINVAL, "max_angle_deg must be in (0, 90) and "
+                           "the deviations non-negative");
+    return 0;
+}
+
+int geo_merge_surface_noise(const geo_poly *p, const geo_merge_opts *opts,
+                            double *ret, geo_err *err)
+{
+    geo_merge_opts o;
+    if (opts)
+        o = *opts;
+    else
+        geo_merge_opts_default(&o);
+    int r = check_auto_opts(&o, err);
+    if (r < 0)
+        return r;
+    geo_merge_report rep = {0};
+    session s;
+    if ((r = session_open(&s, p, &o, &rep, err)) < 0)
+        return r;
+    geo_group_crit c = {cos(o.max_angle_deg * M_PI / 180.0),
+                        geo_merge_max_deviation(&o, p), 0, 0};
+    r = geo_mw_surface_noise(s.w, &c, ret);
+    if (r < 0)
+        geo_err_set(err, r, "out of memory");
+    session_close(&s);
+    geo_merge_report_clear(&rep);
+    return r;
+}
+
 int geo_merge_auto(geo_poly *p, const geo_merge_opts *opts,
                    const geo_ctx *ctx, geo_merge_report *report,
                    geo_err *err)
@@ -545,25 +581,34 @@ int geo_merge_auto(geo_poly *p, const geo_merge_opts *opts,
         o = *opts;
     else
         geo_merge_opts_default(&o);
-    if (!(o.max_angle_deg > 0 && o.max_angle_deg < 90) || !(o.max_deviation >= 0) ||
-        !(o.rel_deviation >= 0))
-        return geo_err_set(err, -EINVAL, "max_angle_deg must be in (0, 90) and "
-                           "the deviations non-negative");
+    int r = check_auto_opts(&o, err);
+    if (r < 0)
+        return r;
     geo_merge_report local = {0}, *rep = report ? report : &local;
     geo_merge_report_clear(rep);
     session s;
-    int r = session_open(&s, p, &o, rep, err);
+    r = session_open(&s, p, &o, rep, err);
     if (r < 0) {
         geo_merge_report_clear(&local);
         return r;
     }
-    double max_dev = geo_merge_max_deviation(&o, p);
+    geo_group_crit c = {cos(o.max_angle_deg * M_PI / 180.0),
+                        geo_merge_max_deviation(&o, p), 0, 0};
+    uint32_t views = o.views;
+    if (views == 0 && (r = geo_merge_view_grid(p, &views, NULL)) < 0)
+        r = geo_err_set(err, r, "out of memory");
+    c.step = views ? M_PI / views : 0;
+    if (r == 0 && o.noise > 0)
+        c.noise = o.noise;
+    else if (r == 0 && o.noise == 0 && (r = geo_mw_surface_noise(s.w, &c, &c.noise)) < 0)
+        r = geo_err_set(err, r, "out of memory");
+    rep->views = views;
+    rep->noise = c.noise;
     uint32_t rounds = o.max_rounds ? o.max_rounds : 1;
     for (uint32_t k = 0; k < rounds && r == 0; k++) {
         uint32_t merged = 0;
-        r = geo_mw_auto_round(s.w, o.max_angle_deg, max_dev, ctx,
-                              (double)k / rounds, (double)(k + 1) / rounds, rep,
-                              &merged, err);
+        r = geo_mw_auto_round(s.w, &c, ctx, (double)k / rounds,
+                              (double)(k + 1) / rounds, rep, &merged, err);
         rep->rounds++;
         if (merged == 0)
             break;

@@ -32,7 +32,10 @@
  * Groups found automatically (geo_merge_auto): connected groups of facets
  * sharing edges, each facet's normal within max_angle_deg of the group's
  * common plane and every vertex of the group within max_deviation of that
- * plane; grown greedily from the largest facet not yet in a group; only
+ * plane, and — the scan's own error — each facet that joins within
+ * a few times the scan's surface noise plus a view step's roof of the
+ * plane the group had before it; grown greedily from the largest facet
+ * not yet in a group; only
  * simply connected groups (one enclosing contour, §2.1) are merged. Rounds
  * repeat until a round merges nothing (merged facets can merge again).
  *
@@ -86,6 +89,14 @@ typedef struct geo_merge_opts {
      * (bounding-box diagonal). */
     double max_deviation;
     double rel_deviation;
+    /* Automatic groups on a scan (see merge_groups.c, README): the
+     * scanner's views over 180° (K), 0 to read them off the model
+     * (geo_merge_view_grid; none found: no view-step term) [0]; the
+     * scan's surface noise, mm (area RMS distance of one true facet's
+     * slivers from its plane), 0 to measure it on the model, negative to
+     * leave the noise test out [0]. */
+    uint32_t views;
+    double noise;
     /* Automatic groups: rounds at most [16]. */
     uint32_t max_rounds;
 } geo_merge_opts;
@@ -138,6 +149,9 @@ typedef struct geo_merge_report {
     uint32_t *vmap;
     uint32_t statement_violations; /* §2.7 statements 1–3 found false
                                       (groups rolled back); 0 expected */
+    uint32_t views;       /* automatic groups: the views used (0: none) */
+    double noise;         /* automatic groups: the surface noise used, mm
+                             (0: no noise test) */
     uint32_t vertices_before, facets_before, vertices_after, facets_after;
     double volume_before, volume_after;
 } geo_merge_report;
@@ -148,6 +162,21 @@ void geo_merge_report_clear(geo_merge_report *r);
 /* The deviation bound opts gives for p: max_deviation, or rel_deviation ×
  * geo_poly_size(p) when max_deviation is 0. */
 double geo_merge_max_deviation(const geo_merge_opts *o, const geo_poly *p);
+
+/* The scanner's views over 180° as the facet normals of a raw scan show
+ * them (see lib/merge_scale.c): K when at least half of the facets that
+ * are not horizontal have normal azimuths, modulo 180°, on a grid of step
+ * 180°/K, else 0. *ret_fraction (may be NULL) gets the fraction on the
+ * grid. O(n log n). Returns 0 or -ENOMEM. Thread-safe (reads p only). */
+int geo_merge_view_grid(const geo_poly *p, uint32_t *ret_views,
+                        double *ret_fraction);
+
+/* The surface noise geo_merge_auto measures when opts->noise is 0 (see
+ * lib/merge_scale.c), mm, 0 when p has no group of nearly coplanar
+ * facets; opts NULL means defaults. Returns 0, -EINVAL (p not closed and
+ * manifold), -ENOMEM. */
+int geo_merge_surface_noise(const geo_poly *p, const geo_merge_opts *opts,
+                            double *ret, geo_err *err);
 
 /* Merges the group of n facets of p (indices into p) in place. Returns 0
  * when merged; -EINVAL when the group cannot be merged or the result

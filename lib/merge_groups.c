@@ -4,18 +4,27 @@
  * A group grows from a seed facet (the largest facet not yet in a group)
  * by adding, one at a time, the neighbour (across an edge) whose normal is
  * closest to the group's plane, as long as (a) every member's normal stays
- * within max_angle of the plane and (b) every vertex of the members stays
- * within max_dev of it. The plane is the least-squares plane of the
- * members' distinct vertices, kept as running moments (about the seed's
- * first vertex, so the sums do not cancel) and solved with the 3×3 eigen
- * solver for every candidate. A candidate that fails is not tried again
- * for that group. The deviation decides, the angle only keeps steep
- * facets apart: a K-contour scan tilts its silhouette planes by up to
- * about 180°/K, and along every true edge it leaves bevels, narrow strips
- * whose normals lie anywhere between the two facets that meet there, so
- * no angle separates slivers from true facets (README "Automatic
- * correction" has the measurements), while the vertices of one true
- * facet's slivers stay within the scan's error, a few µm, of one plane.
+ * within max_angle of the plane, (b) every vertex of the members stays
+ * within max_dev of it and (c) on a scan, the joining facet lies within
+ * the scan's own error of the plane the group had before it (area RMS
+ * distance). The plane is the least-squares plane of the members'
+ * distinct vertices, kept as running moments (about the seed's first
+ * vertex, so the sums do not cancel) and solved with the 3×3 eigen solver
+ * for every candidate. A candidate that fails is not tried again for that
+ * group.
+ *
+ * Why (b) and (c): the vertices of one true facet's slivers stay within
+ * the scan's error, a few µm, of one plane, and along every true edge the
+ * scanner leaves bevels, narrow strips whose normals lie anywhere between
+ * the two facets that meet there, so no angle separates slivers from true
+ * facets (README "Automatic correction" has the measurements). But (b)
+ * alone lets the refitted plane split the difference: two true facets
+ * 2.8° apart and 0.16 mm wide deviate only ±2 µm from their common plane,
+ * less than a single facet's scan vertices do. The joining facet's RMS
+ * distance from the plane before it joined does not split anything: such
+ * a neighbour lies 4.5 µm RMS off, a sliver of the same facet within its
+ * noise plus the roof its view step leaves (step × extent). (c) uses the
+ * surface noise measured on the scan itself (merge_scale.c).
  * Cost per group O(c · (m + v)) for c candidates, m members, v vertices;
  * groups are small. */
 #include "merge_impl.h"
@@ -44,6 +53,8 @@ static int cmp_area(const void *a, const void *b)
 typedef struct grower {
     geo_mw *w;
     geo_edit *e;
+    const geo_group_crit *c;
+    double lo[3], hi[3]; /* box of the members' vertices */
     double o[3];        /* origin of the moments */
     double s[3], ss[3][3];
     uint32_t cnt;
@@ -106,13 +117,59 @@ static void moments_add(grower *g, const double x[3])
     g->cnt++;
 }
 
+void geo_mw_facet_moments(const geo_edit *e, uint32_t f, const double o[3],
+                          double *a, double s[3], double ss[3][3])
+{
+    uint32_t n = geo_edit_fn(e, f);
+    const uint32_t *fv = geo_edit_fv(e, f);
+    double p0[3];
+    geo_vsub(e->verts[fv[0]], o, p0);
+    for (uint32_t i = 1; i + 1 < n; i++) {
+        double p1[3], p2[3], u[3], v[3], c[3], m[3];
+        geo_vsub(e->verts[fv[i]], o, p1);
+        geo_vsub(e->verts[fv[i + 1]], o, p2);
+        geo_vsub(p1, p0, u);
+        geo_vsub(p2, p0, v);
+        geo_vcross(u, v, c);
+        double ar = 0.5 * geo_vlen(c);
+        for (int k = 0; k < 3; k++)
+            m[k] = (p0[k] + p1[k] + p2[k]) / 3;
+        *a += ar;
+        /* ∫ x xᵀ over a triangle = A/12 (Σ pᵢ pᵢᵀ + 9 m mᵀ) */
+        for (int k = 0; k < 3; k++) {
+            s[k] += ar * m[k];
+            for (int l = k; l < 3; l++)
+                ss[k][l] += ar / 12 * (p0[k] * p0[l] + p1[k] * p1[l] +
+                                       p2[k] * p2[l] + 9 * m[k] * m[l]);
+        }
+    }
+}
+
+/* Area RMS distance of facet f from plane pl. */
+static double rms_from_plane(const geo_edit *e, uint32_t f, const double pl[4])
+{
+    double o[3], a = 0, s[3] = {0, 0, 0}, ss[3][3] = {{0}};
+    memcpy(o, e->verts[geo_edit_fv(e, f)[0]], sizeof o);
+    geo_mw_facet_moments(e, f, o, &a, s, ss);
+    if (!(a > 0))
+        return 0;
+    /* d(x) = n·(x − o) + h with h = pl(o): ∫d² = nᵀSS n + 2h n·s + h² a */
+    const double *n = pl;
+    double h = geo_plane_eval(pl, o), q = 0;
+    for (int k = 0; k < 3; k++)
+        for (int l = 0; l < 3; l++)
+            q += n[k] * n[l] * (k <= l ? ss[k][l] : ss[l][k]);
+    double m = (q + 2 * h * geo_vdot(n, s)) / a + h * h;
+    return sqrt(fmax(m, 0));
+}
+
 /* Would facet f fit the group? On success the plane is returned in
  * ret_plane. */
-static bool fits(grower *g, uint32_t f, double cosmax, double max_dev,
-                 double ret_plane[4])
+static bool fits(grower *g, uint32_t f, double ret_plane[4])
 {
     geo_edit *e = g->e;
     geo_mw *w = g->w;
+    const geo_group_crit *c = g->c;
     uint32_t n = geo_edit_fn(e, f);
     const uint32_t *fv = geo_edit_fv(e, f);
     double extra[64][3];
@@ -125,20 +182,36 @@ static bool fits(grower *g, uint32_t f, double cosmax, double max_dev,
             return false;
         memcpy(extra[nx++], e->verts[v], sizeof extra[0]);
     }
+    double lo[3], hi[3], d[3];
+    memcpy(lo, g->lo, sizeof lo);
+    memcpy(hi, g->hi, sizeof hi);
+    for (uint32_t i = 0; i < nx; i++)
+        for (int k = 0; k < 3; k++) {
+            lo[k] = fmin(lo[k], extra[i][k]);
+            hi[k] = fmax(hi[k], extra[i][k]);
+        }
+    geo_vsub(hi, lo, d);
+    double ext = geo_vlen(d);
     double pl[4];
     if (!moments_plane(g, (const double(*)[3])extra, nx, pl))
         return false;
-    if (geo_vdot(e->planes[f], pl) < cosmax)
+    if (geo_vdot(e->planes[f], pl) < c->cosmax)
         return false;
     for (uint32_t i = 0; i < g->nmem; i++)
-        if (geo_vdot(e->planes[g->mem[i]], pl) < cosmax)
+        if (geo_vdot(e->planes[g->mem[i]], pl) < c->cosmax)
             return false;
     for (uint32_t i = 0; i < nx; i++)
-        if (fabs(geo_plane_eval(pl, extra[i])) > max_dev)
+        if (fabs(geo_plane_eval(pl, extra[i])) > c->max_dev)
             return false;
     for (uint32_t i = 0; i < g->nvs; i++)
-        if (fabs(geo_plane_eval(pl, e->verts[g->vs[i]])) > max_dev)
+        if (fabs(geo_plane_eval(pl, e->verts[g->vs[i]])) > c->max_dev)
             return false;
+    if (c->noise > 0) {
+        double tol = GEO_GROUP_RMS_FACTOR * c->noise +
+                     GEO_GROUP_STEP_FACTOR * ext * c->step;
+        if (rms_from_plane(e, f, g->plane) > tol)
+            return false;
+    }
     memcpy(ret_plane, pl, sizeof pl);
     return true;
 }
@@ -162,6 +235,10 @@ static int add_member(grower *g, uint32_t f, uint8_t *taken)
             return -ENOMEM;
         g->vs[g->nvs++] = v;
         moments_add(g, e->verts[v]);
+        for (int k = 0; k < 3; k++) {
+            g->lo[k] = fmin(g->lo[k], e->verts[v][k]);
+            g->hi[k] = fmax(g->hi[k], e->verts[v][k]);
+        }
     }
     /* its neighbours become candidates */
     for (uint32_t i = 0; i < n; i++) {
@@ -182,12 +259,11 @@ static int add_member(grower *g, uint32_t f, uint8_t *taken)
     return 0;
 }
 
-int geo_mw_find_groups(geo_mw *w, double max_angle_deg, double max_dev,
+int geo_mw_find_groups(geo_mw *w, const geo_group_crit *c,
                        uint32_t **ret_start, uint32_t **ret_facets,
                        uint32_t *ret_n)
 {
     geo_edit *e = w->e;
-    double cosmax = cos(max_angle_deg * M_PI / 180.0);
     uint32_t nf = e->nfacets, nlive = 0;
     area_id *order = malloc(((size_t)nf + 1) * sizeof *order);
     uint8_t *taken = calloc((size_t)nf + 1, 1);
@@ -197,6 +273,7 @@ int geo_mw_find_groups(geo_mw *w, double max_angle_deg, double max_dev,
     memset(&g, 0, sizeof g);
     g.w = w;
     g.e = e;
+    g.c = c;
     int r = 0;
     if (!order || !taken || !start)
         goto oom;
@@ -221,6 +298,10 @@ int geo_mw_find_groups(geo_mw *w, double max_angle_deg, double max_dev,
         memset(g.ss, 0, sizeof g.ss);
         memcpy(g.o, e->verts[geo_edit_fv(e, seed)[0]], sizeof g.o);
         memcpy(g.seedn, e->planes[seed], sizeof g.seedn);
+        for (int a = 0; a < 3; a++) {
+            g.lo[a] = INFINITY;
+            g.hi[a] = -INFINITY;
+        }
         if (add_member(&g, seed, taken) < 0)
             goto oom;
         memcpy(g.plane, e->planes[seed], sizeof g.plane);
@@ -243,7 +324,7 @@ int geo_mw_find_groups(geo_mw *w, double max_angle_deg, double max_dev,
             if (taken[h] || w->fmark[h] == w->gen)
                 continue;
             double pl[4];
-            if (bd < cosmax || !fits(&g, h, cosmax, max_dev, pl)) {
+            if (bd < c->cosmax || !fits(&g, h, pl)) {
                 w->fmark[h] = w->gen; /* rejected for this group */
                 continue;
             }
@@ -273,16 +354,58 @@ done:
     return r;
 }
 
-int geo_mw_auto_round(geo_mw *w, double max_angle_deg, double max_dev,
-                      const geo_ctx *ctx, double frac0, double frac1,
-                      geo_merge_report *rep, uint32_t *ret_merged,
-                      geo_err *err)
+/* Does the group still meet the criterion on the current model? Groups
+ * of a round are found on the model the round started from; a group
+ * merged earlier in the round may have lifted or cut the facets of a
+ * later one, whose vertices can then lie far from any common plane. */
+static int still_fits(geo_mw *w, const uint32_t *mem, uint32_t n,
+                      const geo_group_crit *c, bool *ret)
+{
+    geo_edit *e = w->e;
+    if (geo_mw_stamp(w) < 0)
+        return -ENOMEM;
+    grower g;
+    memset(&g, 0, sizeof g);
+    g.w = w;
+    g.e = e;
+    memcpy(g.o, e->verts[geo_edit_fv(e, mem[0])[0]], sizeof g.o);
+    memcpy(g.seedn, e->planes[mem[0]], sizeof g.seedn);
+    int r = 0;
+    for (uint32_t i = 0; i < n && r == 0; i++) {
+        uint32_t nv = geo_edit_fn(e, mem[i]);
+        for (uint32_t j = 0; j < nv; j++) {
+            uint32_t v = geo_edit_fv(e, mem[i])[j];
+            if (w->vmark[v] == w->gen)
+                continue;
+            w->vmark[v] = w->gen;
+            if (geo_mw_grow(&g.vs, &g.capvs, (size_t)g.nvs + 1) < 0) {
+                r = -ENOMEM;
+                break;
+            }
+            g.vs[g.nvs++] = v;
+            moments_add(&g, e->verts[v]);
+        }
+    }
+    double pl[4];
+    bool ok = r == 0 && moments_plane(&g, NULL, 0, pl);
+    for (uint32_t i = 0; ok && i < n; i++)
+        ok = geo_vdot(e->planes[mem[i]], pl) >= c->cosmax;
+    for (uint32_t i = 0; ok && i < g.nvs; i++)
+        ok = fabs(geo_plane_eval(pl, e->verts[g.vs[i]])) <= c->max_dev;
+    free(g.vs);
+    *ret = ok;
+    return r;
+}
+
+int geo_mw_auto_round(geo_mw *w, const geo_group_crit *c, const geo_ctx *ctx,
+                      double frac0, double frac1, geo_merge_report *rep,
+                      uint32_t *ret_merged, geo_err *err)
 {
     uint32_t *start = NULL, *facets = NULL, ng = 0, merged = 0;
     int r = geo_mw_world_build(w, err);
     if (r < 0)
         return r;
-    if (geo_mw_find_groups(w, max_angle_deg, max_dev, &start, &facets, &ng) < 0)
+    if (geo_mw_find_groups(w, c, &start, &facets, &ng) < 0)
         return geo_err_set(err, -ENOMEM, "out of memory");
     uint32_t *live = NULL, caplive = 0;
     for (uint32_t g = 0; g < ng; g++) {
@@ -302,6 +425,13 @@ int geo_mw_auto_round(geo_mw *w, double max_angle_deg, double max_dev,
                 live[n++] = facets[k];
         if (n < 2)
             continue;
+        bool ok;
+        if (still_fits(w, live, n, c, &ok) < 0) {
+            r = geo_err_set(err, -ENOMEM, "out of memory");
+            break;
+        }
+        if (!ok)
+            continue; /* found again, as it now is, next round */
         geo_merge_group *gr;
         if (geo_merge_report_add(rep, live, n, &gr) < 0) {
             r = geo_err_set(err, -ENOMEM, "out of memory");

@@ -138,22 +138,54 @@ int geo_merge_report_finish(geo_merge_report *rep, const geo_edit *e,
                             const double (*in_verts)[3], uint32_t nin,
                             geo_poly *out);
 
+/* The criterion of automatic groups (merge_groups.c, README "Automatic
+ * correction"): every member's normal within acos(cosmax) of the group's
+ * least-squares plane and every vertex within max_dev of it; when noise
+ * > 0, also each facet that joins within rms_factor·noise +
+ * step_factor·extent·step (area RMS distance, mm) of the plane the group
+ * had before it, extent being the diagonal of the grown group's box and
+ * step the scanner's view step (radians, 0 when unknown). */
+/* The factors of the noise test (README "Automatic correction" says how
+ * they were chosen). */
+#define GEO_GROUP_RMS_FACTOR 3.0
+#define GEO_GROUP_STEP_FACTOR 0.1
+
+typedef struct geo_group_crit {
+    double cosmax;
+    double max_dev;
+    double noise;
+    double step;
+} geo_group_crit;
+
 /* Automatic groups of the current edit (merge_groups.c): CSR lists
  * (*ret_start: *ret_n + 1 offsets; *ret_facets) malloc'd for the caller,
  * largest seed first. 0 or -ENOMEM. */
-int geo_mw_find_groups(geo_mw *w, double max_angle_deg, double max_dev,
+int geo_mw_find_groups(geo_mw *w, const geo_group_crit *c,
                        uint32_t **ret_start, uint32_t **ret_facets,
                        uint32_t *ret_n);
 
 /* One round of automatic merging: finds the groups and merges each
- * (members merged away meanwhile are dropped from it); groups go into
- * rep. *ret_merged counts the groups merged. 0, -ENOMEM or -ECANCELED
- * (ctx is asked between groups; frac0..frac1 is this round's share of
- * the progress). */
-int geo_mw_auto_round(geo_mw *w, double max_angle_deg, double max_dev,
-                      const geo_ctx *ctx, double frac0, double frac1,
-                      geo_merge_report *rep, uint32_t *ret_merged,
-                      geo_err *err);
+ * (members merged away meanwhile are dropped from it, and a group whose
+ * facets an earlier group changed is merged only if it still meets the
+ * angle and deviation bounds); groups go into rep. *ret_merged counts the
+ * groups merged. 0, -ENOMEM or -ECANCELED (ctx is asked between groups;
+ * frac0..frac1 is this round's share of the progress). */
+int geo_mw_auto_round(geo_mw *w, const geo_group_crit *c, const geo_ctx *ctx,
+                      double frac0, double frac1, geo_merge_report *rep,
+                      uint32_t *ret_merged, geo_err *err);
+
+/* Area moments of facet f about the point o (fan triangles): area,
+ * first moment Σ∫(x − o) dA and second moment Σ∫(x − o)(x − o)ᵀ dA
+ * (added to *a, s and ss). */
+void geo_mw_facet_moments(const geo_edit *e, uint32_t f, const double o[3],
+                          double *a, double s[3], double ss[3][3]);
+
+/* The surface noise of the scan (merge_scale.c): the median, over the
+ * groups of at least two facets the criterion c finds (with c->noise
+ * ignored), of the area RMS distance of the group's surface from its
+ * area least-squares plane; 0 when there is no such group. 0 or
+ * -ENOMEM. */
+int geo_mw_surface_noise(geo_mw *w, const geo_group_crit *c, double *ret);
 
 /* Side of v against plane with the tolerance: 0 when |plane(v)| ≤ eps,
  * else the sign; decided once and cached until geo_mw_side_reset (which

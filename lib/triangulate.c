@@ -83,6 +83,42 @@ static void project_cb(void *user, double p[3])
     geo_frep_project(s->f, p, s->tol, s->max_step);
 }
 
+/* Keeps a point made from vertices on the surface on what they share: the
+ * smooth piece all of them lie on, or the crease (corner) when they share
+ * two (three); refuses it when they share nothing — a triangle across a
+ * crease is not split, since its centroid would land on either side and
+ * fold the mesh — or when that part of the piece is not on the surface
+ * there. */
+static bool place_cb(void *user, double p[3], const double *const *from,
+                     uint32_t n)
+{
+    const surface *s = user;
+    uint32_t common[4], nc = 0;
+    for (uint32_t k = 0; k < n; k++) {
+        uint32_t pc[4];
+        uint32_t np = geo_frep_pieces_at(s->f, from[k], s->crease_tol, pc, 4);
+        if (np > 4)
+            np = 4;
+        if (k == 0) {
+            memcpy(common, pc, np * sizeof *pc);
+            nc = np;
+            continue;
+        }
+        uint32_t keep = 0;
+        for (uint32_t i = 0; i < nc; i++)
+            for (uint32_t j = 0; j < np; j++)
+                if (common[i] == pc[j]) {
+                    common[keep++] = common[i];
+                    break;
+                }
+        nc = keep;
+    }
+    if (nc == 0)
+        return false;
+    return geo_frep_project_pieces(s->f, common, nc < 3 ? nc : 3, p, s->tol,
+                                   s->max_step);
+}
+
 /* How many smooth pieces of F the points p and q have in common (pieces
  * through a point: lib/frep.h); UINT32_MAX when neither lies on any
  * piece within the tolerance. */
@@ -122,11 +158,13 @@ static bool crosses_cb(void *user, const double p[3], const double q[3])
  * the holes around it into one, which the filler then closes as a disk
  * without the point. Repeats while pinches remain (a few rounds at most;
  * they are rare and isolated). flat is kept aligned with the facets. */
-static int unpinch(geo_poly *m, uint8_t **flat, uint32_t *ret_n,
-                   geo_err *err)
+static int unpinch(geo_poly *m, uint8_t **flat, const geo_ctx *ctx,
+                   uint32_t *ret_n, geo_err *err)
 {
     *ret_n = 0;
     for (int round = 0; round < 8; round++) {
+        if (geo_ctx_canceled(ctx))
+            return geo_err_set(err, -ECANCELED, "canceled");
         geo_topo *t = geo_topo_build(m, err);
         if (!t)
             return -ENOMEM;
@@ -161,6 +199,30 @@ static int unpinch(geo_poly *m, uint8_t **flat, uint32_t *ret_n,
         if (rc < 0)
             return geo_err_set(err, rc, "out of memory");
     }
+    return 0;
+}
+
+/* Adds to the refinement region every triangle sharing a vertex with it:
+ * a wall (a triangle parallel to the rays) at a silhouette is a long
+ * sliver between the last points of its columns, and only flips across
+ * its edges, into the triangles beside it, can replace it by fair ones. */
+static int grow_region(const geo_poly *m, uint8_t *region, geo_err *err)
+{
+    uint8_t *mark = calloc((size_t)m->nverts + 1, 1);
+    if (!mark)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    for (uint32_t f = 0; f < m->nfacets; f++)
+        if (region[f]) {
+            const uint32_t *fv = geo_poly_facet(m, f);
+            for (uint32_t k = 0; k < geo_poly_facet_size(m, f); k++)
+                mark[fv[k]] = 1;
+        }
+    for (uint32_t f = 0; f < m->nfacets; f++) {
+        const uint32_t *fv = geo_poly_facet(m, f);
+        for (uint32_t k = 0; k < geo_poly_facet_size(m, f) && !region[f]; k++)
+            region[f] = mark[fv[k]];
+    }
+    free(mark);
     return 0;
 }
 
@@ -202,11 +264,15 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
 
     if ((rc = geo_frep_connect(g, ctx, &mesh, &flat, &rep.connect, err)) < 0)
         goto fail;
+    if (geo_ctx_canceled(ctx)) {
+        rc = geo_err_set(err, -ECANCELED, "canceled");
+        goto fail;
+    }
     if ((rc = geo_poly_compact(mesh, NULL, NULL, NULL)) < 0) {
         geo_err_set(err, rc, "out of memory");
         goto fail;
     }
-    if ((rc = unpinch(mesh, &flat, &rep.npinched, err)) < 0)
+    if ((rc = unpinch(mesh, &flat, ctx, &rep.npinched, err)) < 0)
         goto fail;
     if ((rc = geo_ctx_progress(ctx, 0.55)) < 0) {
         geo_err_set(err, rc, "canceled");
@@ -226,13 +292,18 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
     fo.project = project_cb;
     fo.hard_edge = hard_cb;
     fo.crosses_feature = crosses_cb;
+    uint32_t nprog;
+    const geo_frep_op *prog = geo_frep_program(f, &nprog);
+    for (uint32_t i = 0; i < nprog; i++)
+        if (prog[i].code == GEO_FREP_OP_MIN || prog[i].code == GEO_FREP_OP_MAX)
+            fo.place = place_cb;
     fo.project_user = &surf;
     /* holes first, refinement after the creases are recovered: a
      * centroid of a triangle lying on one smooth piece then stays on it */
     geo_fill_opts lo = fo;
     lo.refine = false;
     lo.fair = GEO_FAIR_NONE;
-    sc = sub_ctx(ctx, &sr, 0.55, 0.65);
+    sc = sub_ctx(ctx, &sr, 0.55, 0.6);
     uint32_t nf0 = mesh->nfacets;
     if ((rc = geo_fill_holes(mesh, &lo, &sc, &rep.fill, err)) < 0)
         goto fail;
@@ -246,13 +317,16 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
         flat[fc] = 1;
     rep.t_fill = now() - t;
     t = now();
+    sc = sub_ctx(ctx, &sr, 0.6, 0.7);
     if (o.sharpen &&
-        (rc = geo_frep_sharpen(f, mesh, &flat, ctx, &rep.sharpen, err)) < 0)
+        (rc = geo_frep_sharpen(f, mesh, &flat, &sc, &rep.sharpen, err)) < 0)
         goto fail;
     rep.t_sharpen = now() - t;
     t = now();
+    if ((rc = grow_region(mesh, flat, err)) < 0)
+        goto fail;
     geo_fill_stats rs = {0};
-    sc = sub_ctx(ctx, &sr, 0.65, 0.9);
+    sc = sub_ctx(ctx, &sr, 0.7, 0.9);
     if ((o.refine || o.fair != GEO_FAIR_NONE) &&
         (rc = geo_refine_region(mesh, flat, &fo, &sc, &rs, err)) < 0)
         goto fail;
@@ -262,25 +336,22 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
     rep.fill.nflips = rs.nflips;
     rep.fill.nhard_splits = rs.nhard_splits;
     rep.fill.nfair_sweeps = rs.nfair_sweeps;
+    for (uint32_t fc = 0; fc < mesh->nfacets; fc++) {
+        if ((fc & 65535) == 0 && geo_ctx_canceled(ctx)) {
+            rc = geo_err_set(err, -ECANCELED, "canceled");
+            goto fail;
+        }
+        geo_poly_facet_fit_plane(mesh, fc, GEO_PLANE_UNWEIGHTED,
+                                 mesh->planes[fc]);
+    }
     rep.t_fill += now() - t;
     t = now();
-    /* refinement may split a curved crease off itself: recover again */
-    geo_sharpen_stats s2;
-    if (o.sharpen && (rc = geo_frep_sharpen(f, mesh, NULL, ctx, &s2, err)) < 0)
-        goto fail;
-    rep.sharpen.nedge_splits += s2.nedge_splits;
-    rep.sharpen.nsnaps += s2.nsnaps;
-    rep.sharpen.ncorners += s2.ncorners;
-    rep.sharpen.nrejected = s2.nrejected;
-    geo_poly_compute_planes(mesh, GEO_PLANE_UNWEIGHTED);
     if ((rc = geo_ctx_progress(ctx, 0.92)) < 0) {
         geo_err_set(err, rc, "canceled");
         goto fail;
     }
-    rep.t_sharpen += now() - t;
-    t = now();
 
-    if ((rc = geo_frep_mesh_metrics(f, mesh, &rep.quality, err)) < 0)
+    if ((rc = geo_frep_mesh_metrics(f, mesh, ctx, &rep.quality, err)) < 0)
         goto fail;
     geo_selfint si;
     sc = sub_ctx(ctx, &sr, 0.94, 1.0);

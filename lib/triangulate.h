@@ -9,15 +9,23 @@
  *              F = 0 (lib/frep_grid.h);
  *  2. connect  vertical/horizontal section contours and the quads
  *              A→B→C→D, two triangles each (lib/frep_connect.h);
- *  3. fill     holes: Liepa's minimum-weight triangulation, refinement
- *              together with the triangles that project with zero area,
- *              hard-edge splits, fairing (lib/hole_fill.h); every vertex
- *              added or moved is projected onto F = 0 by Newton steps
- *              along ∇F, and hard edges are judged by the angle between
- *              the surface normals −∇F at their ends;
+ *  3. fill     holes: Liepa's minimum-weight triangulation
+ *              (lib/hole_fill.h);
  *  4. sharpen  creases of unions/intersections recovered
- *              (lib/frep_sharpen.h), when the object has any;
- *  5. metrics  vertex and normal deviation, uniformity, topology
+ *              (lib/frep_sharpen.h), when the object has any, including
+ *              those of faces parallel to the rays (walls);
+ *  5. refine   the patches together with the triangles that project with
+ *              zero area (walls) and every triangle sharing a vertex with
+ *              them, so that flips can turn a wall's slivers into fair
+ *              triangles: centroid splits, hard-edge splits, fairing
+ *              (lib/hole_fill.h, geo_refine_region; its time is counted
+ *              in t_fill). A new or moved vertex stays on what its sources
+ *              share: Newton steps along ∇F for a smooth object; on an
+ *              object with creases, onto the smooth piece (or the crease)
+ *              all its sources lie on, a triangle spanning a crease not
+ *              being split at all, so refinement never cuts a crease;
+ *              hard edges are the edges lying on a crease;
+ *  6. metrics  vertex and normal deviation, uniformity, topology
  *              (lib/frep_metrics.h), exact self-intersections
  *              (lib/selfint.h).
  *

@@ -5,9 +5,11 @@
 #include "trimesh.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "selfint.h"
 #include "vec.h"
 
 int geo_tmesh_init(geo_tmesh *m, const double *xyz, uint32_t nv)
@@ -185,4 +187,204 @@ double geo_tmesh_normal(const geo_tmesh *m, uint32_t t, double ret_n[3])
     geo_vsub(m->v[m->t[t][2]], m->v[m->t[t][0]], e2);
     geo_vcross(e1, e2, ret_n);
     return geo_vnormalize(ret_n);
+}
+
+void geo_tmesh_probe_destroy(geo_tmesh_probe *pr)
+{
+    free(pr->vstamp), free(pr->vloc), free(pr->tstamp);
+    free(pr->queue), free(pr->tris), free(pr->gv);
+    geo_poly_free(pr->p);
+    memset(pr, 0, sizeof *pr);
+}
+
+static int grow_u32(uint32_t **a, uint32_t *cap, uint32_t need, bool zero)
+{
+    if (need <= *cap)
+        return 0;
+    uint32_t nc = *cap * 2 + 64;
+    if (nc < need)
+        nc = need;
+    uint32_t *n = realloc(*a, (size_t)nc * sizeof *n);
+    if (!n)
+        return -ENOMEM;
+    if (zero)
+        memset(n + *cap, 0, (size_t)(nc - *cap) * sizeof *n);
+    *a = n;
+    *cap = nc;
+    return 0;
+}
+
+/* Marks triangle t as part of the neighbourhood once. */
+static int probe_tri(geo_tmesh_probe *pr, uint32_t t, uint32_t *ntris)
+{
+    if (pr->tstamp[t] == pr->stamp)
+        return 0;
+    pr->tstamp[t] = pr->stamp;
+    uint32_t c = pr->cap_tris;
+    if (grow_u32(&pr->tris, &c, *ntris + 1, false) < 0)
+        return -ENOMEM;
+    pr->cap_tris = c;
+    pr->tris[(*ntris)++] = t;
+    return 0;
+}
+
+/* Visits vertex v (reached along an edge to w): its triangles join the
+ * neighbourhood, its unvisited neighbours the queue at depth + 1. */
+static int probe_fan(const geo_tmesh *m, geo_tmesh_probe *pr, uint32_t v,
+                     uint32_t w, uint32_t *ntris, uint32_t *nq, bool expand)
+{
+    for (int dir = 0; dir < 2; dir++) {
+        uint32_t u = w;
+        for (uint32_t guard = 0; guard < 1024; guard++) {
+            /* CCW: triangle (v, u, c) has half-edge v→u; CW: (u, v, c) */
+            uint32_t h = dir ? geo_tmesh_find(m, u, v) : geo_tmesh_find(m, v, u);
+            if (h == UINT32_MAX)
+                break;
+            if (probe_tri(pr, h / 3, ntris) < 0)
+                return -ENOMEM;
+            uint32_t c = geo_tmesh_opposite(m, h);
+            if (expand && pr->vstamp[c] != pr->stamp) {
+                pr->vstamp[c] = pr->stamp;
+                uint32_t cap = pr->cap_q;
+                if (grow_u32(&pr->queue, &cap, 2 * (*nq + 1), false) < 0)
+                    return -ENOMEM;
+                pr->cap_q = cap;
+                pr->queue[2 * *nq] = c;
+                pr->queue[2 * *nq + 1] = v;
+                (*nq)++;
+            }
+            u = c;
+            if (u == w)
+                return 0; /* closed fan: no need to go the other way */
+        }
+    }
+    return 0;
+}
+
+/* Local index of mesh vertex g (or GEO_TMESH_NEWV) in the probe's
+ * polyhedron, adding it on first use. */
+static int64_t probe_vertex(const geo_tmesh *m, geo_tmesh_probe *pr,
+                            uint32_t g, uint32_t moved, const double x[3],
+                            int64_t *newv)
+{
+    if (g == GEO_TMESH_NEWV && *newv >= 0)
+        return *newv;
+    if (g != GEO_TMESH_NEWV && pr->vstamp[g] == pr->stamp + 1)
+        return pr->vloc[g];
+    const double *pos = g == GEO_TMESH_NEWV || g == moved ? x : m->v[g];
+    int64_t l = geo_poly_add_vertex(pr->p, pos);
+    if (l < 0)
+        return l;
+    if (g != GEO_TMESH_NEWV) {
+        pr->vstamp[g] = pr->stamp + 1;
+        pr->vloc[g] = (uint32_t)l;
+    } else {
+        *newv = l;
+    }
+    return l;
+}
+
+static bool boxes_apart(const geo_poly *p, const uint32_t *a, const uint32_t *b)
+{
+    for (int k = 0; k < 3; k++) {
+        double alo = p->verts[a[0]][k], ahi = alo, blo = p->verts[b[0]][k],
+               bhi = blo;
+        for (int i = 1; i < 3; i++) {
+            alo = fmin(alo, p->verts[a[i]][k]), ahi = fmax(ahi, p->verts[a[i]][k]);
+            blo = fmin(blo, p->verts[b[i]][k]), bhi = fmax(bhi, p->verts[b[i]][k]);
+        }
+        if (ahi < blo || bhi < alo)
+            return true;
+    }
+    return false;
+}
+
+int geo_tmesh_clashes(const geo_tmesh *m, geo_tmesh_probe *pr,
+                      const uint32_t *old, uint32_t nold,
+                      const uint32_t (*newt)[3], uint32_t nnew,
+                      uint32_t moved, const double x[3], uint32_t rings)
+{
+    uint32_t cv = pr->cap_v;
+    if (grow_u32(&pr->vstamp, &cv, m->nv, true) < 0)
+        return -ENOMEM;
+    if (cv != pr->cap_v) {
+        uint32_t *n = realloc(pr->vloc, (size_t)cv * sizeof *n);
+        if (!n)
+            return -ENOMEM;
+        pr->vloc = n;
+        pr->cap_v = cv;
+    }
+    if (grow_u32(&pr->tstamp, &pr->cap_t, m->nt, true) < 0)
+        return -ENOMEM;
+    if (!pr->p && !(pr->p = geo_poly_new()))
+        return -ENOMEM;
+    /* two stamps per call: stamp marks visited, stamp + 1 mapped */
+    if (pr->stamp >= UINT32_MAX - 4) {
+        memset(pr->vstamp, 0, (size_t)pr->cap_v * sizeof *pr->vstamp);
+        memset(pr->tstamp, 0, (size_t)pr->cap_t * sizeof *pr->tstamp);
+        pr->stamp = 0;
+    }
+    pr->stamp += 2;
+    uint32_t ntris = 0, nq = 0;
+    /* old triangles are marked so that they are never collected */
+    for (uint32_t i = 0; i < nold; i++)
+        pr->tstamp[old[i]] = pr->stamp;
+    for (uint32_t i = 0; i < nold; i++)
+        for (int k = 0; k < 3; k++) {
+            uint32_t v = m->t[old[i]][k];
+            if (pr->vstamp[v] == pr->stamp)
+                continue;
+            pr->vstamp[v] = pr->stamp;
+            uint32_t cap = pr->cap_q;
+            if (grow_u32(&pr->queue, &cap, 2 * (nq + 1), false) < 0)
+                return -ENOMEM;
+            pr->cap_q = cap;
+            pr->queue[2 * nq] = v;
+            pr->queue[2 * nq + 1] = m->t[old[i]][(k + 1) % 3];
+            nq++;
+        }
+    /* breadth first: depth of queue[lo .. hi) is d */
+    uint32_t lo = 0;
+    for (uint32_t d = 0; d < rings && lo < nq; d++) {
+        uint32_t hi = nq;
+        for (uint32_t q = lo; q < hi; q++)
+            if (probe_fan(m, pr, pr->queue[2 * q], pr->queue[2 * q + 1],
+                          &ntris, &nq, d + 1 < rings) < 0)
+                return -ENOMEM;
+        lo = hi;
+    }
+    /* the polyhedron: neighbourhood triangles, then the new ones */
+    geo_poly_clear(pr->p);
+    int64_t newv = -1;
+    for (uint32_t i = 0; i < ntris + nnew; i++) {
+        const uint32_t *tv = i < ntris ? m->t[pr->tris[i]] : newt[i - ntris];
+        uint32_t loc[3];
+        for (int k = 0; k < 3; k++) {
+            int64_t l = probe_vertex(m, pr, tv[k], moved, x, &newv);
+            if (l < 0)
+                return -ENOMEM;
+            loc[k] = (uint32_t)l;
+        }
+        if (geo_poly_add_facet(pr->p, loc, 3) < 0)
+            return -ENOMEM;
+    }
+    for (uint32_t i = 0; i < nnew; i++) {
+        uint32_t f = ntris + i;
+        geo_facet_shape sf;
+        geo_facet_shape_of(pr->p, f, &sf);
+        if (sf.degenerate)
+            return 1;
+        const uint32_t *fv = geo_poly_facet(pr->p, f);
+        for (uint32_t g = 0; g < f; g++) {
+            const uint32_t *gv = geo_poly_facet(pr->p, g);
+            if (boxes_apart(pr->p, fv, gv))
+                continue;
+            geo_facet_shape sg;
+            geo_facet_shape_of(pr->p, g, &sg);
+            int hit = geo_facets_intersect(pr->p, f, g, &sf, &sg);
+            if (hit != 0)
+                return hit < 0 ? -ENOMEM : 1;
+        }
+    }
+    return 0;
 }

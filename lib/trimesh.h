@@ -18,6 +18,7 @@
 #include <stdint.h>
 
 #include "edgemap.h"
+#include "poly.h"
 
 typedef struct geo_tmesh {
     double (*v)[3];
@@ -78,5 +79,40 @@ static inline uint32_t geo_tmesh_opposite(const geo_tmesh *m, uint32_t h)
 /* Unit normal of triangle t (zero for a degenerate one); returns twice
  * its area. */
 double geo_tmesh_normal(const geo_tmesh *m, uint32_t t, double ret_n[3]);
+
+/* Scratch of geo_tmesh_clashes, reusable across calls on one mesh:
+ * zero-initialise, release with geo_tmesh_probe_destroy. */
+typedef struct geo_tmesh_probe {
+    uint32_t *vstamp, *vloc;  /* per mesh vertex: visit stamp, local id */
+    uint32_t cap_v;
+    uint32_t *tstamp;         /* per triangle: visit stamp */
+    uint32_t cap_t;
+    uint32_t stamp;
+    uint32_t *queue, *tris, *gv; /* BFS vertices, triangles, local → mesh */
+    uint32_t cap_q, cap_tris, cap_gv;
+    geo_poly *p;              /* the neighbourhood as a polyhedron */
+} geo_tmesh_probe;
+
+void geo_tmesh_probe_destroy(geo_tmesh_probe *pr);
+
+/* Stands for the vertex at position x in geo_tmesh_clashes' new
+ * triangles (not yet in the mesh). */
+#define GEO_TMESH_NEWV (UINT32_MAX - 1)
+
+/* Whether replacing the live triangles old[0..nold) by newt[0..nnew)
+ * would make the surface touch or cross itself near them, decided
+ * exactly with lib/selfint.h's definition (shared vertices and edges do
+ * not count; a degenerate new triangle counts as a clash). Vertex ids in
+ * newt are mesh vertices or GEO_TMESH_NEWV, which stands at x; when
+ * moved is a mesh vertex, it is taken at x instead of its position (and
+ * x is then not a new vertex). The neighbourhood is every live triangle
+ * incident to a vertex within `rings` − 1 edges of old's vertices
+ * (found by walking vertex fans, both ways around at a boundary);
+ * triangles farther away are not looked at. Returns 1 (clash), 0 (none)
+ * or -ENOMEM. The mesh is not changed. */
+int geo_tmesh_clashes(const geo_tmesh *m, geo_tmesh_probe *pr,
+                      const uint32_t *old, uint32_t nold,
+                      const uint32_t (*newt)[3], uint32_t nnew,
+                      uint32_t moved, const double x[3], uint32_t rings);
 
 #endif

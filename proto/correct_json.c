@@ -108,6 +108,8 @@ json_t *proto_merge_report_to_json(const geo_merge_report *r)
     put(o, "failed", json_integer(r->failed), &ok);
     put(o, "rounds", json_integer(r->rounds), &ok);
     put(o, "statement_violations", json_integer(r->statement_violations), &ok);
+    put(o, "views", json_integer(r->views), &ok);
+    put(o, "noise", num(r->noise), &ok);
     put(o, "vertices_before", json_integer(r->vertices_before), &ok);
     put(o, "facets_before", json_integer(r->facets_before), &ok);
     put(o, "vertices_after", json_integer(r->vertices_after), &ok);
@@ -174,6 +176,8 @@ json_t *proto_correct_report_to_json(const geo_correct_report *r)
     put(o, "rounds", json_integer(r->rounds), &ok);
     put(o, "merge_passes", json_integer(r->merge_passes), &ok);
     put(o, "reoriented_facets", json_integer(r->reoriented_facets), &ok);
+    put(o, "views", json_integer(r->views), &ok);
+    put(o, "noise", num(r->noise), &ok);
     json_t *cl = json_pack("{s:i, s:i, s:i, s:f}", "found",
                            (json_int_t)r->clusters_found, "collapsed",
                            (json_int_t)r->clusters_collapsed, "rolled_back",

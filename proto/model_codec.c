@@ -1,5 +1,6 @@
 /* model_codec.c — the pieces every model codec shares: the output buffer,
- * exact (shortest round-trip) number printing, little-endian loads and
+ * exact (shortest round-trip) number printing (proto/decimal.h),
+ * little-endian loads and
  * stores, limit checks, and finishing the planes of a read model.
  * Invariant of proto_buf: data[0..len) is valid, len ≤ cap; once failed
  * is set the buffer never changes again. */
@@ -13,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "decimal.h"
 #include "vec.h"
 
 static bool buf_reserve(proto_buf *b, size_t n)
@@ -74,29 +76,55 @@ void proto_buf_printf(proto_buf *b, const char *fmt, ...)
     b->len += (size_t)n;
 }
 
-size_t proto_fmt_double(char *out, double x)
-{
-    if (x == 0) {
-        /* "-0" would read back as the JSON integer 0: keep the sign */
-        strcpy(out, signbit(x) ? "-0.0" : "0");
-        return strlen(out);
-    }
-    /* %.17g always round-trips; shorter forms are tried first so that
-     * 0.1 prints as 0.1 rather than 0.10000000000000001 */
-    int n = 0;
-    for (int prec = 15; prec <= 17; prec++) {
-        n = snprintf(out, 32, "%.*g", prec, x);
-        if (prec == 17 || strtod(out, NULL) == x)
-            break;
-    }
-    return (size_t)n;
-}
-
 void proto_buf_double(proto_buf *b, double x)
 {
-    char s[32];
-    size_t n = proto_fmt_double(s, x);
-    proto_buf_append(b, s, n);
+    if (!buf_reserve(b, PROTO_DECIMAL_MAX))
+        return;
+    b->len += proto_decimal_format(b->data + b->len, x);
+}
+
+void proto_buf_u32(proto_buf *b, uint32_t v)
+{
+    if (!buf_reserve(b, 10))
+        return;
+    char tmp[10];
+    int n = 0;
+    do {
+        tmp[n++] = (char)('0' + v % 10);
+        v /= 10;
+    } while (v);
+    for (int i = 0; i < n; i++)
+        b->data[b->len + (size_t)i] = tmp[n - 1 - i];
+    b->len += (size_t)n;
+}
+
+unsigned char *proto_buf_grow(proto_buf *b, size_t n)
+{
+    if (!buf_reserve(b, n))
+        return NULL;
+    unsigned char *at = (unsigned char *)b->data + b->len;
+    b->len += n;
+    return at;
+}
+
+void proto_st_u16le(unsigned char *p, uint16_t v)
+{
+    p[0] = (unsigned char)v;
+    p[1] = (unsigned char)(v >> 8);
+}
+
+void proto_st_u32le(unsigned char *p, uint32_t v)
+{
+    for (int i = 0; i < 4; i++)
+        p[i] = (unsigned char)(v >> (8 * i));
+}
+
+void proto_st_f64le(unsigned char *p, double v)
+{
+    uint64_t u;
+    memcpy(&u, &v, 8);
+    for (int i = 0; i < 8; i++)
+        p[i] = (unsigned char)(u >> (8 * i));
 }
 
 void proto_buf_u16le(proto_buf *b, uint16_t v)

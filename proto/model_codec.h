@@ -36,16 +36,21 @@ void proto_buf_puts(proto_buf *b, const char *s);
 void proto_buf_printf(proto_buf *b, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
 /* The shortest decimal that reads back (strtod) as exactly x; "-0.0" for
- * negative zero. x must be finite. */
+ * negative zero (proto_decimal_format). x must be finite. */
 void proto_buf_double(proto_buf *b, double x);
+/* v in decimal digits. */
+void proto_buf_u32(proto_buf *b, uint32_t v);
+/* Appends n bytes and returns where they start, for the caller to fill;
+ * NULL after an allocation failure (then failed is set). */
+unsigned char *proto_buf_grow(proto_buf *b, size_t n);
+/* Little-endian stores to unaligned bytes. */
+void proto_st_u16le(unsigned char *p, uint16_t v);
+void proto_st_u32le(unsigned char *p, uint32_t v);
+void proto_st_f64le(unsigned char *p, double v);
 void proto_buf_u16le(proto_buf *b, uint16_t v);
 void proto_buf_u32le(proto_buf *b, uint32_t v);
 void proto_buf_f32le(proto_buf *b, float v);
 void proto_buf_f64le(proto_buf *b, double v);
-
-/* Writes the shortest round-trip decimal of finite x into out (at least
- * 32 bytes); returns its length. */
-size_t proto_fmt_double(char *out, double x);
 
 /* Little-endian loads from unaligned bytes. */
 uint16_t proto_ld_u16le(const unsigned char *p);
@@ -106,6 +111,12 @@ geo_poly *proto_json_read(const void *data, size_t len,
                           geo_err *err);
 geo_poly *proto_json_from_value(const json_t *root, const proto_limits *lim,
                                 proto_read_report *rep, geo_err *err);
+/* The model whose value begins with first, read from j (see
+ * proto_model_from_jpull); *ret_syntax tells a JSON error (err "line L,
+ * column C: ...") from an invalid model. */
+geo_poly *proto_json_from_pull(proto_jpull *j, proto_jtok first,
+                               const proto_limits *lim, proto_read_report *rep,
+                               bool *ret_syntax, geo_err *err);
 int proto_json_write(const geo_poly *p, proto_buf *buf, geo_err *err);
 
 geo_poly *proto_polytxt_read(const void *data, size_t len,

@@ -151,20 +151,28 @@ int proto_fmb1_write(const geo_poly *p, proto_buf *b, geo_err *err)
             return geo_err_set(err, -ERANGE, "facets[%u]: %u vertices, FMB1 "
                                              "holds at most 65535 per facet",
                                f, geo_poly_facet_size(p, f));
-    proto_buf_append(b, "FMB1", 4);
-    proto_buf_u32le(b, p->nverts);
-    proto_buf_u32le(b, p->nfacets);
+    size_t size = HEAD + (size_t)p->nverts * VERT +
+                  (size_t)p->nfacets * FACET_HEAD +
+                  4 * (size_t)geo_poly_ncorners(p);
+    unsigned char *o = proto_buf_grow(b, size);
+    if (!o)
+        return 0; /* b->failed tells */
+    memcpy(o, "FMB1", 4);
+    proto_st_u32le(o + 4, p->nverts);
+    proto_st_u32le(o + 8, p->nfacets);
+    o += HEAD;
     for (uint32_t i = 0; i < p->nverts; i++)
-        for (int k = 0; k < 3; k++)
-            proto_buf_f64le(b, p->verts[i][k]);
+        for (int k = 0; k < 3; k++, o += 8)
+            proto_st_f64le(o, p->verts[i][k]);
     for (uint32_t f = 0; f < p->nfacets; f++) {
         uint32_t n = geo_poly_facet_size(p, f);
         const uint32_t *v = geo_poly_facet(p, f);
-        proto_buf_u16le(b, (uint16_t)n);
-        for (int k = 0; k < 4; k++)
-            proto_buf_f64le(b, p->planes[f][k]);
-        for (uint32_t i = 0; i < n; i++)
-            proto_buf_u32le(b, v[i]);
+        proto_st_u16le(o, (uint16_t)n);
+        o += 2;
+        for (int k = 0; k < 4; k++, o += 8)
+            proto_st_f64le(o, p->planes[f][k]);
+        for (uint32_t i = 0; i < n; i++, o += 4)
+            proto_st_u32le(o, v[i]);
     }
     return 0;
 }

@@ -461,3 +461,27 @@ geo_poly *proto_model_from_json(const json_t *root, const proto_limits *lim,
 {
     return proto_model_from_json_ex(root, lim, path_prefix, NULL, err);
 }
+
+geo_poly *proto_model_from_jpull(proto_jpull *j, proto_jtok first,
+                                 const proto_limits *lim,
+                                 const char *path_prefix,
+                                 proto_read_report *ret_report,
+                                 bool *ret_syntax, geo_err *err)
+{
+    proto_limits dl;
+    if (!lim) {
+        proto_limits_default(&dl);
+        lim = &dl;
+    }
+    proto_read_report rep;
+    memset(&rep, 0, sizeof rep);
+    bool syntax;
+    geo_poly *p = proto_json_from_pull(j, first, lim, &rep, &syntax, err);
+    if (!p && !syntax)
+        prefix_json_path(err, path_prefix);
+    else if (p && ret_report)
+        *ret_report = rep;
+    if (ret_syntax)
+        *ret_syntax = syntax;
+    return p;
+}

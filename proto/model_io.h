@@ -28,6 +28,7 @@
 
 #include <jansson.h>
 
+#include "json_pull.h"
 #include "poly.h"
 
 typedef enum proto_format {
@@ -126,6 +127,22 @@ geo_poly *proto_model_from_json_ex(const json_t *root, const proto_limits *lim,
                                    const char *path_prefix,
                                    proto_read_report *ret_report,
                                    geo_err *err);
+
+/* facet-model/1 read straight from a pull tokenizer (proto/json_pull.h)
+ * whose last token, first, begins the model's value: the daemon reads the
+ * model of a job body this way, without building a tree. The whole value
+ * is read even past a problem in the model, so that bad JSON later in it
+ * is what gets reported. Returns the model, or NULL with err set and
+ * *ret_syntax (may be NULL) true when the JSON itself is bad — j then
+ * holds the error and err says "line L, column C: ..." — or false when
+ * the model is invalid (err names the place, prefixed with path_prefix as
+ * by proto_model_from_json). Messages are those of proto_model_from_json
+ * for the same text. lim NULL means the defaults. */
+geo_poly *proto_model_from_jpull(proto_jpull *j, proto_jtok first,
+                                 const proto_limits *lim,
+                                 const char *path_prefix,
+                                 proto_read_report *ret_report,
+                                 bool *ret_syntax, geo_err *err);
 
 /* facet-model/1 as a new JSON value (planes always written), or NULL on
  * out-of-memory. */

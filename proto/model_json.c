@@ -1,15 +1,17 @@
 /* model_json.c — facet-model/1 (formats.md): the JSON form of a
- * polyhedron, read through jansson and written directly as text.
+ * polyhedron, read from text with the pull tokenizer (proto/json_pull.h)
+ * or from a jansson value, and written directly as text.
  *
- * Reading: the text is parsed with JSON_REJECT_DUPLICATES (jansson also
- * rejects NaN/Infinity literals and numbers that overflow a double), then
- * the value is validated strictly, every error naming its place
- * ("facets[12].vertices[3]: index 9001 out of range (8000 vertices)").
- * "format" is required and must be "facet-model/1": the contract is
- * versioned by that key, so a model without it cannot be told apart from
- * a later version. "units" is optional and must be "mm" when present.
- * Unknown keys are ignored. Counts are checked against the limits before
- * the model is allocated.
+ * Reading: duplicate keys, NaN/Infinity and numbers that overflow a double
+ * are JSON errors; the model is then validated strictly, every error
+ * naming its place ("facets[12].vertices[3]: index 9001 out of range
+ * (8000 vertices)"). "format" is required and must be "facet-model/1":
+ * the contract is versioned by that key, so a model without it cannot be
+ * told apart from a later version. "units" is optional and must be "mm"
+ * when present. Unknown keys are ignored. Counts are checked against the
+ * limits before the model is allocated (tree reader) or while it is
+ * filled (streaming reader, which stops storing past a limit). Both
+ * readers give the same first error for every document.
  *
  * Writing: one vertex and one facet per line, every double printed as the
  * shortest decimal that reads back to the same double, so a write/read
@@ -213,51 +215,470 @@ fail:
     return geo_poly_free(p);
 }
 
+/* The streaming reader: one pass over the tokens fills the model's arrays
+ * directly. Members may come in any order, so every check is recorded and
+ * decided at the end in the order of the tree reader above (header,
+ * "vertices"/"facets" types, counts, facet shapes, corner count, vertices,
+ * facets), which gives the same first error for any document. Storing
+ * stops once a count passes its limit (the limit is then the error), so
+ * memory stays bounded by the limits whatever the input claims. */
+
+enum { M_ABSENT = 0, M_WRONG_TYPE, M_WRONG_VALUE, M_OK };
+
+typedef struct mread {
+    proto_jpull *j;
+    const proto_limits *lim;
+    geo_poly *p;
+    bool *given;
+    size_t cap_given;
+    int format, units;            /* M_* */
+    char format_text[101], units_text[101];
+    int vertices, facets;         /* M_ABSENT, M_WRONG_TYPE or M_OK */
+    uint64_t nv, nf, nc;
+    bool store_v, store_f;        /* still within the limits and shapes */
+    bool oom;
+    char verr[160];               /* the first vertex error, "" if none */
+    char shape_err[160];          /* the first facet shape error */
+    uint32_t bad_f, bad_i;        /* first facet with a non-index element */
+    bool bad_is_int;              /* ... an integer out of uint32 range */
+    int64_t bad_value;
+    uint32_t plane_f;             /* first facet with a bad plane */
+    char plane_err[160];
+} mread;
+
+/* Reads a string member into text (at most 100 bytes, as "%.100s" shows)
+ * and tells whether it equals want. */
+static int read_name(mread *m, proto_jtok t, char text[101], const char *want)
+{
+    if (t != PROTO_JT_STRING)
+        return proto_jpull_skip(m->j) == PROTO_JT_ERROR ? -1 : M_WRONG_TYPE;
+    snprintf(text, 101, "%s", m->j->str);
+    return strcmp(m->j->str, want) == 0 && m->j->str_len == strlen(want)
+               ? M_OK
+               : M_WRONG_VALUE;
+}
+
+static bool is_number(proto_jtok t)
+{
+    return t == PROTO_JT_INTEGER || t == PROTO_JT_REAL;
+}
+
+static double number_value(const proto_jpull *j, proto_jtok t)
+{
+    return t == PROTO_JT_INTEGER ? (double)j->integer : j->real;
+}
+
+/* One element of "vertices" (its first token t). -1 on a syntax error. */
+static int read_vertex(mread *m, proto_jtok t)
+{
+    proto_jpull *j = m->j;
+    uint64_t i = m->nv++;
+    if (m->store_v && m->nv > m->lim->max_vertices)
+        m->store_v = false;
+    if (t != PROTO_JT_ARRAY) {
+        if (!m->verr[0])
+            snprintf(m->verr, sizeof m->verr, "vertices[%llu]: expected an "
+                     "array of 3 numbers", (unsigned long long)i);
+        return proto_jpull_skip(j) == PROTO_JT_ERROR ? -1 : 0;
+    }
+    double xyz[3] = {0, 0, 0};
+    int n = 0, bad = -1;
+    while ((t = proto_jpull_next(j)) != PROTO_JT_ARRAY_END) {
+        if (t == PROTO_JT_ERROR)
+            return -1;
+        if (is_number(t)) {
+            if (n < 3)
+                xyz[n] = number_value(j, t);
+        } else {
+            if (bad < 0 && n < 3)
+                bad = n;
+            if (proto_jpull_skip(j) == PROTO_JT_ERROR)
+                return -1;
+        }
+        n++;
+    }
+    if (!m->verr[0]) {
+        if (n != 3)
+            snprintf(m->verr, sizeof m->verr, "vertices[%llu]: expected an "
+                     "array of 3 numbers", (unsigned long long)i);
+        else if (bad >= 0)
+            snprintf(m->verr, sizeof m->verr, "vertices[%llu][%d]: expected "
+                     "a number", (unsigned long long)i, bad);
+    }
+    if (m->store_v) {
+        geo_poly *p = m->p;
+        if (i >= p->cap_verts && geo_poly_reserve(p, i + 1, 0, 0) < 0) {
+            m->oom = true;
+            m->store_v = false;
+            return 0;
+        }
+        memcpy(p->verts[i], xyz, sizeof xyz);
+    }
+    return 0;
+}
+
+static void facet_shape_error(mread *m, const char *fmt, uint64_t f)
+{
+    if (!m->shape_err[0])
+        snprintf(m->shape_err, sizeof m->shape_err, fmt,
+                 (unsigned long long)f);
+    m->store_f = false;
+}
+
+/* The "vertices" array of facet f (its first token was ARRAY). */
+static int read_indices(mread *m, uint64_t f)
+{
+    proto_jpull *j = m->j;
+    geo_poly *p = m->p;
+    uint64_t start = m->nc;
+    proto_jtok t;
+    while ((t = proto_jpull_next(j)) != PROTO_JT_ARRAY_END) {
+        if (t == PROTO_JT_ERROR)
+            return -1;
+        uint64_t i = m->nc++ - start;
+        if (m->store_f && m->nc > m->lim->max_corners)
+            m->store_f = false;
+        uint32_t v = 0;
+        if (t == PROTO_JT_INTEGER && j->integer >= 0 &&
+            j->integer <= (int64_t)UINT32_MAX) {
+            v = (uint32_t)j->integer;
+        } else {
+            if (m->bad_f == UINT32_MAX && m->store_f) {
+                m->bad_f = (uint32_t)f;
+                m->bad_i = (uint32_t)i;
+                m->bad_is_int = t == PROTO_JT_INTEGER;
+                m->bad_value = j->integer;
+            }
+            if (proto_jpull_skip(j) == PROTO_JT_ERROR)
+                return -1;
+        }
+        if (m->store_f) {
+            if (m->nc > p->cap_idx &&
+                geo_poly_reserve(p, 0, 0, (size_t)m->nc) < 0) {
+                m->oom = true;
+                m->store_f = false;
+                continue;
+            }
+            p->fidx[m->nc - 1] = v;
+        }
+    }
+    return 0;
+}
+
+/* The "plane" member of facet f (first token t). */
+static int read_plane(mread *m, proto_jtok t, uint64_t f, double pl[4])
+{
+    proto_jpull *j = m->j;
+    if (t != PROTO_JT_ARRAY) {
+        if (m->plane_f == UINT32_MAX) {
+            m->plane_f = (uint32_t)f;
+            snprintf(m->plane_err, sizeof m->plane_err, "facets[%llu].plane: "
+                     "expected an array of 4 numbers", (unsigned long long)f);
+        }
+        return proto_jpull_skip(j) == PROTO_JT_ERROR ? -1 : 0;
+    }
+    int n = 0, bad = -1;
+    while ((t = proto_jpull_next(j)) != PROTO_JT_ARRAY_END) {
+        if (t == PROTO_JT_ERROR)
+            return -1;
+        if (is_number(t)) {
+            if (n < 4)
+                pl[n] = number_value(j, t);
+        } else {
+            if (bad < 0 && n < 4)
+                bad = n;
+            if (proto_jpull_skip(j) == PROTO_JT_ERROR)
+                return -1;
+        }
+        n++;
+    }
+    if (m->plane_f == UINT32_MAX && (n != 4 || bad >= 0)) {
+        m->plane_f = (uint32_t)f;
+        if (n != 4)
+            snprintf(m->plane_err, sizeof m->plane_err, "facets[%llu].plane: "
+                     "expected an array of 4 numbers", (unsigned long long)f);
+        else
+            snprintf(m->plane_err, sizeof m->plane_err, "facets[%llu].plane"
+                     "[%d]: expected a number", (unsigned long long)f, bad);
+    }
+    return 0;
+}
+
+/* One element of "facets" (its first token t). */
+static int read_facet_pull(mread *m, proto_jtok t)
+{
+    proto_jpull *j = m->j;
+    uint64_t f = m->nf++;
+    if (m->store_f && m->nf > m->lim->max_facets)
+        m->store_f = false;
+    if (t != PROTO_JT_OBJECT) {
+        facet_shape_error(m, "facets[%llu]: expected an object", f);
+        return proto_jpull_skip(j) == PROTO_JT_ERROR ? -1 : 0;
+    }
+    geo_poly *p = m->p;
+    if (m->store_f && f >= p->cap_facets) {
+        if (geo_poly_reserve(p, 0, (size_t)f + 1, 0) < 0) {
+            m->oom = true;
+            m->store_f = false;
+        }
+    }
+    if (m->store_f && f >= m->cap_given) {
+        size_t cap = m->cap_given ? m->cap_given * 2 : 1024;
+        bool *g = realloc(m->given, cap);
+        if (!g) {
+            m->oom = true;
+            m->store_f = false;
+        } else {
+            m->given = g;
+            m->cap_given = cap;
+        }
+    }
+    double pl[4] = {0, 0, 0, 0};
+    bool have_vertices = false, have_plane = false;
+    while ((t = proto_jpull_next(j)) != PROTO_JT_OBJECT_END) {
+        if (t == PROTO_JT_ERROR)
+            return -1;
+        if (strcmp(j->str, "vertices") == 0) {
+            have_vertices = true;
+            t = proto_jpull_next(j);
+            if (t == PROTO_JT_ARRAY) {
+                if (read_indices(m, f) < 0)
+                    return -1;
+            } else {
+                facet_shape_error(m, "facets[%llu].vertices: expected an "
+                                     "array", f);
+                if (proto_jpull_skip(j) == PROTO_JT_ERROR)
+                    return -1;
+            }
+        } else if (strcmp(j->str, "plane") == 0) {
+            have_plane = true;
+            if (read_plane(m, proto_jpull_next(j), f, pl) < 0)
+                return -1;
+        } else if (proto_jpull_skip(j) == PROTO_JT_ERROR) {
+            return -1;
+        }
+    }
+    if (!have_vertices)
+        facet_shape_error(m, "facets[%llu].vertices: missing", f);
+    if (m->store_f) {
+        p->fstart[f + 1] = (uint32_t)m->nc;
+        memcpy(p->planes[f], pl, sizeof pl);
+        m->given[f] = have_plane;
+    }
+    return 0;
+}
+
+/* Reads the elements of an array member with fn, or notes its wrong
+ * type. */
+static int read_list(mread *m, proto_jtok t, int *state,
+                     int (*fn)(mread *, proto_jtok))
+{
+    if (t != PROTO_JT_ARRAY) {
+        *state = M_WRONG_TYPE;
+        return proto_jpull_skip(m->j) == PROTO_JT_ERROR ? -1 : 0;
+    }
+    *state = M_OK;
+    while ((t = proto_jpull_next(m->j)) != PROTO_JT_ARRAY_END) {
+        if (t == PROTO_JT_ERROR || fn(m, t) < 0)
+            return -1;
+    }
+    return 0;
+}
+
+/* Decides, in the tree reader's order, the first error of what was read;
+ * 0 when the model is complete and valid. */
+static int mread_verdict(mread *m, proto_read_report *rep, geo_err *err)
+{
+    if (m->format == M_ABSENT)
+        return geo_err_set(err, -EINVAL,
+                           "format: missing (expected \"" FORMAT_NAME "\")");
+    if (m->format == M_WRONG_TYPE)
+        return geo_err_set(err, -EINVAL, "format: expected a string");
+    if (m->format == M_WRONG_VALUE)
+        return geo_err_set(err, -EINVAL, "format: \"%s\" is not supported "
+                           "(expected \"" FORMAT_NAME "\")", m->format_text);
+    if (m->units == M_WRONG_TYPE)
+        return geo_err_set(err, -EINVAL, "units: expected a string");
+    if (m->units == M_WRONG_VALUE)
+        return geo_err_set(err, -EINVAL, "units: \"%s\" is not supported "
+                           "(only \"mm\")", m->units_text);
+    if (m->vertices != M_OK)
+        return geo_err_set(err, -EINVAL, m->vertices == M_ABSENT
+                           ? "vertices: missing" : "vertices: expected an "
+                           "array");
+    if (m->facets != M_OK)
+        return geo_err_set(err, -EINVAL, m->facets == M_ABSENT
+                           ? "facets: missing" : "facets: expected an array");
+    int r = proto_check_limits(m->lim, m->nv, m->nf, 0, err);
+    if (r < 0)
+        return r;
+    if (m->shape_err[0])
+        return geo_err_set(err, -EINVAL, "%s", m->shape_err);
+    r = proto_check_limits(m->lim, m->nv, m->nf, m->nc, err);
+    if (r < 0)
+        return r;
+    if (m->oom)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    if (m->verr[0])
+        return geo_err_set(err, -EINVAL, "%s", m->verr);
+    geo_poly *p = m->p;
+    p->nverts = (uint32_t)m->nv;
+    for (uint32_t f = 0; f < m->nf; f++) {
+        uint32_t n = p->fstart[f + 1] - p->fstart[f];
+        if (n < 3)
+            return geo_err_set(err, -EINVAL, "facets[%u].vertices: %u "
+                               "vertices, a facet needs at least 3", f, n);
+        const uint32_t *v = p->fidx + p->fstart[f];
+        for (uint32_t i = 0; i < n; i++) {
+            if (f == m->bad_f && i == m->bad_i) {
+                if (!m->bad_is_int)
+                    return geo_err_set(err, -EINVAL, "facets[%u].vertices[%u]"
+                                       ": expected an integer", f, i);
+                return geo_err_set(err, -EINVAL, "facets[%u].vertices[%u]: "
+                                   "index %lld out of range (%u vertices)", f,
+                                   i, (long long)m->bad_value, p->nverts);
+            }
+            if (v[i] >= p->nverts)
+                return geo_err_set(err, -EINVAL, "facets[%u].vertices[%u]: "
+                                   "index %u out of range (%u vertices)", f,
+                                   i, v[i], p->nverts);
+        }
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t k = (i + 1) % n;
+            if (v[i] == v[k])
+                return geo_err_set(err, -EINVAL, "facets[%u].vertices[%u]: "
+                                   "index %u repeated consecutively", f, k,
+                                   v[i]);
+        }
+        if (f == m->plane_f)
+            return geo_err_set(err, -EINVAL, "%s", m->plane_err);
+        p->nfacets = f + 1;
+    }
+    return proto_finish_planes(p, m->given, rep, err);
+}
+
+geo_poly *proto_json_from_pull(proto_jpull *j, proto_jtok first,
+                               const proto_limits *lim, proto_read_report *rep,
+                               bool *ret_syntax, geo_err *err)
+{
+    *ret_syntax = false;
+    mread m = {
+        .j = j, .lim = lim, .store_v = true, .store_f = true,
+        .bad_f = UINT32_MAX, .plane_f = UINT32_MAX,
+    };
+    int r = 0;
+    if (first == PROTO_JT_OBJECT) {
+        m.p = geo_poly_new();
+        if (!m.p || geo_poly_reserve(m.p, 0, 1, 0) < 0) {
+            geo_poly_free(m.p);
+            geo_err_set(err, -ENOMEM, "out of memory");
+            return NULL;
+        }
+        m.p->fstart[0] = 0;
+        proto_jtok t;
+        while (r == 0 && (t = proto_jpull_next(j)) != PROTO_JT_OBJECT_END) {
+            if (t == PROTO_JT_ERROR) {
+                r = -1;
+            } else if (strcmp(j->str, "format") == 0) {
+                r = m.format = read_name(&m, proto_jpull_next(j),
+                                         m.format_text, FORMAT_NAME);
+            } else if (strcmp(j->str, "units") == 0) {
+                r = m.units = read_name(&m, proto_jpull_next(j),
+                                        m.units_text, "mm");
+            } else if (strcmp(j->str, "vertices") == 0) {
+                r = read_list(&m, proto_jpull_next(j), &m.vertices,
+                              read_vertex);
+            } else if (strcmp(j->str, "facets") == 0) {
+                r = read_list(&m, proto_jpull_next(j), &m.facets,
+                              read_facet_pull);
+            } else if (proto_jpull_skip(j) == PROTO_JT_ERROR) {
+                r = -1;
+            }
+            if (r > 0)
+                r = 0;
+        }
+    } else if (first == PROTO_JT_ERROR ||
+               proto_jpull_skip(j) == PROTO_JT_ERROR) {
+        r = -1;
+    }
+    if (r < 0) {
+        *ret_syntax = true;
+        geo_err_set(err, j->error.code, "line %d, column %d: %s",
+                    j->error.line, j->error.column, j->error.text);
+    } else if (first != PROTO_JT_OBJECT) {
+        geo_err_set(err, -EINVAL, "expected a JSON object");
+        r = -1;
+    } else if (mread_verdict(&m, rep, err) < 0) {
+        r = -1;
+    }
+    free(m.given);
+    if (r < 0)
+        return geo_poly_free(m.p);
+    return m.p;
+}
+
 geo_poly *proto_json_read(const void *data, size_t len,
                           const proto_limits *lim, proto_read_report *rep,
                           geo_err *err)
 {
-    json_error_t je;
-    json_t *root = json_loadb(data, len, JSON_REJECT_DUPLICATES, &je);
-    if (!root) {
-        geo_err_set(err, -EINVAL, "line %d, column %d: %s", je.line,
-                    je.column, je.text);
-        return NULL;
+    proto_jpull j;
+    proto_jpull_init(&j, data, len);
+    bool syntax;
+    geo_err model_err;
+    geo_poly *p = proto_json_from_pull(&j, proto_jpull_next(&j), lim, rep,
+                                       &syntax, &model_err);
+    /* a syntax error after the model outranks what the model lacks */
+    if (!syntax && proto_jpull_next(&j) == PROTO_JT_ERROR) {
+        p = geo_poly_free(p);
+        geo_err_set(err, j.error.code, "line %d, column %d: %s", j.error.line,
+                    j.error.column, j.error.text);
+    } else if (!p && err) {
+        *err = model_err;
     }
-    geo_poly *p = proto_json_from_value(root, lim, rep, err);
-    json_decref(root);
+    proto_jpull_clear(&j);
     return p;
 }
 
+#define PUT(b, lit) proto_buf_append(b, lit, sizeof lit - 1)
+
 int proto_json_write(const geo_poly *p, proto_buf *b, geo_err *err)
 {
-    proto_buf_puts(b, "{\"format\":\"" FORMAT_NAME "\",\"units\":\"mm\",\n"
-                      "\"vertices\":[\n");
+    PUT(b, "{\"format\":\"" FORMAT_NAME "\",\"units\":\"mm\",\n"
+           "\"vertices\":[\n");
     for (uint32_t i = 0; i < p->nverts; i++) {
-        proto_buf_puts(b, "[");
-        for (int k = 0; k < 3; k++) {
-            if (k)
-                proto_buf_puts(b, ",");
-            proto_buf_double(b, p->verts[i][k]);
-        }
-        proto_buf_puts(b, i + 1 < p->nverts ? "],\n" : "]\n");
+        PUT(b, "[");
+        proto_buf_double(b, p->verts[i][0]);
+        PUT(b, ",");
+        proto_buf_double(b, p->verts[i][1]);
+        PUT(b, ",");
+        proto_buf_double(b, p->verts[i][2]);
+        if (i + 1 < p->nverts)
+            PUT(b, "],\n");
+        else
+            PUT(b, "]\n");
     }
-    proto_buf_puts(b, "],\n\"facets\":[\n");
+    PUT(b, "],\n\"facets\":[\n");
     for (uint32_t f = 0; f < p->nfacets; f++) {
-        proto_buf_puts(b, "{\"vertices\":[");
+        PUT(b, "{\"vertices\":[");
         uint32_t n = geo_poly_facet_size(p, f);
         const uint32_t *v = geo_poly_facet(p, f);
-        for (uint32_t i = 0; i < n; i++)
-            proto_buf_printf(b, i ? ",%u" : "%u", v[i]);
-        proto_buf_puts(b, "],\"plane\":[");
+        for (uint32_t i = 0; i < n; i++) {
+            if (i)
+                PUT(b, ",");
+            proto_buf_u32(b, v[i]);
+        }
+        PUT(b, "],\"plane\":[");
         for (int k = 0; k < 4; k++) {
             if (k)
-                proto_buf_puts(b, ",");
+                PUT(b, ",");
             proto_buf_double(b, p->planes[f][k]);
         }
-        proto_buf_puts(b, f + 1 < p->nfacets ? "]},\n" : "]}\n");
+        if (f + 1 < p->nfacets)
+            PUT(b, "]},\n");
+        else
+            PUT(b, "]}\n");
     }
-    proto_buf_puts(b, "]}\n");
+    PUT(b, "]}\n");
     (void)err;
     return 0;
 }

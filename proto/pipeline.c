@@ -5,6 +5,8 @@
  * default. */
 #include "pipeline.h"
 
+#include "frep_grid.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
@@ -30,21 +32,24 @@ static const char *const op_keys[PROTO_OP_COUNT][8] = {
     [PROTO_OP_INSPECT] = {"op"},
     [PROTO_OP_COLLAPSE_CLUSTERS] = {"op", "radius"},
     [PROTO_OP_MERGE_FACETS] = {"op", "max_angle_deg", "max_deviation",
-                               "groups"},
+                               "views", "groups"},
     [PROTO_OP_CUT] = {"op", "plane"},
     [PROTO_OP_MOVE_VERTEX] = {"op", "vertex", "to", "by", "schedule",
                               "max_steps"},
     [PROTO_OP_INVERSION_STATS] = {"op", "samples", "magnitudes", "seed",
                                   "schedule"},
     [PROTO_OP_TRIANGULATE] = {"op", "quad_levels", "binary_levels", "fill",
-                              "refine", "fair"},
+                              "refine", "fair", "sharpen"},
     [PROTO_OP_FILL_HOLES] = {"op", "weight", "refine", "fair"},
     [PROTO_OP_STITCH] = {"op"},
-    [PROTO_OP_AUTO] = {"op", "radius", "max_angle_deg", "max_deviation"},
+    [PROTO_OP_AUTO] = {"op", "radius", "max_angle_deg", "max_deviation",
+                       "views"},
 };
 
 static const char *const sched_names[] = {"local-exp", "scaled",
                                           "global-exp"};
+static const char *const fill_names[] = {"area", "edges"};
+static const char *const fair_names[] = {"none", "uniform", "length"};
 
 static const double default_magnitudes[] = {1,     .5,     .1,    .05,
                                             .01,   .005,   .001,  .0005,
@@ -274,9 +279,9 @@ static void set_defaults(proto_op *op)
     case PROTO_OP_TRIANGULATE:
         op->u.triangulate.quad_levels = 9;
         op->u.triangulate.binary_levels = 10;
-        op->u.triangulate.fill = true;
         op->u.triangulate.refine = true;
-        op->u.triangulate.fair = true;
+        op->u.triangulate.sharpen = true;
+        op->u.triangulate.fair = PROTO_FAIR_UNIFORM;
         break;
     case PROTO_OP_FILL_HOLES:
         op->u.fill_holes.refine = true;
@@ -310,6 +315,9 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
         if (r == 0)
             r = get_number(o, "max_deviation", pl, 0, 1e9, false,
                            &op->u.correct.max_deviation, err);
+        if (r == 0)
+            r = get_u32(o, "views", pl, 0, PROTO_MAX_VIEWS,
+                        &op->u.correct.views, err);
         return r;
     case PROTO_OP_MERGE_FACETS: {
         r = get_number(o, "max_angle_deg", pl, 0, 90, true,
@@ -319,6 +327,9 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
         if (r == 0)
             r = get_number(o, "max_deviation", pl, 0, 1e9, false,
                            &op->u.merge.max_deviation, err);
+        if (r == 0)
+            r = get_u32(o, "views", pl, 0, PROTO_MAX_VIEWS,
+                        &op->u.merge.views, err);
         const json_t *g = json_object_get(o, "groups");
         if (r == 0 && g)
             r = parse_groups(g, pl, op, err);
@@ -389,19 +400,25 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
             r = get_schedule(o, pl, &op->u.inversion.schedule, err);
         return r;
     }
-    case PROTO_OP_TRIANGULATE:
-        r = get_u32(o, "quad_levels", pl, 1, 12,
+    case PROTO_OP_TRIANGULATE: {
+        int fill = op->u.triangulate.fill_edges, fair = op->u.triangulate.fair;
+        r = get_u32(o, "quad_levels", pl, 1, GEO_FREP_MAX_QLEV,
                     &op->u.triangulate.quad_levels, err);
         if (r == 0)
-            r = get_u32(o, "binary_levels", pl, 1, 20,
+            r = get_u32(o, "binary_levels", pl, 1, GEO_FREP_MAX_BLEV,
                         &op->u.triangulate.binary_levels, err);
         if (r == 0)
-            r = get_bool(o, "fill", pl, &op->u.triangulate.fill, err);
+            r = get_choice(o, "fill", pl, fill_names, 2, &fill, err);
         if (r == 0)
             r = get_bool(o, "refine", pl, &op->u.triangulate.refine, err);
         if (r == 0)
-            r = get_bool(o, "fair", pl, &op->u.triangulate.fair, err);
+            r = get_choice(o, "fair", pl, fair_names, 3, &fair, err);
+        if (r == 0)
+            r = get_bool(o, "sharpen", pl, &op->u.triangulate.sharpen, err);
+        op->u.triangulate.fill_edges = fill == 1;
+        op->u.triangulate.fair = (proto_fair)fair;
         return r;
+    }
     case PROTO_OP_FILL_HOLES: {
         static const char *const weights[] = {"area", "length"};
         int w = op->u.fill_holes.weight_length;
@@ -550,6 +567,7 @@ static json_t *op_to_json(const proto_op *op)
                                  json_real(op->u.merge.max_angle_deg));
         e |= json_object_set_new(o, "max_deviation",
                                  json_real(op->u.merge.max_deviation));
+        e |= json_object_set_new(o, "views", json_integer(op->u.merge.views));
         if (op->u.merge.ngroups) {
             json_t *gs = json_array();
             for (uint32_t g = 0; gs && g < op->u.merge.ngroups; g++) {
@@ -574,6 +592,8 @@ static json_t *op_to_json(const proto_op *op)
                                  json_real(op->u.correct.max_angle_deg));
         e |= json_object_set_new(o, "max_deviation",
                                  json_real(op->u.correct.max_deviation));
+        e |= json_object_set_new(o, "views",
+                                 json_integer(op->u.correct.views));
         break;
     case PROTO_OP_MOVE_VERTEX:
         e |= json_object_set_new(o, "vertex", json_integer(op->u.move.vertex));
@@ -600,10 +620,14 @@ static json_t *op_to_json(const proto_op *op)
                                  json_integer(op->u.triangulate.quad_levels));
         e |= json_object_set_new(o, "binary_levels",
                                  json_integer(op->u.triangulate.binary_levels));
-        e |= json_object_set_new(o, "fill", json_boolean(op->u.triangulate.fill));
+        e |= json_object_set_new(
+            o, "fill", json_string(fill_names[op->u.triangulate.fill_edges]));
         e |= json_object_set_new(o, "refine",
                                  json_boolean(op->u.triangulate.refine));
-        e |= json_object_set_new(o, "fair", json_boolean(op->u.triangulate.fair));
+        e |= json_object_set_new(
+            o, "fair", json_string(fair_names[op->u.triangulate.fair]));
+        e |= json_object_set_new(o, "sharpen",
+                                 json_boolean(op->u.triangulate.sharpen));
         break;
     case PROTO_OP_FILL_HOLES:
         e |= json_object_set_new(
@@ -632,4 +656,27 @@ json_t *proto_pipeline_to_json(const proto_pipeline *p)
             a = (json_decref(a), NULL);
     }
     return a;
+}
+
+int proto_pipeline_copy(const proto_pipeline *src, proto_pipeline *ret)
+{
+    /* the canonical JSON round-trips exactly (see proto_pipeline_to_json) */
+    json_t *j = proto_pipeline_to_json(src);
+    if (!j)
+        return -ENOMEM;
+    geo_err err;
+    int r = proto_pipeline_from_json(j, NULL, ret, &err);
+    json_decref(j);
+    return r < 0 ? -ENOMEM : 0;
+}
+
+void proto_pipeline_set_views(proto_pipeline *p, uint32_t views)
+{
+    for (size_t i = 0; i < p->nops; i++) {
+        proto_op *op = &p->ops[i];
+        if (op->kind == PROTO_OP_MERGE_FACETS && op->u.merge.views == 0)
+            op->u.merge.views = views;
+        else if (op->kind == PROTO_OP_AUTO && op->u.correct.views == 0)
+            op->u.correct.views = views;
+    }
 }

@@ -11,9 +11,10 @@
  *   inspect
  *   collapse_clusters {radius ≥ 0 [0: 2e-4 × the model's size]}
  *   merge_facets {max_angle_deg in (0, 90) [60], max_deviation ≥ 0
- *                 [0: 5e-4 × the model's size], groups?: [[facet, facet,
- *                 ...], ...]}
- *   auto {radius, max_angle_deg, max_deviation: as above} — the whole
+ *                 [0: 5e-4 × the model's size], views ≥ 0 (the scanner's
+ *                 contours over 180°) [0: read off the model], groups?:
+ *                 [[facet, facet, ...], ...]}
+ *   auto {radius, max_angle_deg, max_deviation, views: as above} — the whole
  *                 post-scan correction of lib/correct.h in one op
  *   cut {plane: [a, b, c, d]} — keeps plane(p) ≤ 0; (a,b,c) non-zero
  *                 with a finite length, kept as given (the cut decides
@@ -25,8 +26,12 @@
  *   inversion_stats {samples 1..100000 [100], magnitudes: [m > 0, ...]
  *                 [1, .5, .1, .05, .01, .005, .001, .0005, .0001, .00005],
  *                 seed [1], schedule ["local-exp"]}
- *   triangulate {quad_levels 1..12 [9], binary_levels 1..20 [10],
- *                 fill [true], refine [true], fair [true]}
+ *   triangulate {quad_levels 1..11 [9], binary_levels 1..20 [10],
+ *                 fill "area"|"edges" ["area"], refine [true],
+ *                 fair "uniform"|"length"|"none" ["uniform"],
+ *                 sharpen [true]} — an F-rep input (lib/triangulate.h)
+ *                 to a mesh; only as the first op of a job whose input is
+ *                 a frep-object/1
  *   fill_holes {weight "area"|"length" ["area"], refine [true],
  *                 fair [true]}
  *   stitch
@@ -69,7 +74,14 @@ typedef enum proto_schedule {
     PROTO_SCHED_GLOBAL_EXP,    /* §4.3.3 */
 } proto_schedule;
 
-enum { PROTO_PIPELINE_MAX_OPS = 64, PROTO_MAX_MAGNITUDES = 64 };
+typedef enum proto_fair {
+    PROTO_FAIR_NONE = 0,
+    PROTO_FAIR_UNIFORM, /* w = 1 (seed 001, closed form) */
+    PROTO_FAIR_LENGTH,  /* w = edge length (gradient descent) */
+} proto_fair;
+
+enum { PROTO_PIPELINE_MAX_OPS = 64, PROTO_MAX_MAGNITUDES = 64,
+       PROTO_MAX_VIEWS = 100000 };
 
 typedef struct proto_op {
     proto_op_kind kind;
@@ -79,6 +91,7 @@ typedef struct proto_op {
         } collapse;
         struct {
             double max_angle_deg, max_deviation;
+            uint32_t views;      /* scanner views over 180°, 0: read off */
             uint32_t ngroups;    /* 0: find groups automatically */
             uint32_t *gstart;    /* ngroups + 1 offsets into gfacets */
             uint32_t *gfacets;   /* facet indices of every group */
@@ -88,6 +101,7 @@ typedef struct proto_op {
         } cut;
         struct {
             double radius, max_angle_deg, max_deviation;
+            uint32_t views;      /* scanner views over 180°, 0: read off */
         } correct;
         struct {
             uint32_t vertex;
@@ -105,7 +119,9 @@ typedef struct proto_op {
         } inversion;
         struct {
             uint32_t quad_levels, binary_levels;
-            bool fill, refine, fair;
+            bool fill_edges;     /* weight holes by edge length (else area) */
+            bool refine, sharpen;
+            proto_fair fair;
         } triangulate;
         struct {
             bool weight_length;  /* weight by edge length (else area) */
@@ -131,6 +147,14 @@ int proto_pipeline_from_json(const json_t *v, const char *where,
 /* The canonical JSON (an array of op objects with every parameter), or
  * NULL on out-of-memory. Parsing it gives the same pipeline. */
 json_t *proto_pipeline_to_json(const proto_pipeline *p);
+
+/* A deep copy of src into *ret (free with proto_pipeline_free). 0 or
+ * -ENOMEM (*ret untouched). */
+int proto_pipeline_copy(const proto_pipeline *src, proto_pipeline *ret);
+
+/* Sets views (the scanner's contours over 180°) on every merge_facets and
+ * auto op of p that would otherwise read them off the model. */
+void proto_pipeline_set_views(proto_pipeline *p, uint32_t views);
 
 /* Frees the arrays of p and zeroes it; accepts NULL. */
 void proto_pipeline_free(proto_pipeline *p);

@@ -56,6 +56,16 @@ json_t *proto_tri_report_to_json(const geo_tri_report *r)
         (json_int_t)r->sharpen.nsnaps, "crease_corners",
         (json_int_t)r->sharpen.ncorners, "evaluations", (json_int_t)r->nevals,
         "boxes", (json_int_t)r->nboxes);
+    if (stages &&
+        (json_object_set_new(stages, "crease_middle_splits",
+                             json_integer(r->sharpen.nmiddle_splits)) < 0 ||
+         json_object_set_new(stages, "crease_corner_flips",
+                             json_integer(r->sharpen.ncorner_flips)) < 0 ||
+         json_object_set_new(stages, "crease_refused",
+                             json_integer(r->sharpen.nrejected)) < 0)) {
+        json_decref(stages);
+        stages = NULL;
+    }
     json_t *time = json_pack("{s:f, s:f, s:f, s:f, s:f, s:f}", "sample",
                              r->t_sample, "connect", r->t_connect, "fill",
                              r->t_fill, "sharpen", r->t_sharpen, "metrics",

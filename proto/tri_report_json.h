@@ -15,7 +15,9 @@
  *    "volume", "area",
  *    "stages": {"quads", "cells_open", "pinched", "refine_splits", "flips",
  *               "hard_splits", "crease_splits", "crease_snaps",
- *               "crease_corners", "evaluations", "boxes"},
+ *               "crease_corners", "crease_middle_splits",
+ *               "crease_corner_flips", "crease_refused", "evaluations",
+ *               "boxes"},
  *    "time": {"sample", "connect", "fill", "sharpen", "metrics", "total"}}
  * Reentrant; returns NULL on out-of-memory. */
 #ifndef PROTO_TRI_REPORT_JSON_H

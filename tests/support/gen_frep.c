@@ -146,6 +146,91 @@ json_t *gf_gem(void)
     return object(json_pack("{s:o}", "intersection", list), -0.7, 0.7);
 }
 
+/* The half-space of a facet as facet() builds it, turned by the rotation
+ * matrix rot (row-major) about the origin. */
+static json_t *facet_rot(double az, double tilt, int up, const double p[3],
+                         const double rot[9])
+{
+    double a = az * M_PI / 180, t = tilt * M_PI / 180;
+    double n[3] = {sin(t) * cos(a), sin(t) * sin(a), up ? cos(t) : -cos(t)};
+    double rn[3], rp[3];
+    for (int i = 0; i < 3; i++) {
+        rn[i] = rot[3 * i] * n[0] + rot[3 * i + 1] * n[1] + rot[3 * i + 2] * n[2];
+        rp[i] = rot[3 * i] * p[0] + rot[3 * i + 1] * p[1] + rot[3 * i + 2] * p[2];
+    }
+    return json_pack("{s:{s:[f,f,f,f]}}", "halfspace", "plane", rn[0], rn[1],
+                     rn[2], -geo_vdot(rn, rp));
+}
+
+json_t *gf_gem_random(uint64_t seed)
+{
+    uint64_t st = seed * 0x9e3779b97f4a7c15ull + 1;
+    double R = 0.45 + 0.1 * geo_rand_unit(&st);
+    double half = 0.005 + 0.025 * geo_rand_unit(&st); /* girdle */
+    double zt = half + R * (0.15 + 0.2 * geo_rand_unit(&st));
+    double crown = 28 + 10 * geo_rand_unit(&st), star = crown - 8 -
+                   6 * geo_rand_unit(&st);
+    double pav = 38 + 5 * geo_rand_unit(&st);
+    double ug = crown + 4 + 6 * geo_rand_unit(&st);
+    double lg = pav + 1 + 3 * geo_rand_unit(&st);
+    double tab = 0.5 + 0.15 * geo_rand_unit(&st);
+    double rot[9];
+    if (seed % 2 == 0) {
+        /* about the axis only: the girdle stays parallel to the rays */
+        double a = 2 * M_PI * geo_rand_unit(&st);
+        double r[9] = {cos(a), -sin(a), 0, sin(a), cos(a), 0, 0, 0, 1};
+        memcpy(rot, r, sizeof r);
+    } else {
+        /* a uniform random rotation from a unit quaternion */
+        double q[4], len;
+        do {
+            len = 0;
+            for (int k = 0; k < 4; k++) {
+                q[k] = 2 * geo_rand_unit(&st) - 1;
+                len += q[k] * q[k];
+            }
+        } while (len > 1 || len < 0.01);
+        len = sqrt(len);
+        for (int k = 0; k < 4; k++)
+            q[k] /= len;
+        double w = q[0], x = q[1], y = q[2], z = q[3];
+        double r[9] = {1 - 2 * (y * y + z * z), 2 * (x * y - w * z),
+                       2 * (x * z + w * y),     2 * (x * y + w * z),
+                       1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+                       2 * (x * z - w * y),     2 * (y * z + w * x),
+                       1 - 2 * (x * x + y * y)};
+        memcpy(rot, r, sizeof r);
+    }
+    json_t *list = json_array();
+    double top[3] = {0, 0, zt};
+    json_array_append_new(list, facet_rot(0, 0, 1, top, rot));
+    for (int k = 0; k < 8; k++) {
+        double az = 45.0 * k, a = az * M_PI / 180;
+        double pg[3] = {R * cos(a), R * sin(a), half};
+        json_array_append_new(list, facet_rot(az, crown, 1, pg, rot));
+        double as = (az + 22.5) * M_PI / 180;
+        double ps[3] = {tab * R * cos(as), tab * R * sin(as), zt};
+        json_array_append_new(list, facet_rot(az + 22.5, star, 1, ps, rot));
+        double pb[3] = {R * cos(a), R * sin(a), -half};
+        json_array_append_new(list, facet_rot(az, pav, 0, pb, rot));
+        for (int s = -1; s <= 1; s += 2) {
+            double au = (az + 22.5 + s * 11.25) * M_PI / 180;
+            double pu[3] = {R * cos(au), R * sin(au), half};
+            json_array_append_new(
+                list, facet_rot(az + 22.5 + s * 11.25, ug, 1, pu, rot));
+            double pl[3] = {R * cos(au), R * sin(au), -half};
+            json_array_append_new(
+                list, facet_rot(az + 22.5 + s * 11.25, lg, 0, pl, rot));
+        }
+    }
+    for (int k = 0; k < 16; k++) {
+        double az = 22.5 * k + 11.25, a = az * M_PI / 180;
+        double pg[3] = {R * cos(a), R * sin(a), 0};
+        json_array_append_new(list, facet_rot(az, 90.0, 1, pg, rot));
+    }
+    return object(json_pack("{s:o}", "intersection", list), -0.75, 0.75);
+}
+
 json_t *gf_two_spheres(void)
 {
     json_t *list = json_pack("[o,o]", sphere(-0.22, 0, 0, 0.42),

@@ -23,6 +23,11 @@ json_t *gf_torus(void);
  * bezels, 8 stars, 16 upper girdles, 16 girdle facets, 8 pavilion mains,
  * 16 lower girdles. Its axis is z. */
 json_t *gf_gem(void);
+/* A gem of the same 73 facets with seeded random proportions (girdle
+ * thickness, crown and pavilion angles, table size, crown height); an
+ * even seed turns it about its axis only (z, so the girdle stays parallel
+ * to the rays), an odd one by a uniform random rotation. */
+json_t *gf_gem_random(uint64_t seed);
 /* The union of two overlapping spheres (a crease circle). */
 json_t *gf_two_spheres(void);
 

@@ -218,10 +218,11 @@ static void add_inclined(plane_list *l, double phi, double alpha, double r,
     add_plane(l, n, p0);
 }
 
-/* A round brilliant with `fold` mains (8: the classic 57-facet crown and
- * pavilion pattern with a 64-facet girdle; 16: a "jubilee" with twice the
- * facets, for large scans). */
-static void brilliant(plane_list *l, uint64_t *rng, int fold)
+/* A round brilliant with `fold` mains and a girdle of `ngirdle` facets
+ * (8, 64: the classic 57-facet crown and pavilion pattern with a 64-facet
+ * girdle; 16, 128: a "jubilee" with twice the facets, for large scans;
+ * 16, 96: the jubilee's crown and pavilion on a 96-facet girdle). */
+static void brilliant(plane_list *l, uint64_t *rng, int fold, int ngirdle)
 {
     const double R = 3.25, deg = M_PI / 180;
     double girdle = 0.03 * 2 * R * (1 + jitter(rng, 0.2));
@@ -230,7 +231,6 @@ static void brilliant(plane_list *l, uint64_t *rng, int fold)
     double pav = (40.75 + jitter(rng, 0.6)) * deg;
     double table_h = zt + (R * (1 - (0.56 + jitter(rng, 0.02)))) * tan(crown);
     double rot = jitter(rng, M_PI);
-    int ngirdle = 8 * fold;
     for (int k = 0; k < ngirdle; k++) {
         double phi = rot + k * 2 * M_PI / ngirdle, n[3] = {cos(phi), sin(phi), 0};
         double p0[3] = {R * n[0], R * n[1], 0};
@@ -316,8 +316,12 @@ geo_poly *sim_stone(enum sim_cut cut, uint64_t seed)
 {
     uint64_t rng = seed * 0x9e3779b97f4a7c15ULL + 1;
     plane_list l = {0};
-    if (cut == SIM_BRILLIANT || cut == SIM_JUBILEE)
-        brilliant(&l, &rng, cut == SIM_JUBILEE ? 16 : 8);
+    if (cut == SIM_BRILLIANT)
+        brilliant(&l, &rng, 8, 64);
+    else if (cut == SIM_JUBILEE)
+        brilliant(&l, &rng, 16, 128);
+    else if (cut == SIM_JUBILEE96)
+        brilliant(&l, &rng, 16, 96);
     else
         step_cut(&l, &rng, cut == SIM_EMERALD);
     geo_poly *p = sim_halfspace_intersection(l.v, l.n, 10.0);

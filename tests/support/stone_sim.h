@@ -22,9 +22,13 @@
 
 #include "poly.h"
 
-/* Cuts: a round brilliant (121 facets), princess, emerald, and a
- * 16-fold brilliant with twice the facets (large scans for benchmarks). */
-enum sim_cut { SIM_BRILLIANT, SIM_PRINCESS, SIM_EMERALD, SIM_JUBILEE };
+/* Cuts: a round brilliant (121 facets), princess, emerald, a 16-fold
+ * brilliant with twice the facets ("jubilee", 241: its 128 girdle facets
+ * are 2.8° apart and 0.16 mm wide), and the same crown and pavilion on a
+ * 96-facet girdle ("jubilee96", 209 facets; girdle facets 3.75° apart,
+ * 0.21 mm wide). */
+enum sim_cut { SIM_BRILLIANT, SIM_PRINCESS, SIM_EMERALD, SIM_JUBILEE,
+               SIM_JUBILEE96 };
 
 /* The true stone of the given cut, about 6.5 mm across, with proportions
  * drawn from seed. NULL on out-of-memory. Valid convex polyhedron. */

@@ -1,17 +1,23 @@
 /* correct_table.c — the acceptance table of the automatic correction
  * (README "Automatic correction"): simulated stones of several cuts and
- * seeds scanned with K views (tests/support/stone_sim.h), each scan
+ * seeds scanned with K views (tests/support/stone_sim.h; silhouette noise
+ * --sim-noise, 1 µm by default), each scan
  * corrected by geo_correct_auto, and the result compared with the stone.
  *
- *   correct_table [--cuts brilliant,princess,emerald,jubilee] [--seeds 1,2,3]
+ *   correct_table [--cuts brilliant,princess,emerald,jubilee,jubilee96]
+ *                 [--seeds 1,2,3]
  *                 [--ks 100,400,800] [--angle DEG] [--rel-dev R]
+ *                 [--sim-noise MM] [--group-noise MM|0|-1] [--views K]
  *                 [--plane contour|weighted|area] [--order event|paper]
  *                 [--no-collapse] [--models DIR]
  *
  * One Markdown table row per scan: cut, seed, K, facets (truth / scan /
  * corrected), Hausdorff distance to the stone of the scan and of the
  * corrected model (µm, sim_hausdorff), volume error of the corrected model
- * (%), groups merged / not merged, whether geo_inspect calls the result
+ * (%), groups merged / not merged, the scanner's views and the surface
+ * noise the automatic groups used (--views and --group-noise set them:
+ * 0 means read off the scan, a negative noise no noise test), whether
+ * geo_inspect calls the result
  * valid, and the correction's time. With --models, the sample scans
  * DIR/brilliant.scan-k{100,400,800}.json are added, compared with
  * DIR/brilliant.truth.json. The last line sums up: rows, rows meeting
@@ -61,9 +67,10 @@ static void row(const char *cut, const char *seed, unsigned k,
     bool good = ferr <= 0.1 && ferr >= -0.1 && hc <= hs && rep.after.valid;
     t->good += good;
     t->invalid += !rep.after.valid;
-    printf("| %s | %s | %u | %u / %u / %u | %.2f | %.2f | %+.3f | %u / %u | %s | %.0f |\n",
+    printf("| %s | %s | %u | %u / %u / %u | %.2f | %.2f | %+.3f | %u / %u | %u / %.2f "
+           "| %s | %.0f |\n",
            cut, seed, k, truth->nfacets, scan->nfacets, p->nfacets, hs, hc,
-           verr, rep.merge.merged, rep.merge.failed,
+           verr, rep.merge.merged, rep.merge.failed, rep.views, rep.noise * 1e3,
            rep.after.valid ? "yes" : "NO", ms);
     geo_correct_report_clear(&rep);
     geo_poly_free(p);
@@ -79,7 +86,8 @@ static int split(char *s, char **out, int max)
 
 int main(int argc, char **argv)
 {
-    char cuts_s[256] = "brilliant,princess,emerald,jubilee";
+    char cuts_s[256] = "brilliant,princess,emerald,jubilee,jubilee96";
+    double sim_noise = 0.001;
     char seeds_s[256] = "1,2,3", ks_s[256] = "100,400,800";
     const char *models = NULL;
     geo_correct_opts o;
@@ -103,6 +111,12 @@ int main(int argc, char **argv)
             snprintf(ks_s, sizeof ks_s, "%s", v);
         else if (strcmp(a, "--angle") == 0)
             o.merge.max_angle_deg = atof(v);
+        else if (strcmp(a, "--sim-noise") == 0)
+            sim_noise = atof(v);
+        else if (strcmp(a, "--group-noise") == 0)
+            o.merge.noise = atof(v);
+        else if (strcmp(a, "--views") == 0)
+            o.merge.views = (uint32_t)strtoul(v, NULL, 10);
         else if (strcmp(a, "--rel-dev") == 0)
             o.merge.rel_deviation = atof(v);
         else if (strcmp(a, "--plane") == 0)
@@ -124,19 +138,20 @@ int main(int argc, char **argv)
         nk = split(ks_s, ks, 16);
     printf("| cut | seed | K | facets truth / scan / corrected | Hausdorff scan µm "
            "| Hausdorff corrected µm | volume error %% | groups merged / not "
-           "| valid | ms |\n|---|---|---|---|---|---|---|---|---|---|\n");
+           "| views / noise µm | valid | ms |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
     totals t = {0, 0, 0};
     for (int c = 0; c < nc; c++) {
         enum sim_cut cut = strcmp(cuts[c], "princess") == 0  ? SIM_PRINCESS
                            : strcmp(cuts[c], "emerald") == 0 ? SIM_EMERALD
                            : strcmp(cuts[c], "jubilee") == 0 ? SIM_JUBILEE
+                           : strcmp(cuts[c], "jubilee96") == 0 ? SIM_JUBILEE96
                                                              : SIM_BRILLIANT;
         for (int s = 0; s < ns; s++) {
             uint64_t seed = strtoull(seeds[s], NULL, 10);
             geo_poly *stone = sim_stone(cut, seed);
             for (int k = 0; stone && k < nk; k++) {
                 unsigned kv = (unsigned)strtoul(ks[k], NULL, 10);
-                geo_poly *scan = sim_scan(stone, kv, 0.001, seed);
+                geo_poly *scan = sim_scan(stone, kv, sim_noise, seed);
                 if (scan)
                     row(cuts[c], seeds[s], kv, stone, scan, &o, &t);
                 geo_poly_free(scan);

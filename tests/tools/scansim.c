@@ -2,7 +2,8 @@
  * facet-model/1 JSON (tests/support/stone_sim.h), for the correction's
  * acceptance runs and for anyone who wants a scan to look at.
  *
- *   scansim --cut brilliant|princess|emerald|jubilee [--k 400] [--seed 3]
+ *   scansim --cut brilliant|princess|emerald|jubilee|jubilee96 [--k 400]
+ *           [--seed 3]
  *           [--noise 0.001] [--truth T.json] [--scan S.json]
  *
  * The stone's proportions come from --seed, the scan's silhouette noise
@@ -21,7 +22,7 @@
 static int usage(const char *msg)
 {
     fprintf(stderr, "scansim: %s\nusage: scansim --cut brilliant|princess|"
-            "emerald|jubilee [--k 400] [--seed 3] [--noise 0.001] "
+            "emerald|jubilee|jubilee96 [--k 400] [--seed 3] [--noise 0.001] "
             "[--truth T.json] [--scan S.json]\n", msg);
     return 2;
 }
@@ -78,8 +79,11 @@ int main(int argc, char **argv)
         c = SIM_EMERALD;
     else if (strcmp(cut, "jubilee") == 0)
         c = SIM_JUBILEE;
+    else if (strcmp(cut, "jubilee96") == 0)
+        c = SIM_JUBILEE96;
     else
-        return usage("--cut: expected brilliant, princess, emerald or jubilee");
+        return usage("--cut: expected brilliant, princess, emerald, jubilee or "
+                         "jubilee96");
 
     geo_poly *stone = sim_stone(c, seed);
     geo_poly *scan = stone ? sim_scan(stone, (uint32_t)k, noise, seed) : NULL;

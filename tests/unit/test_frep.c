@@ -187,6 +187,62 @@ static void expect_error(const char *json, const char *want)
         fail_msg("got \"%s\", want \"%s\"", err.msg, want);
 }
 
+/* A cube [-0.5, 0.5]³ as six half-spaces: pieces are its faces. */
+static geo_frep *cube(void)
+{
+    geo_frep *f = geo_frep_new();
+    uint32_t ids[6];
+    for (int k = 0; k < 6; k++) {
+        double pl[4] = {0, 0, 0, -0.5};
+        pl[k / 2] = k % 2 ? -1 : 1;
+        ids[k] = (uint32_t)geo_frep_halfspace(f, pl, NULL);
+    }
+    int64_t root = geo_frep_intersection(f, 6, ids, NULL);
+    assert_int_equal(geo_frep_finish(f, (uint32_t)root, LO, HI, NULL), 0);
+    return f;
+}
+
+static void test_projection_onto_pieces_lands_on_faces_edges_corners(void **state)
+{
+    (void)state;
+    geo_frep *f = cube();
+    uint32_t px[4], py[4], pz[4];
+    double on_x[3] = {0.5, 0.1, 0.2}, on_y[3] = {0.1, 0.5, 0.2},
+           on_z[3] = {0.1, 0.2, 0.5};
+    assert_int_equal(geo_frep_pieces_at(f, on_x, 1e-12, px, 4), 1);
+    assert_int_equal(geo_frep_pieces_at(f, on_y, 1e-12, py, 4), 1);
+    assert_int_equal(geo_frep_pieces_at(f, on_z, 1e-12, pz, 4), 1);
+    /* one piece: straight onto the face x = 0.5 */
+    double p[3] = {0.3, 0.1, 0.2};
+    assert_true(geo_frep_project_pieces(f, px, 1, p, 1e-12, 1.0));
+    assert_true(fabs(p[0] - 0.5) < 1e-12 && fabs(p[1] - 0.1) < 1e-12);
+    /* two: onto the edge x = y = 0.5 */
+    uint32_t two[2] = {px[0], py[0]}, three[3] = {px[0], py[0], pz[0]};
+    double q[3] = {0.4, 0.45, 0.1};
+    assert_true(geo_frep_project_pieces(f, two, 2, q, 1e-12, 1.0));
+    assert_true(fabs(q[0] - 0.5) < 1e-12 && fabs(q[1] - 0.5) < 1e-12 &&
+                fabs(q[2] - 0.1) < 1e-12);
+    /* three: the corner */
+    double r[3] = {0.3, 0.35, 0.4};
+    assert_true(geo_frep_project_pieces(f, three, 3, r, 1e-12, 1.0));
+    for (int k = 0; k < 3; k++)
+        assert_true(fabs(r[k] - 0.5) < 1e-12);
+    /* a part of the face's plane that another face cuts away is refused,
+     * and so is a step longer than allowed; p stays where it was */
+    double far[3] = {0.3, 0.9, 0.2}, keep[3] = {0.3, 0.9, 0.2};
+    assert_false(geo_frep_project_pieces(f, px, 1, far, 1e-12, 1.0));
+    assert_memory_equal(far, keep, sizeof far);
+    double near[3] = {0.3, 0.1, 0.2};
+    assert_false(geo_frep_project_pieces(f, px, 1, near, 1e-12, 0.1));
+    /* parallel faces have no common point */
+    double on_mx[3] = {-0.5, 0.1, 0.2};
+    uint32_t par[2] = {px[0], 0};
+    assert_int_equal(geo_frep_pieces_at(f, on_mx, 1e-12, par + 1, 1), 1);
+    assert_true(par[1] != par[0]);
+    assert_false(geo_frep_project_pieces(f, par, 2, near, 1e-12, 1.0));
+    geo_frep_free(f);
+}
+
 static void test_reader_errors_name_the_place(void **state)
 {
     (void)state;
@@ -292,6 +348,8 @@ int main(void)
         cmocka_unit_test(test_gradient_matches_finite_differences),
         cmocka_unit_test(test_interval_encloses_samples_and_pruning_agrees),
         cmocka_unit_test(test_pieces_meet_at_gem_edges_and_projection_lands),
+        cmocka_unit_test(
+            test_projection_onto_pieces_lands_on_faces_edges_corners),
         cmocka_unit_test(test_reader_errors_name_the_place),
         cmocka_unit_test(test_reader_limits_depth_and_count),
         cmocka_unit_test(test_test_objects_parse),

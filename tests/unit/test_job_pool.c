@@ -132,7 +132,7 @@ static void test_jobs_run_and_outcomes_are_recorded(void **state)
     submit(f, p, "fail", bad);
     job_rec r = wait_state(f, ok, JOB_SUCCEEDED);
     assert_string_equal(r.summary, "{\"facets\":1}");
-    assert_true(r.result_hash == job_hash64("MODEL", 5));
+    assert_true(r.result_hash == job_digest64("MODEL", 5));
     job_rec_clear(&r);
     r = wait_state(f, bad, JOB_FAILED);
     assert_string_equal(r.error, "facets[3]: broken");

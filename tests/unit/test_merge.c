@@ -315,6 +315,119 @@ static void test_correct_auto_recovers_the_stone_from_its_scan(void **state)
     geo_poly_free(p);
 }
 
+/* p turned about z by angle a (vertices and planes). */
+static void rotate_z(geo_poly *p, double a)
+{
+    double c = cos(a), s = sin(a);
+    for (uint32_t v = 0; v < p->nverts; v++) {
+        double x = p->verts[v][0], y = p->verts[v][1];
+        p->verts[v][0] = c * x - s * y;
+        p->verts[v][1] = s * x + c * y;
+    }
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        double x = p->planes[f][0], y = p->planes[f][1];
+        p->planes[f][0] = c * x - s * y;
+        p->planes[f][1] = s * x + c * y;
+    }
+}
+
+static void test_view_grid_reads_the_scanners_step_off_a_scan(void **state)
+{
+    (void)state;
+    uint32_t k;
+    double frac;
+    geo_poly *p = tu_load_model("brilliant.scan-k400.json");
+    assert_non_null(p);
+    assert_int_equal(geo_merge_view_grid(p, &k, &frac), 0);
+    assert_int_equal(k, 400);
+    assert_true(frac >= 0.5);
+    /* the grid need not start at azimuth 0 */
+    rotate_z(p, 0.123);
+    assert_int_equal(geo_merge_view_grid(p, &k, NULL), 0);
+    assert_int_equal(k, 400);
+    geo_poly_free(p);
+    geo_poly *stone = sim_stone(SIM_EMERALD, 2);
+    geo_poly *scan = sim_scan(stone, 100, 0.001, 2);
+    assert_non_null(scan);
+    assert_int_equal(geo_merge_view_grid(scan, &k, NULL), 0);
+    assert_int_equal(k, 100);
+    /* a model that is not a raw scan shows no grid */
+    geo_correct_report rep;
+    geo_err err = {{0}};
+    assert_int_equal(geo_correct_auto(scan, NULL, NULL, &rep, &err), 0);
+    assert_int_equal(rep.views, 100);
+    assert_true(rep.noise > 0);
+    geo_correct_report_clear(&rep);
+    assert_int_equal(geo_merge_view_grid(scan, &k, &frac), 0);
+    assert_int_equal(k, 0);
+    assert_true(frac < 0.5);
+    geo_poly_free(scan);
+    geo_poly_free(stone);
+}
+
+static void test_surface_noise_follows_the_scanners_noise(void **state)
+{
+    (void)state;
+    geo_poly *stone = sim_stone(SIM_BRILLIANT, 2);
+    double est[3], sigma[3] = {0.0005, 0.001, 0.002};
+    for (int i = 0; i < 3; i++) {
+        geo_poly *scan = sim_scan(stone, 100, sigma[i], 2);
+        assert_non_null(scan);
+        geo_err err = {{0}};
+        assert_int_equal(geo_merge_surface_noise(scan, NULL, &est[i], &err), 0);
+        /* a fraction of the silhouette noise: one facet's slivers lie
+         * within it of their common plane */
+        assert_true(est[i] > 0.1 * sigma[i] && est[i] < sigma[i]);
+        geo_poly_free(scan);
+    }
+    assert_true(est[0] < est[1] && est[1] < est[2]);
+    geo_poly_free(stone);
+}
+
+/* Neighbouring girdle facets 3.75° apart and 0.21 mm wide part by less
+ * than the deviation bound from their common plane; the noise test keeps
+ * them apart (without it this scan comes out with 173 facets for 209). */
+static void test_auto_groups_keep_neighbouring_girdle_facets_apart(void **state)
+{
+    (void)state;
+    geo_poly *stone = sim_stone(SIM_JUBILEE96, 1);
+    geo_poly *scan = sim_scan(stone, 100, 0.001, 1);
+    assert_non_null(scan);
+    geo_poly *p = geo_poly_copy(scan);
+    geo_correct_report rep;
+    geo_err err = {{0}};
+    assert_int_equal(geo_correct_auto(p, NULL, NULL, &rep, &err), 0);
+    assert_true(rep.after.valid);
+    assert_int_equal(rep.views, 100);
+    assert_true(fabs((double)p->nfacets / stone->nfacets - 1) <= 0.1);
+    assert_true(sim_hausdorff(p, stone, 500) <= sim_hausdorff(scan, stone, 500));
+    geo_correct_report_clear(&rep);
+    geo_poly_free(p);
+    geo_poly_free(scan);
+    geo_poly_free(stone);
+}
+
+/* A group found at the start of a round whose facets an earlier group of
+ * the round lifted or cut is checked again before it is merged (emerald
+ * seed 2 at K = 400 came out 9 µm from the stone, its scan 4.4 µm). */
+static void test_group_changed_by_an_earlier_group_is_checked_again(void **state)
+{
+    (void)state;
+    geo_poly *stone = sim_stone(SIM_EMERALD, 2);
+    geo_poly *scan = sim_scan(stone, 400, 0.001, 2);
+    assert_non_null(scan);
+    geo_poly *p = geo_poly_copy(scan);
+    geo_correct_report rep;
+    geo_err err = {{0}};
+    assert_int_equal(geo_correct_auto(p, NULL, NULL, &rep, &err), 0);
+    assert_true(rep.after.valid);
+    assert_true(sim_hausdorff(p, stone, 500) <= sim_hausdorff(scan, stone, 500));
+    geo_correct_report_clear(&rep);
+    geo_poly_free(p);
+    geo_poly_free(scan);
+    geo_poly_free(stone);
+}
+
 static void test_collapse_joins_vertices_of_short_edges(void **state)
 {
     (void)state;
@@ -395,6 +508,10 @@ int main(void)
         cmocka_unit_test(test_local_cut_equals_geo_cut_with_main_facet),
         cmocka_unit_test(test_unmergeable_group_leaves_the_model_untouched),
         cmocka_unit_test(test_correct_auto_recovers_the_stone_from_its_scan),
+        cmocka_unit_test(test_view_grid_reads_the_scanners_step_off_a_scan),
+        cmocka_unit_test(test_surface_noise_follows_the_scanners_noise),
+        cmocka_unit_test(test_auto_groups_keep_neighbouring_girdle_facets_apart),
+        cmocka_unit_test(test_group_changed_by_an_earlier_group_is_checked_again),
         cmocka_unit_test(test_collapse_joins_vertices_of_short_edges),
         cmocka_unit_test(test_hausdorff_of_two_boxes),
         cmocka_unit_test(test_report_json_has_the_documented_keys),

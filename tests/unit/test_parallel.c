@@ -1,7 +1,9 @@
 /* test_parallel.c — par_for runs every index exactly once, for any pool
- * size and for many loops in a row on the same pool. */
+ * size, for many loops in a row on the same pool, for loops started from
+ * several threads at once and for loops nested inside a loop. */
 #include "testutil.h"
 
+#include <pthread.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 
@@ -47,11 +49,58 @@ static void test_null_pool_runs_inline(void **state)
     assert_null(par_pool_free(NULL));
 }
 
+typedef struct nest {
+    par_pool *pool;
+    atomic_int *hit; /* 50 × 40 inner indices */
+} nest;
+
+static void inner(void *arg, size_t i)
+{
+    atomic_int *row = arg;
+    atomic_fetch_add(&row[i], 1);
+}
+
+static void outer(void *arg, size_t i)
+{
+    nest *n = arg;
+    par_for(n->pool, 40, inner, n->hit + i * 40);
+}
+
+static void *caller(void *arg)
+{
+    nest *n = arg;
+    for (int loop = 0; loop < 50; loop++)
+        par_for(n->pool, 50, outer, n);
+    return NULL;
+}
+
+static void test_concurrent_and_nested_loops_run_every_index(void **state)
+{
+    (void)state;
+    par_pool *p = par_pool_new(3);
+    assert_non_null(p);
+    enum { CALLERS = 4 };
+    nest ns[CALLERS];
+    pthread_t th[CALLERS];
+    for (int c = 0; c < CALLERS; c++) {
+        ns[c] = (nest){p, calloc(50 * 40, sizeof(atomic_int))};
+        assert_int_equal(pthread_create(&th[c], NULL, caller, &ns[c]), 0);
+    }
+    for (int c = 0; c < CALLERS; c++) {
+        pthread_join(th[c], NULL);
+        for (int i = 0; i < 50 * 40; i++)
+            assert_int_equal(atomic_load(&ns[c].hit[i]), 50);
+        free(ns[c].hit);
+    }
+    par_pool_free(p);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_every_index_runs_once),
         cmocka_unit_test(test_null_pool_runs_inline),
+        cmocka_unit_test(test_concurrent_and_nested_loops_run_every_index),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -93,8 +93,11 @@ static void test_errors_name_the_place(void **state)
                  "pipeline[0].max_angle_deg: 0 out of range (0, 90]");
     expect_error("[{\"op\":\"inversion_stats\",\"magnitudes\":[1,0]}]",
                  "pipeline[0].magnitudes[1]: expected a positive number");
-    expect_error("[{\"op\":\"triangulate\",\"quad_levels\":13}]",
-                 "pipeline[0].quad_levels: 13 out of range [1, 12]");
+    expect_error("[{\"op\":\"triangulate\",\"quad_levels\":12}]",
+                 "pipeline[0].quad_levels: 12 out of range [1, 11]");
+    expect_error("[{\"op\":\"triangulate\",\"fair\":true}]",
+                 "pipeline[0].fair: expected one of \"none\", \"uniform\", "
+                 "\"length\"");
     expect_error("[{\"op\":\"fill_holes\",\"refine\":\"yes\"}]",
                  "pipeline[0].refine: expected true or false");
     expect_error("[{\"radius\":1}]",
@@ -133,7 +136,8 @@ static void test_canonical_json_round_trips(void **state)
         "{\"op\":\"move_vertex\",\"vertex\":4,\"by\":[0.1,0,0],"
         "\"schedule\":\"scaled\",\"max_steps\":50},"
         "{\"op\":\"inversion_stats\",\"samples\":10,\"magnitudes\":[1,0.1],"
-        "\"seed\":7}, {\"op\":\"triangulate\",\"fair\":false},"
+        "\"seed\":7}, {\"op\":\"triangulate\",\"fair\":\"none\","
+        "\"fill\":\"edges\"},"
         "{\"op\":\"fill_holes\",\"weight\":\"length\"}, \"stitch\","
         "{\"op\":\"cut\",\"plane\":[1,0,0,0.25]},"
         "{\"op\":\"collapse_clusters\",\"radius\":0.01}]";
@@ -152,7 +156,10 @@ static void test_canonical_json_round_trips(void **state)
     assert_int_equal(b.ops[2].u.move.schedule, PROTO_SCHED_SCALED);
     assert_int_equal(b.ops[3].u.inversion.nmagnitudes, 2);
     assert_int_equal(b.ops[3].u.inversion.seed, 7);
-    assert_false(b.ops[4].u.triangulate.fair);
+    assert_int_equal(b.ops[4].u.triangulate.fair, PROTO_FAIR_NONE);
+    assert_true(b.ops[4].u.triangulate.fill_edges);
+    assert_true(b.ops[4].u.triangulate.sharpen);
+    assert_int_equal(b.ops[4].u.triangulate.quad_levels, 9);
     assert_true(b.ops[5].u.fill_holes.weight_length);
     free(canon);
     free(canon2);
@@ -160,6 +167,31 @@ static void test_canonical_json_round_trips(void **state)
     json_decref(j2);
     proto_pipeline_free(&a);
     proto_pipeline_free(&b);
+}
+
+/* A scanner job's pipeline carries the scan's contour count to every op
+ * that would otherwise read the view step off the model; an explicit
+ * "views" stays as given, and the copy leaves the original untouched. */
+static void test_views_are_set_on_a_copy_for_scanner_jobs(void **state)
+{
+    (void)state;
+    proto_pipeline p, q;
+    geo_err err = {{0}};
+    assert_int_equal(parse("[\"inspect\", \"auto\", {\"op\":\"merge_facets\","
+                           "\"views\":250}, \"merge_facets\"]", &p, &err), 0);
+    assert_int_equal(p.ops[1].u.correct.views, 0);
+    assert_int_equal(p.ops[2].u.merge.views, 250);
+    assert_int_equal(proto_pipeline_copy(&p, &q), 0);
+    proto_pipeline_set_views(&q, 400);
+    assert_int_equal(q.ops[1].u.correct.views, 400);
+    assert_int_equal(q.ops[2].u.merge.views, 250);
+    assert_int_equal(q.ops[3].u.merge.views, 400);
+    assert_int_equal(p.ops[1].u.correct.views, 0);
+    assert_int_equal(p.ops[3].u.merge.views, 0);
+    proto_pipeline_free(&q);
+    proto_pipeline_free(&p);
+    expect_error("[{\"op\":\"auto\",\"views\":-1}]",
+                 "pipeline[0].views: -1 out of range [0, 100000]");
 }
 
 int main(void)
@@ -170,6 +202,7 @@ int main(void)
         cmocka_unit_test(test_errors_name_the_place),
         cmocka_unit_test(test_cut_plane_is_kept_as_given),
         cmocka_unit_test(test_canonical_json_round_trips),
+        cmocka_unit_test(test_views_are_set_on_a_copy_for_scanner_jobs),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

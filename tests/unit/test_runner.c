@@ -1,5 +1,5 @@
-/* test_runner.c — the pipeline runner: ops without a kernel in the build
- * are refused by name and place, inspect runs and reports (stats "before",
+/* test_runner.c — the pipeline runner: every op has its kernel in the
+ * build, inspect runs and reports (stats "before",
  * summary counts and validity), progress rises monotonically to 1 across
  * the ops, and a set cancel flag stops the run with -ECANCELED. */
 #include "testutil.h"
@@ -20,22 +20,19 @@ static proto_pipeline parse(const char *text)
     return p;
 }
 
-static void test_unavailable_op_is_refused_by_name(void **state)
+/* Every operation the pipeline parser knows has its kernel in this build
+ * (runner_check refuses the others by name and place, as the daemon's
+ * 422 for an op that has not landed yet). */
+static void test_every_op_has_a_kernel(void **state)
 {
     (void)state;
+    for (int k = 0; k < PROTO_OP_COUNT; k++)
+        if (!runner_op_available((proto_op_kind)k))
+            fail_msg("op '%s' has no kernel", proto_op_name((proto_op_kind)k));
+    assert_false(runner_op_available(PROTO_OP_COUNT));
     proto_pipeline p = parse("[\"inspect\", {\"op\":\"cut\",\"plane\":[0,0,1,0]}]");
-    geo_err err = {{0}};
-    assert_int_equal(runner_check(&p, &err), -ENOTSUP);
-    assert_string_equal(err.msg,
-                        "pipeline[1]: op 'cut' is not available in this build");
-    geo_poly *m = tu_notch_cube();
-    json_t *stats = NULL, *summary = NULL;
-    assert_int_equal(runner_run(&p, &m, NULL, NULL, NULL, &stats, &summary,
-                                &err), -ENOTSUP);
-    assert_null(stats);
-    geo_poly_free(m);
+    assert_int_equal(runner_check(&p, NULL), 0);
     proto_pipeline_free(&p);
-    assert_true(runner_op_available(PROTO_OP_INSPECT));
 }
 
 typedef struct track {
@@ -111,7 +108,7 @@ static void test_cancel_flag_stops_the_run(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_unavailable_op_is_refused_by_name),
+        cmocka_unit_test(test_every_op_has_a_kernel),
         cmocka_unit_test(test_inspect_reports_and_progress_rises),
         cmocka_unit_test(test_cancel_flag_stops_the_run),
     };

@@ -185,7 +185,7 @@ static void test_finish_keeps_results_and_ends_the_job(void **state)
     assert_true(r.progress == 1.0);
     assert_string_equal(r.summary, "{\"ok\":1}");
     assert_int_equal(r.result_bytes, 11);
-    assert_true(r.result_hash == job_hash64("MODEL", 5));
+    assert_true(r.result_hash == job_digest64("MODEL", 5));
     assert_true(r.finished_ms >= r.started_ms);
     job_rec_clear(&r);
     void *b;
@@ -198,6 +198,40 @@ static void test_finish_keeps_results_and_ends_the_job(void **state)
     assert_int_equal(store_finish(f->s, id, JOB_FAILED, "x", NULL, NULL, 0,
                                   NULL, 0, NULL), -EBUSY);
     assert_int_equal(store_progress(f->s, id, 0.5, NULL, NULL), -EBUSY);
+}
+
+static void test_unchanged_result_is_the_input_kept_once(void **state)
+{
+    fixture *f = *state;
+    char id[27], failed[27];
+    assert_int_equal(put(f->s, JOB_PRIO_NORMAL, "http", NULL, id, 10), 0);
+    assert_int_equal(put(f->s, JOB_PRIO_NORMAL, "http", NULL, failed, 10), 0);
+    job_rec r;
+    assert_int_equal(store_claim(f->s, &r, NULL), 0);
+    job_rec_clear(&r);
+    assert_int_equal(store_claim(f->s, &r, NULL), 0);
+    job_rec_clear(&r);
+    assert_int_equal(store_finish(f->s, id, JOB_SUCCEEDED, NULL, "{}", NULL,
+                                  0, "STATS", 5, NULL), 0);
+    assert_int_equal(store_finish(f->s, failed, JOB_FAILED, "no", NULL, NULL,
+                                  0, NULL, 0, NULL), 0);
+    assert_int_equal(store_get(f->s, id, &r, NULL), 0);
+    assert_int_equal(r.result_bytes, 5);
+    assert_true(r.result_hash == job_digest64(id, strlen(id)));
+    job_rec_clear(&r);
+    void *b;
+    size_t n;
+    assert_int_equal(store_get_blob(f->s, id, STORE_BLOB_MODEL, &b, &n, NULL),
+                     0);
+    assert_int_equal(n, 7);
+    assert_memory_equal(b, "{\"m\":1}", 7);
+    free(b);
+    /* a failed job has no result, not its input */
+    assert_int_equal(store_get_blob(f->s, failed, STORE_BLOB_MODEL, &b, &n,
+                                    NULL), -ENOENT);
+    assert_int_equal(store_get(f->s, failed, &r, NULL), 0);
+    assert_true(r.result_hash == 0);
+    job_rec_clear(&r);
 }
 
 static void test_cancel_queued_ends_it_running_flags_it(void **state)
@@ -438,6 +472,52 @@ static void test_concurrent_claims_hand_out_each_job_once(void **state)
         free(c[t].seen);
 }
 
+typedef struct putter {
+    store *s;
+    int base, fails;
+} putter;
+
+static void *put_many(void *arg)
+{
+    putter *p = arg;
+    for (int i = 0; i < 40; i++) {
+        char id[JOB_ID_LEN + 1];
+        int64_t ms = 1800000000000 + p->base * 1000 + i;
+        job_id_new(id, ms);
+        store_new_job j = {
+            .id = id, .priority = JOB_PRIO_NORMAL, .source = "http",
+            .pipeline = "[\"inspect\"]", .input = "{}", .input_len = 2,
+            .created_ms = ms,
+        };
+        p->fails += store_put(p->s, &j, 100000, NULL, NULL) != 0;
+    }
+    return NULL;
+}
+
+/* Submissions from several threads share WAL syncs (group commit); every
+ * one returns committed, and all are there after reopening. */
+static void test_concurrent_puts_are_all_committed(void **state)
+{
+    fixture *f = *state;
+    enum { T = 6 };
+    pthread_t th[T];
+    putter p[T];
+    for (int t = 0; t < T; t++) {
+        p[t] = (putter){f->s, t, 0};
+        pthread_create(&th[t], NULL, put_many, &p[t]);
+    }
+    for (int t = 0; t < T; t++) {
+        pthread_join(th[t], NULL);
+        assert_int_equal(p[t].fails, 0);
+    }
+    f->s = store_close(f->s);
+    f->s = store_sqlite_open(f->dir, NULL);
+    assert_non_null(f->s);
+    store_counts c;
+    assert_int_equal(store_count(f->s, &c, NULL), 0);
+    assert_int_equal(c.by_state[JOB_QUEUED], T * 40);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -448,6 +528,7 @@ int main(void)
         T(test_queue_bound_rejects_without_writing),
         T(test_idempotency_key_returns_the_first_job),
         T(test_finish_keeps_results_and_ends_the_job),
+        T(test_unchanged_result_is_the_input_kept_once),
         T(test_cancel_queued_ends_it_running_flags_it),
         T(test_remove_only_deletes_finished_jobs),
         T(test_list_pages_newest_first_with_filters),
@@ -455,6 +536,7 @@ int main(void)
         T(test_retention_deletes_oldest_finished_first),
         T(test_newer_schema_is_refused),
         T(test_concurrent_claims_hand_out_each_job_once),
+        T(test_concurrent_puts_are_all_committed),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

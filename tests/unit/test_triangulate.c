@@ -120,6 +120,23 @@ static void test_finer_levels_approach_the_sphere(void **state)
     geo_frep_free(f);
 }
 
+static void test_silhouette_walls_become_fair_triangles(void **state)
+{
+    (void)state;
+    /* where the sphere turns parallel to the rays, the walls between the
+     * last points of the columns are long slivers unless refinement can
+     * flip them into the triangles beside them (22° normal error before) */
+    geo_frep *f = load("sphere");
+    geo_tri_report rep;
+    geo_poly *m = run(f, 8, 9, NULL, &rep);
+    assert_valid(m, &rep, 2);
+    if (!(rep.quality.ndev_max < 2.0))
+        fail_msg("normal deviation %g°", rep.quality.ndev_max);
+    geo_tri_report_clear(&rep);
+    geo_poly_free(m);
+    geo_frep_free(f);
+}
+
 static void test_gem_edges_stay_sharp(void **state)
 {
     (void)state;
@@ -238,6 +255,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_smooth_objects_give_valid_surfaces_on_f_zero),
         cmocka_unit_test(test_finer_levels_approach_the_sphere),
+        cmocka_unit_test(test_silhouette_walls_become_fair_triangles),
         cmocka_unit_test(test_gem_edges_stay_sharp),
         cmocka_unit_test(test_union_crease_is_recovered),
         cmocka_unit_test(test_result_does_not_depend_on_threads),

@@ -1,0 +1,904 @@
+/* json_pull.c — the JSON pull tokenizer (json_pull.h).
+ *
+ * Two layers: lex() reads one token from the bytes (whitespace, strings
+ * with their escapes and UTF-8, numbers, literals) and the state machine
+ * of proto_jpull_next() checks the grammar between tokens.
+ *
+ * Error compatibility with jansson rests on three rules, each followed at
+ * every error site:
+ * - the context ("near '...'") is the token's raw bytes read so far: the
+ *   whole token for grammar errors, the part before the offending byte
+ *   for errors inside a token, nothing for a bad byte between tokens;
+ *   printed only when it is 1–20 bytes long and does not start with NUL
+ *   ("near end of file" when there is none, except after a UTF-8 error);
+ * - the position is where reading stopped: after the token, or before
+ *   the byte that cannot be part of it (a UTF-8 error stops before the
+ *   bad sequence), or after a bad escape character;
+ * - a UTF-8 sequence is checked wherever jansson reads it: inside strings,
+ *   at the start of a token, and at the byte after a number or a literal
+ *   (the look-ahead that ends them).
+ * Line and column are computed from the position only when an error is
+ * reported. Invariant of the state machine: state says what may come
+ * next, kinds[0..depth) are the open containers. */
+#include "json_pull.h"
+
+#include <errno.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "decimal.h"
+
+enum {
+    TK_FAILED = -1, /* the lexer reported an error */
+    TK_EOF = 0,
+    TK_LBRACE, TK_RBRACE, TK_LBRACKET, TK_RBRACKET, TK_COLON, TK_COMMA,
+    TK_STRING, TK_INTEGER, TK_REAL, TK_TRUE, TK_FALSE, TK_NULL,
+    TK_INVALID, /* not a token; the grammar layer says "invalid token" */
+};
+
+enum {
+    ST_START,     /* nothing read yet */
+    ST_VALUE,     /* after ':' */
+    ST_ARR_FIRST, /* after '[' */
+    ST_ARR_NEXT,  /* after ',' in an array */
+    ST_OBJ_FIRST, /* after '{' */
+    ST_OBJ_NEXT,  /* after ',' in an object */
+    ST_AFTER,     /* after a value */
+    ST_DONE,
+    ST_FAILED,
+};
+
+enum { K_OBJECT = 1, K_ARRAY = 2 };
+
+/* A member name of an object: its bytes are arena[off, off + len). */
+typedef struct proto_jkey {
+    uint64_t hash; /* 0 marks an empty slot */
+    uint32_t serial, len;
+    size_t off;
+} proto_jkey;
+
+void proto_jpull_init(proto_jpull *j, const void *data, size_t len)
+{
+    memset(j, 0, sizeof *j);
+    j->data = data ? data : (const unsigned char *)"";
+    j->len = len;
+    j->state = ST_START;
+    j->str = "";
+}
+
+void proto_jpull_clear(proto_jpull *j)
+{
+    free(j->kinds);
+    free(j->serials);
+    free(j->sbuf);
+    free(j->keys);
+    free(j->arena);
+    memset(j, 0, sizeof *j);
+    j->state = ST_FAILED;
+}
+
+/* Line and column of a position, counted as jansson counts them. */
+static void locate(const unsigned char *d, size_t pos, int *ret_line,
+                   int *ret_col)
+{
+    int line = 1;
+    size_t start = 0;
+    const unsigned char *nl;
+    while (start < pos && (nl = memchr(d + start, '\n', pos - start))) {
+        line++;
+        start = (size_t)(nl - d) + 1;
+    }
+    int col = 0;
+    for (size_t i = start; i < pos; i++)
+        col += d[i] < 0x80 || (d[i] >= 0xC2 && d[i] <= 0xF4);
+    *ret_line = line;
+    *ret_col = col;
+}
+
+/* Records an error stopping at pos with context [cs, ce); after_utf8
+ * marks a bad UTF-8 sequence (no "near end of file"). */
+static int fail_at(proto_jpull *j, size_t pos, size_t cs, size_t ce,
+                   bool after_utf8, const char *fmt, ...)
+    __attribute__((format(printf, 6, 7)));
+
+static int fail_at(proto_jpull *j, size_t pos, size_t cs, size_t ce,
+                   bool after_utf8, const char *fmt, ...)
+{
+    /* every message is short, so message + context fit the 160 bytes */
+    char msg[128];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    const char *ctx = (const char *)j->data + cs;
+    size_t clen = ce - cs, shown = strnlen(ctx, clen);
+    proto_jerror *e = &j->error;
+    if (shown > 0) {
+        if (clen <= 20)
+            snprintf(e->text, sizeof e->text, "%s near '%.*s'", msg,
+                     (int)(shown < 20 ? shown : 20), ctx);
+        else
+            snprintf(e->text, sizeof e->text, "%s", msg);
+    } else if (after_utf8) {
+        snprintf(e->text, sizeof e->text, "%s", msg);
+    } else {
+        snprintf(e->text, sizeof e->text, "%s near end of file", msg);
+    }
+    e->code = -EINVAL;
+    e->position = pos;
+    locate(j->data, pos, &e->line, &e->column);
+    j->pos = pos;
+    j->state = ST_FAILED;
+    return TK_FAILED;
+}
+
+static int fail_oom(proto_jpull *j)
+{
+    proto_jerror *e = &j->error;
+    e->code = -ENOMEM;
+    e->position = j->pos;
+    locate(j->data, j->pos, &e->line, &e->column);
+    snprintf(e->text, sizeof e->text, "out of memory");
+    j->state = ST_FAILED;
+    return TK_FAILED;
+}
+
+/* A grammar error about the token just read. */
+static proto_jtok fail_token(proto_jpull *j, const char *what)
+{
+    fail_at(j, j->pos, j->tok_start, j->tok_end, false, "%s", what);
+    return PROTO_JT_ERROR;
+}
+
+/* Length of the valid UTF-8 sequence of 2–4 bytes at s (avail bytes
+ * there), or 0: no overlong forms, no surrogates, nothing above
+ * U+10FFFF. */
+static size_t utf8_seq(const unsigned char *s, size_t avail)
+{
+    unsigned c = s[0];
+    size_t n;
+    uint32_t cp;
+    if (c >= 0xC2 && c <= 0xDF) {
+        n = 2;
+        cp = c & 0x1F;
+    } else if (c >= 0xE0 && c <= 0xEF) {
+        n = 3;
+        cp = c & 0x0F;
+    } else if (c >= 0xF0 && c <= 0xF4) {
+        n = 4;
+        cp = c & 0x07;
+    } else {
+        return 0;
+    }
+    if (avail < n)
+        return 0;
+    for (size_t i = 1; i < n; i++) {
+        if ((s[i] & 0xC0) != 0x80)
+            return 0;
+        cp = cp << 6 | (s[i] & 0x3F);
+    }
+    if (cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF) ||
+        (n == 3 && cp < 0x800) || (n == 4 && cp < 0x10000))
+        return 0;
+    return n;
+}
+
+static int bad_utf8(proto_jpull *j, size_t pos, size_t ctx_start)
+{
+    return fail_at(j, pos, ctx_start, pos, true, "unable to decode byte 0x%x",
+                   j->data[pos]);
+}
+
+/* The byte at p ends a number or a literal; jansson reads it (and the
+ * rest of its UTF-8 sequence) before giving it back. */
+static bool lookahead_ok(proto_jpull *j, size_t p, size_t start)
+{
+    if (p < j->len && j->data[p] >= 0x80 &&
+        !utf8_seq(j->data + p, j->len - p)) {
+        bad_utf8(j, p, start);
+        return false;
+    }
+    return true;
+}
+
+static bool sbuf_reserve(proto_jpull *j, size_t more)
+{
+    if (more <= j->scap - j->slen)
+        return true;
+    size_t cap = j->scap ? j->scap : 256;
+    while (cap - j->slen < more) {
+        if (cap > SIZE_MAX / 2)
+            return false;
+        cap *= 2;
+    }
+    char *b = realloc(j->sbuf, cap);
+    if (!b)
+        return false;
+    j->sbuf = b;
+    j->scap = cap;
+    return true;
+}
+
+static int hexval(unsigned c)
+{
+    if (c >= '0' && c <= '9')
+        return (int)(c - '0');
+    if (c >= 'a' && c <= 'f')
+        return (int)(c - 'a' + 10);
+    if (c >= 'A' && c <= 'F')
+        return (int)(c - 'A' + 10);
+    return -1;
+}
+
+static size_t utf8_put(char *o, uint32_t cp)
+{
+    if (cp < 0x80) {
+        o[0] = (char)cp;
+        return 1;
+    }
+    if (cp < 0x800) {
+        o[0] = (char)(0xC0 | cp >> 6);
+        o[1] = (char)(0x80 | (cp & 0x3F));
+        return 2;
+    }
+    if (cp < 0x10000) {
+        o[0] = (char)(0xE0 | cp >> 12);
+        o[1] = (char)(0x80 | (cp >> 6 & 0x3F));
+        o[2] = (char)(0x80 | (cp & 0x3F));
+        return 3;
+    }
+    o[0] = (char)(0xF0 | cp >> 18);
+    o[1] = (char)(0x80 | (cp >> 12 & 0x3F));
+    o[2] = (char)(0x80 | (cp >> 6 & 0x3F));
+    o[3] = (char)(0x80 | (cp & 0x3F));
+    return 4;
+}
+
+/* A string starting with the quote at start. The text is checked in one
+ * pass; a surrogate problem is remembered and reported once the closing
+ * quote is found, as jansson decodes only a string it has fully read. */
+static int lex_string(proto_jpull *j, size_t start)
+{
+    const unsigned char *d = j->data;
+    size_t n = j->len, p = start + 1;
+    j->slen = 0;
+    j->has_nul = false;
+    char bad_unicode[48] = "";
+    uint32_t high = 0;   /* a high surrogate waiting for its low half */
+    bool decoding = true; /* false once a surrogate problem was found */
+    for (;;) {
+        size_t q = p;
+        while (q < n && d[q] >= 0x20 && d[q] < 0x80 && d[q] != '"' &&
+               d[q] != '\\')
+            q++;
+        if (q > p) {
+            if (high) {
+                snprintf(bad_unicode, sizeof bad_unicode,
+                         "invalid Unicode '\\u%04X'", (unsigned)high);
+                high = 0;
+                decoding = false;
+            }
+            if (decoding) {
+                if (!sbuf_reserve(j, q - p))
+                    return fail_oom(j);
+                memcpy(j->sbuf + j->slen, d + p, q - p);
+                j->slen += q - p;
+            }
+            p = q;
+        }
+        if (p >= n)
+            return fail_at(j, n, start, n, false, "premature end of input");
+        unsigned c = d[p];
+        if (c == '"')
+            break;
+        if (c < 0x20)
+            return fail_at(j, p, start, p, false,
+                           c == '\n' ? "unexpected newline"
+                                     : "control character 0x%x", c);
+        if (high && (c != '\\' || p + 1 >= n || d[p + 1] != 'u')) {
+            snprintf(bad_unicode, sizeof bad_unicode,
+                     "invalid Unicode '\\u%04X'", (unsigned)high);
+            high = 0;
+            decoding = false;
+        }
+        if (c >= 0x80) {
+            size_t l = utf8_seq(d + p, n - p);
+            if (!l)
+                return bad_utf8(j, p, start);
+            if (decoding) {
+                if (!sbuf_reserve(j, l))
+                    return fail_oom(j);
+                memcpy(j->sbuf + j->slen, d + p, l);
+                j->slen += l;
+            }
+            p += l;
+            continue;
+        }
+        /* a backslash */
+        p++;
+        if (p >= n)
+            return fail_at(j, p, start, p, false, "invalid escape");
+        c = d[p];
+        if (c == 'u') {
+            p++;
+            uint32_t cp = 0;
+            for (int i = 0; i < 4; i++) {
+                if (p >= n)
+                    return fail_at(j, p, start, p, false, "invalid escape");
+                if (d[p] >= 0x80 && !utf8_seq(d + p, n - p))
+                    return bad_utf8(j, p, start);
+                int h = hexval(d[p]);
+                if (h < 0)
+                    return fail_at(j, p + 1, start, p + 1, false,
+                                   "invalid escape");
+                cp = cp << 4 | (uint32_t)h;
+                p++;
+            }
+            if (!decoding)
+                continue;
+            if (high) {
+                if (cp >= 0xDC00 && cp <= 0xDFFF) {
+                    cp = ((high - 0xD800) << 10) + (cp - 0xDC00) + 0x10000;
+                    high = 0;
+                } else {
+                    snprintf(bad_unicode, sizeof bad_unicode,
+                             "invalid Unicode '\\u%04X\\u%04X'",
+                             (unsigned)high, (unsigned)cp);
+                    high = 0;
+                    decoding = false;
+                    continue;
+                }
+            } else if (cp >= 0xD800 && cp <= 0xDBFF) {
+                high = cp;
+                continue;
+            } else if (cp >= 0xDC00 && cp <= 0xDFFF) {
+                snprintf(bad_unicode, sizeof bad_unicode,
+                         "invalid Unicode '\\u%04X'", (unsigned)cp);
+                decoding = false;
+                continue;
+            }
+            if (!sbuf_reserve(j, 4))
+                return fail_oom(j);
+            j->slen += utf8_put(j->sbuf + j->slen, cp);
+            j->has_nul |= cp == 0;
+            continue;
+        }
+        char out;
+        switch (c) {
+        case '"': case '\\': case '/':
+            out = (char)c;
+            break;
+        case 'b':
+            out = '\b';
+            break;
+        case 'f':
+            out = '\f';
+            break;
+        case 'n':
+            out = '\n';
+            break;
+        case 'r':
+            out = '\r';
+            break;
+        case 't':
+            out = '\t';
+            break;
+        default:
+            if (c >= 0x80 && !utf8_seq(d + p, n - p))
+                return bad_utf8(j, p, start);
+            return fail_at(j, p + 1, start, p + 1, false, "invalid escape");
+        }
+        p++;
+        if (decoding) {
+            if (!sbuf_reserve(j, 1))
+                return fail_oom(j);
+            j->sbuf[j->slen++] = out;
+        }
+    }
+    p++; /* the closing quote */
+    if (high)
+        snprintf(bad_unicode, sizeof bad_unicode, "invalid Unicode '\\u%04X'",
+                 (unsigned)high);
+    j->tok_end = j->pos = p;
+    if (bad_unicode[0])
+        return fail_at(j, p, start, p, false, "%s", bad_unicode);
+    if (!sbuf_reserve(j, 1))
+        return fail_oom(j);
+    j->sbuf[j->slen] = '\0';
+    j->str = j->sbuf;
+    j->str_len = j->slen;
+    return TK_STRING;
+}
+
+static bool is_digit(unsigned c)
+{
+    return c - '0' < 10;
+}
+
+/* Eight bytes at p as a little-endian word. */
+static uint64_t load8(const unsigned char *p)
+{
+    uint64_t v;
+    memcpy(&v, p, 8);
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
+    v = __builtin_bswap64(v);
+#endif
+    return v;
+}
+
+/* True when all eight bytes of v are ASCII digits. */
+static bool eight_digits(uint64_t v)
+{
+    return ((v & 0xF0F0F0F0F0F0F0F0u) |
+            (((v + 0x0606060606060606u) & 0xF0F0F0F0F0F0F0F0u) >> 4)) ==
+           0x3333333333333333u;
+}
+
+/* The value of eight digit bytes, first byte most significant. */
+static uint32_t eight_digits_value(uint64_t v)
+{
+    v -= 0x3030303030303030u;
+    v = v * 10 + (v >> 8);
+    v = ((v & 0x000000FF000000FFu) * (100 + (UINT64_C(1000000) << 32)) +
+         ((v >> 16 & 0x000000FF000000FFu) * (1 + (UINT64_C(10000) << 32)))) >>
+        32;
+    return (uint32_t)v;
+}
+
+/* Significant digits of v < 10^8. */
+static int digits_of(uint32_t v)
+{
+    static const uint32_t pow10[8] = {1,      10,      100,      1000,
+                                      10000,  100000,  1000000,  10000000};
+    int k = 0;
+    while (k < 8 && v >= pow10[k])
+        k++;
+    return k;
+}
+
+/* A number starting at start ('-' or a digit), read as jansson reads it:
+ * "-" or "01" or "1." or "1e" are not numbers (TK_INVALID with the bytes
+ * read so far), the look-ahead byte is checked as UTF-8. The digits are
+ * gathered in the same pass (w·10^q, as proto/decimal.h wants them). */
+static int lex_number(proto_jpull *j, size_t start)
+{
+    const unsigned char *d = j->data;
+    size_t n = j->len, p = start;
+    bool neg = d[p] == '-';
+    if (neg)
+        p++;
+    uint64_t w = 0;
+    int nd = 0;
+    int64_t q = 0;
+    bool dropped = false;
+    if (p < n && d[p] == '0') {
+        p++;
+    } else if (p < n && is_digit(d[p])) {
+        /* eight digits at a time while they fit in w's 19 */
+        uint64_t v;
+        while (nd <= 11 && n - p >= 8 && eight_digits(v = load8(d + p))) {
+            w = w * 100000000 + eight_digits_value(v);
+            nd += 8;
+            p += 8;
+        }
+        while (p < n && is_digit(d[p])) {
+            unsigned dg = d[p++] - '0';
+            if (nd < 19) {
+                w = w * 10 + dg;
+                nd++;
+            } else {
+                q++;
+                dropped |= dg != 0;
+            }
+        }
+    } else {
+        if (!lookahead_ok(j, p, start))
+            return TK_FAILED;
+        j->tok_end = j->pos = p;
+        return TK_INVALID;
+    }
+    if (p < n && d[p] >= 0x80 && !lookahead_ok(j, p, start))
+        return TK_FAILED;
+    if (p < n && is_digit(d[p])) { /* a leading zero */
+        j->tok_end = j->pos = p;
+        return TK_INVALID;
+    }
+    if (p >= n || (d[p] != '.' && d[p] != 'e' && d[p] != 'E')) {
+        j->tok_end = j->pos = p;
+        /* at most 19 digits are in w; more overflow any int64 */
+        if (neg) {
+            if (q > 0 || w > UINT64_C(1) << 63)
+                return fail_at(j, p, start, p, false,
+                               "too big negative integer");
+            j->integer = w == UINT64_C(1) << 63 ? INT64_MIN : -(int64_t)w;
+        } else {
+            if (q > 0 || w > (uint64_t)INT64_MAX)
+                return fail_at(j, p, start, p, false, "too big integer");
+            j->integer = (int64_t)w;
+        }
+        return TK_INTEGER;
+    }
+    if (d[p] == '.') {
+        p++;
+        if (p < n && d[p] >= 0x80 && !lookahead_ok(j, p, start))
+            return TK_FAILED;
+        if (p >= n || !is_digit(d[p])) {
+            j->tok_end = j->pos = p;
+            return TK_INVALID;
+        }
+        uint64_t v;
+        while (nd <= 11 && n - p >= 8 && eight_digits(v = load8(d + p))) {
+            uint32_t x = eight_digits_value(v);
+            /* leading zeros of the fraction are not significant */
+            nd += w ? 8 : digits_of(x);
+            w = w * 100000000 + x;
+            q -= 8;
+            p += 8;
+        }
+        while (p < n && is_digit(d[p])) {
+            unsigned dg = d[p++] - '0';
+            if (nd < 19) {
+                w = w * 10 + dg;
+                nd += w != 0;
+                q--;
+            } else {
+                dropped |= dg != 0;
+            }
+        }
+        if (p < n && d[p] >= 0x80 && !lookahead_ok(j, p, start))
+            return TK_FAILED;
+    }
+    if (p < n && (d[p] == 'e' || d[p] == 'E')) {
+        p++;
+        if (p < n && d[p] >= 0x80 && !lookahead_ok(j, p, start))
+            return TK_FAILED;
+        bool eneg = false;
+        if (p < n && (d[p] == '+' || d[p] == '-')) {
+            eneg = d[p++] == '-';
+            if (p < n && d[p] >= 0x80 && !lookahead_ok(j, p, start))
+                return TK_FAILED;
+        }
+        if (p >= n || !is_digit(d[p])) {
+            j->tok_end = j->pos = p;
+            return TK_INVALID;
+        }
+        int64_t ex = 0;
+        do {
+            if (ex < 1000000000)
+                ex = ex * 10 + (d[p] - '0');
+            p++;
+        } while (p < n && is_digit(d[p]));
+        if (p < n && d[p] >= 0x80 && !lookahead_ok(j, p, start))
+            return TK_FAILED;
+        q += eneg ? -ex : ex;
+    }
+    j->tok_end = j->pos = p;
+    int r = proto_decimal_from_parts(neg, w, q, dropped,
+                                     (const char *)d + start, p - start,
+                                     &j->real);
+    if (r == -ENOMEM)
+        return fail_oom(j);
+    if (r < 0)
+        return fail_at(j, p, start, p, false, "real number overflow");
+    return TK_REAL;
+}
+
+static bool is_alpha(unsigned c)
+{
+    return (c | 0x20) - 'a' < 26;
+}
+
+static int lex(proto_jpull *j)
+{
+    const unsigned char *d = j->data;
+    size_t n = j->len, p = j->pos;
+    while (p < n && (d[p] == ' ' || d[p] == '\n' || d[p] == '\r' ||
+                     d[p] == '\t'))
+        p++;
+    j->tok_start = j->tok_end = j->pos = p;
+    if (p >= n)
+        return TK_EOF;
+    unsigned c = d[p];
+    int tk;
+    switch (c) {
+    case '{':
+        tk = TK_LBRACE;
+        break;
+    case '}':
+        tk = TK_RBRACE;
+        break;
+    case '[':
+        tk = TK_LBRACKET;
+        break;
+    case ']':
+        tk = TK_RBRACKET;
+        break;
+    case ':':
+        tk = TK_COLON;
+        break;
+    case ',':
+        tk = TK_COMMA;
+        break;
+    case '"':
+        return lex_string(j, p);
+    default:
+        if (c == '-' || is_digit(c))
+            return lex_number(j, p);
+        if (is_alpha(c)) {
+            size_t q = p;
+            while (q < n && is_alpha(d[q]))
+                q++;
+            if (!lookahead_ok(j, q, p))
+                return TK_FAILED;
+            j->tok_end = j->pos = q;
+            size_t l = q - p;
+            if (l == 4 && memcmp(d + p, "true", 4) == 0)
+                return TK_TRUE;
+            if (l == 5 && memcmp(d + p, "false", 5) == 0)
+                return TK_FALSE;
+            if (l == 4 && memcmp(d + p, "null", 4) == 0)
+                return TK_NULL;
+            return TK_INVALID;
+        }
+        if (c >= 0x80) {
+            size_t l = utf8_seq(d + p, n - p);
+            if (!l)
+                return bad_utf8(j, p, p);
+            j->tok_end = j->pos = p + l;
+            return TK_INVALID;
+        }
+        tk = TK_INVALID;
+        break;
+    }
+    j->tok_end = j->pos = p + 1;
+    return tk;
+}
+
+/* Remembers a member name of object serial; false when that object
+ * already has it (or, with *oom set, when memory ran out). */
+static bool key_insert(proto_jpull *j, uint32_t serial, const char *s,
+                       size_t len, bool *oom)
+{
+    uint64_t h = 0xcbf29ce484222325u ^ serial;
+    for (size_t i = 0; i < len; i++)
+        h = (h ^ (unsigned char)s[i]) * 0x100000001b3u;
+    h |= 1;
+    if ((j->nkeys + 1) * 2 > j->cap_keys) {
+        size_t cap = j->cap_keys ? j->cap_keys * 2 : 64;
+        proto_jkey *nk = calloc(cap, sizeof *nk);
+        if (!nk) {
+            *oom = true;
+            return false;
+        }
+        for (size_t i = 0; i < j->cap_keys; i++) {
+            if (!j->keys[i].hash)
+                continue;
+            size_t k = j->keys[i].hash & (cap - 1);
+            while (nk[k].hash)
+                k = (k + 1) & (cap - 1);
+            nk[k] = j->keys[i];
+        }
+        free(j->keys);
+        j->keys = nk;
+        j->cap_keys = cap;
+    }
+    size_t mask = j->cap_keys - 1, k = h & mask;
+    for (; j->keys[k].hash; k = (k + 1) & mask) {
+        const proto_jkey *e = &j->keys[k];
+        if (e->hash == h && e->serial == serial && e->len == len &&
+            (len == 0 || memcmp(j->arena + e->off, s, len) == 0))
+            return false;
+    }
+    if (len > j->acap - j->alen) {
+        size_t cap = j->acap ? j->acap : 1024;
+        while (cap - j->alen < len) {
+            if (cap > SIZE_MAX / 2 || cap > UINT32_MAX) {
+                *oom = true;
+                return false;
+            }
+            cap *= 2;
+        }
+        char *a = realloc(j->arena, cap);
+        if (!a) {
+            *oom = true;
+            return false;
+        }
+        j->arena = a;
+        j->acap = cap;
+    }
+    if (len)
+        memcpy(j->arena + j->alen, s, len);
+    j->keys[k] = (proto_jkey){h, serial, (uint32_t)len, j->alen};
+    j->alen += len;
+    j->nkeys++;
+    return true;
+}
+
+static bool push(proto_jpull *j, unsigned char kind)
+{
+    if (j->depth == j->cap_depth) {
+        unsigned cap = j->cap_depth ? j->cap_depth * 2 : 32;
+        unsigned char *k = realloc(j->kinds, cap);
+        if (!k)
+            return false;
+        j->kinds = k;
+        uint32_t *s = realloc(j->serials, cap * sizeof *s);
+        if (!s)
+            return false;
+        j->serials = s;
+        j->cap_depth = cap;
+    }
+    j->kinds[j->depth] = kind;
+    j->serials[j->depth] = kind == K_OBJECT ? ++j->next_serial : 0;
+    j->depth++;
+    return true;
+}
+
+static proto_jtok oom_error(proto_jpull *j)
+{
+    fail_oom(j);
+    return PROTO_JT_ERROR;
+}
+
+/* The first token of a value has been read. */
+static proto_jtok begin_value(proto_jpull *j, int tk)
+{
+    if (j->depth + 1 > PROTO_JSON_MAX_DEPTH)
+        return fail_token(j, "maximum parsing depth reached");
+    switch (tk) {
+    case TK_LBRACE:
+        if (!push(j, K_OBJECT))
+            return oom_error(j);
+        j->state = ST_OBJ_FIRST;
+        return PROTO_JT_OBJECT;
+    case TK_LBRACKET:
+        if (!push(j, K_ARRAY))
+            return oom_error(j);
+        j->state = ST_ARR_FIRST;
+        return PROTO_JT_ARRAY;
+    case TK_STRING:
+        if (j->has_nul)
+            return fail_token(j, "\\u0000 is not allowed without "
+                                 "JSON_ALLOW_NUL");
+        j->state = ST_AFTER;
+        return PROTO_JT_STRING;
+    case TK_INTEGER:
+        j->state = ST_AFTER;
+        return PROTO_JT_INTEGER;
+    case TK_REAL:
+        j->state = ST_AFTER;
+        return PROTO_JT_REAL;
+    case TK_TRUE:
+        j->state = ST_AFTER;
+        return PROTO_JT_TRUE;
+    case TK_FALSE:
+        j->state = ST_AFTER;
+        return PROTO_JT_FALSE;
+    case TK_NULL:
+        j->state = ST_AFTER;
+        return PROTO_JT_NULL;
+    case TK_INVALID:
+        return fail_token(j, "invalid token");
+    default:
+        return fail_token(j, "unexpected token");
+    }
+}
+
+/* A member name has been read (or should have been). */
+static proto_jtok begin_member(proto_jpull *j, int tk)
+{
+    if (tk != TK_STRING)
+        return fail_token(j, "string or '}' expected");
+    if (j->has_nul)
+        return fail_token(j, "NUL byte in object key not supported");
+    bool oom = false;
+    if (!key_insert(j, j->serials[j->depth - 1], j->str, j->str_len, &oom))
+        return oom ? oom_error(j) : fail_token(j, "duplicate object key");
+    size_t ks = j->tok_start, ke = j->tok_end;
+    int colon = lex(j);
+    if (colon == TK_FAILED)
+        return PROTO_JT_ERROR;
+    if (colon != TK_COLON)
+        return fail_token(j, "':' expected");
+    j->tok_start = ks;
+    j->tok_end = ke;
+    j->state = ST_VALUE;
+    return PROTO_JT_KEY;
+}
+
+static proto_jtok end_container(proto_jpull *j, proto_jtok t)
+{
+    j->depth--;
+    j->state = ST_AFTER;
+    return t;
+}
+
+static proto_jtok next_token(proto_jpull *j)
+{
+    int tk;
+    for (;;) {
+        switch (j->state) {
+        case ST_DONE:
+            return PROTO_JT_END;
+        case ST_START:
+            if ((tk = lex(j)) == TK_FAILED)
+                return PROTO_JT_ERROR;
+            if (tk != TK_LBRACE && tk != TK_LBRACKET)
+                return fail_token(j, "'[' or '{' expected");
+            return begin_value(j, tk);
+        case ST_VALUE:
+            if ((tk = lex(j)) == TK_FAILED)
+                return PROTO_JT_ERROR;
+            return begin_value(j, tk);
+        case ST_ARR_FIRST:
+        case ST_ARR_NEXT:
+            if ((tk = lex(j)) == TK_FAILED)
+                return PROTO_JT_ERROR;
+            if (tk == TK_RBRACKET && j->state == ST_ARR_FIRST)
+                return end_container(j, PROTO_JT_ARRAY_END);
+            if (tk == TK_EOF)
+                return fail_token(j, "']' expected");
+            return begin_value(j, tk);
+        case ST_OBJ_FIRST:
+        case ST_OBJ_NEXT:
+            if ((tk = lex(j)) == TK_FAILED)
+                return PROTO_JT_ERROR;
+            if (tk == TK_RBRACE && j->state == ST_OBJ_FIRST)
+                return end_container(j, PROTO_JT_OBJECT_END);
+            return begin_member(j, tk);
+        case ST_AFTER:
+            if ((tk = lex(j)) == TK_FAILED)
+                return PROTO_JT_ERROR;
+            if (j->depth == 0) {
+                if (tk != TK_EOF)
+                    return fail_token(j, "end of file expected");
+                j->state = ST_DONE;
+                return PROTO_JT_END;
+            }
+            if (j->kinds[j->depth - 1] == K_ARRAY) {
+                if (tk == TK_COMMA) {
+                    j->state = ST_ARR_NEXT;
+                    continue;
+                }
+                if (tk == TK_RBRACKET)
+                    return end_container(j, PROTO_JT_ARRAY_END);
+                return fail_token(j, "']' expected");
+            }
+            if (tk == TK_COMMA) {
+                j->state = ST_OBJ_NEXT;
+                continue;
+            }
+            if (tk == TK_RBRACE)
+                return end_container(j, PROTO_JT_OBJECT_END);
+            return fail_token(j, "'}' expected");
+        default:
+            return PROTO_JT_ERROR;
+        }
+    }
+}
+
+proto_jtok proto_jpull_next(proto_jpull *j)
+{
+    proto_jtok t = next_token(j);
+    j->last = t;
+    return t;
+}
+
+proto_jtok proto_jpull_skip(proto_jpull *j)
+{
+    if (j->last == PROTO_JT_KEY)
+        proto_jpull_next(j);
+    if (j->last != PROTO_JT_OBJECT && j->last != PROTO_JT_ARRAY)
+        return j->last;
+    unsigned target = j->depth - 1;
+    for (;;) {
+        proto_jtok t = proto_jpull_next(j);
+        if (t == PROTO_JT_ERROR)
+            return t;
+        if ((t == PROTO_JT_OBJECT_END || t == PROTO_JT_ARRAY_END) &&
+            j->depth == target)
+            return t;
+    }
+}
