@@ -266,9 +266,7 @@ int geo_inspect(const geo_poly *p, const geo_inspect_opts *opts,
     for (uint32_t f = 0; f < p->nfacets; f++)
         ret->nonconvex_facets +=
             (ret->selfint.facet_flags[f] & GEO_SI_NONCONVEX) != 0;
-    /* an empty model bounds nothing: not a valid polyhedron */
-    ret->valid = p->nfacets > 0 && ret->closed &&
-                 ret->nonmanifold_vertices == 0 &&
+    ret->valid = ret->closed && ret->nonmanifold_vertices == 0 &&
                  ret->low_degree_vertices == 0 && ret->inverted_facets == 0 &&
                  ret->orientation == GEO_ORIENT_OUTWARD &&
                  ret->max_nonplanarity <= ret->eps &&

@@ -37,9 +37,9 @@
  *   (a fraction of the median edge length would: the median falls from
  *   0.27 mm on a true brilliant to 0.05 mm on its K=400 scan, hiding the
  *   very clusters it should count).
- * - valid: at least one facet, closed, no non-manifold vertex, every
- *   vertex in ≥ 3 facets, outward, no inverted facet, max_nonplanarity ≤
- *   eps, no self-intersection, no degenerate facet.
+ * - valid: closed, no non-manifold vertex, every vertex in ≥ 3 facets,
+ *   outward, no inverted facet, max_nonplanarity ≤ eps, no
+ *   self-intersection, no degenerate facet.
  *
  * Complexity: O(n log n) overall (topology O(corners), BVH O(n log n),
  * degree and near-coplanar counts O(corners log)), the self-intersection

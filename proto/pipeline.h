@@ -16,10 +16,10 @@
  *                 [[facet, facet, ...], ...]}
  *   auto {radius, max_angle_deg, max_deviation, views: as above} — the whole
  *                 post-scan correction of lib/correct.h in one op
- *   cut {plane: [a, b, c, d]} — keeps plane(p) ≤ 0; (a,b,c) non-zero
- *                 with a finite length, kept as given (the cut decides
- *                 sides on these coefficients, as `facet cut` does, and
- *                 the canonical JSON parses back to the same bits)
+ *   cut {plane: [a, b, c, d]} — keeps plane(p) ≤ 0; (a,b,c) non-zero,
+ *                 normalised to unit length (d scaled with it) unless
+ *                 already unit to rounding, so that the canonical JSON
+ *                 parses back to the same bits
  *   move_vertex {vertex, to: [x,y,z] | by: [dx,dy,dz], schedule
  *                 "local-exp"|"scaled"|"global-exp" ["local-exp"],
  *                 max_steps ≥ 1 [10000]}
@@ -97,7 +97,7 @@ typedef struct proto_op {
             uint32_t *gfacets;   /* facet indices of every group */
         } merge;
         struct {
-            double plane[4];     /* a, b, c, d as given */
+            double plane[4];     /* unit normal, offset */
         } cut;
         struct {
             double radius, max_angle_deg, max_deviation;
