@@ -206,9 +206,10 @@ int cmd_move(int argc, char **argv)
     if (!p)
         return cli_input_error(CMD, "%s", err.msg);
     if (vertex >= p->nverts) {
+        uint32_t nv = p->nverts;
         geo_poly_free(p);
         return cli_input_error(CMD, "%s: --vertex %u out of range (%u "
-                                    "vertices)", path, vertex, p->nverts);
+                                    "vertices)", path, vertex, nv);
     }
     if (have_by)
         for (int k = 0; k < 3; k++)

@@ -410,13 +410,41 @@ typedef struct facet_ref {
     uint32_t id, n;
     const uint32_t *v;
     const geo_facet_shape *s;
+    /* NULL, or the facet's keys (vertex << 32 | position) sorted: large
+     * facets get them once per search, so that matching a small facet's
+     * vertices against them costs O(|G| log |F|), not O(|F|·|G|) */
+    const uint64_t *sorted;
 } facet_ref;
 
 static facet_ref facet_at(const geo_poly *p, uint32_t f,
                           const geo_facet_shape *s)
 {
-    facet_ref r = {f, geo_poly_facet_size(p, f), geo_poly_facet(p, f), s};
+    facet_ref r = {f, geo_poly_facet_size(p, f), geo_poly_facet(p, f), s,
+                   NULL};
     return r;
+}
+
+/* The first position of vertex v in F, or −1. */
+static int32_t position_in(const facet_ref *F, uint32_t v)
+{
+    if (!F->sorted) {
+        for (uint32_t i = 0; i < F->n; i++)
+            if (F->v[i] == v)
+                return (int32_t)i;
+        return -1;
+    }
+    uint64_t key = (uint64_t)v << 32;
+    uint32_t lo = 0, hi = F->n;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (F->sorted[mid] < key)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    if (lo < F->n && (uint32_t)(F->sorted[lo] >> 32) == v)
+        return (int32_t)(uint32_t)F->sorted[lo];
+    return -1;
 }
 
 static int side_of(const geo_poly *p, const facet_ref *F, const double x[3])
@@ -698,30 +726,51 @@ static bool separated_by_shared_edge(const geo_poly *p, const facet_ref *F,
     return true;
 }
 
+/* fpos from gpos: for each position of F, the (last) position of G
+ * listing the same vertex, or −1. O(|F| + |G|). */
+static void fill_fpos(const facet_ref *F, const facet_ref *G,
+                      const int32_t *gpos, int32_t *fpos)
+{
+    for (uint32_t i = 0; i < F->n; i++)
+        fpos[i] = -1;
+    for (uint32_t j = 0; j < G->n; j++)
+        if (gpos[j] >= 0)
+            fpos[gpos[j]] = (int32_t)j;
+}
+
 static bool pair_test(const geo_poly *p, const facet_ref *F,
                       const facet_ref *G, pair_scratch *sc)
 {
+    /* the predicate is symmetric: G, whose vertices are matched and
+     * classified first, is the smaller facet, so that a large facet met
+     * by many small ones that only touch its plane (a prism's cap and its
+     * sides) costs O(|G| log |F|) per pair instead of O(|F|·|G|) */
+    if (G->n > F->n) {
+        const facet_ref *t = F;
+        F = G;
+        G = t;
+    }
     int8_t *sf = sc->sf, *sg = sc->sg;
     int32_t *fpos = sc->fpos, *gpos = sc->gpos;
     uint32_t nshared = 0;
-    for (uint32_t i = 0; i < F->n; i++)
-        fpos[i] = -1;
+    int32_t ju = -1, jw = -1;
     for (uint32_t j = 0; j < G->n; j++) {
-        gpos[j] = -1;
-        for (uint32_t i = 0; i < F->n; i++)
-            if (F->v[i] == G->v[j]) {
-                gpos[j] = (int32_t)i;
-                fpos[i] = (int32_t)j;
-                nshared++;
-                break;
-            }
+        gpos[j] = position_in(F, G->v[j]);
+        if (gpos[j] >= 0) {
+            nshared++;
+            ju < 0 ? (ju = (int32_t)j) : (jw = (int32_t)j);
+        }
     }
-    if (nshared == 2 && F->s->convex && G->s->convex) {
-        int32_t iu = -1, iw = -1;
-        for (uint32_t i = 0; i < F->n; i++)
-            if (fpos[i] >= 0)
-                iu < 0 ? (iu = (int32_t)i) : (iw = (int32_t)i);
-        if (is_edge(F, iu, iw) && is_edge(G, fpos[iu], fpos[iw]) &&
+    if (nshared == 2 && F->s->convex && G->s->convex &&
+        gpos[ju] != gpos[jw]) {
+        /* iu before iw in F's order, as the shared edge is walked there */
+        if (gpos[ju] > gpos[jw]) {
+            int32_t t = ju;
+            ju = jw;
+            jw = t;
+        }
+        int32_t iu = gpos[ju], iw = gpos[jw];
+        if (is_edge(F, iu, iw) && is_edge(G, ju, jw) &&
             separated_by_shared_edge(p, F, G, gpos, (uint32_t)iu,
                                      (uint32_t)iw))
             return false;
@@ -732,10 +781,13 @@ static bool pair_test(const geo_poly *p, const facet_ref *F,
         pos |= sg[j] > 0;
         neg |= sg[j] < 0;
     }
-    if (!pos && !neg)
+    if (!pos && !neg) {
+        fill_fpos(F, G, gpos, fpos);
         return coplanar_overlap(p, F, G, fpos, gpos, F->s->axis);
+    }
     if (!(pos && neg))
         return touching_hits(p, F, G, sg, gpos);
+    fill_fpos(F, G, gpos, fpos);
     pos = neg = false;
     for (uint32_t i = 0; i < F->n; i++) {
         sf[i] = (int8_t)(fpos[i] >= 0 ? 0 : side_of(p, G, V(p, F->v[i])));
@@ -879,6 +931,7 @@ typedef struct search {
     const geo_bvh *h;
     const geo_ctx *ctx;
     const geo_facet_shape *shapes;
+    const uint64_t *const *sorted; /* per facet: sorted keys or NULL */
     atomic_uchar *flags;
     uint32_t keep;
     uint32_t maxn;        /* largest facet size */
@@ -911,6 +964,8 @@ static bool visit_pair(void *user, uint32_t a, uint32_t b)
     if (sa->degenerate || sb->degenerate)
         return true;
     facet_ref F = facet_at(s->p, a, sa), G = facet_at(s->p, b, sb);
+    F.sorted = s->sorted[a];
+    G.sorted = s->sorted[b];
     if (!pair_test(s->p, &F, &G, &vs->sc))
         return true;
     vs->out->count++;
@@ -947,6 +1002,46 @@ typedef struct shape_job {
     atomic_uchar *flags;
     uint32_t block;
 } shape_job;
+
+static int cmp_u64(const void *x, const void *y)
+{
+    uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
+    return (a > b) - (a < b);
+}
+
+/* Facets above this size get sorted vertex keys for the pair tests. */
+enum { SORTED_MIN = 32 };
+
+/* The sorted keys of every facet above SORTED_MIN vertices, in one
+ * buffer (*keys); sorted[f] points into it or is NULL. -ENOMEM. */
+static int sort_large_facets(const geo_poly *p, const uint64_t **sorted,
+                             uint64_t **keys)
+{
+    size_t total = 0;
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        uint32_t n = geo_poly_facet_size(p, f);
+        if (n > SORTED_MIN)
+            total += n;
+    }
+    *keys = malloc((total + 1) * sizeof **keys);
+    if (!*keys)
+        return -ENOMEM;
+    size_t at = 0;
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        uint32_t n = geo_poly_facet_size(p, f);
+        sorted[f] = NULL;
+        if (n <= SORTED_MIN)
+            continue;
+        const uint32_t *fv = geo_poly_facet(p, f);
+        uint64_t *k = *keys + at;
+        for (uint32_t i = 0; i < n; i++)
+            k[i] = (uint64_t)fv[i] << 32 | i;
+        qsort(k, n, sizeof *k, cmp_u64);
+        sorted[f] = k;
+        at += n;
+    }
+    return 0;
+}
 
 static void run_shapes(void *arg, size_t i)
 {
@@ -995,10 +1090,13 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     uint8_t *plain = malloc((size_t)nf + 1);
     uint32_t *ta = malloc((size_t)o.max_tasks * sizeof *ta);
     uint32_t *tb = malloc((size_t)o.max_tasks * sizeof *tb);
+    const uint64_t **sorted = malloc(((size_t)nf + 1) * sizeof *sorted);
+    uint64_t *keys = NULL;
     task_out *out = NULL;
     uint32_t ntasks = 0;
     pair_list all = {0};
-    if (!shapes || !flags || !plain || !ta || !tb)
+    if (!shapes || !flags || !plain || !ta || !tb || !sorted ||
+        sort_large_facets(p, sorted, &keys) < 0)
         goto oom;
     uint32_t maxn = 3;
     for (uint32_t f = 0; f < nf; f++)
@@ -1023,6 +1121,7 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     if (!out)
         goto oom;
     s.p = p, s.h = bvh, s.ctx = ctx, s.shapes = shapes, s.flags = flags;
+    s.sorted = sorted;
     s.keep = o.max_pairs, s.maxn = maxn, s.ta = ta, s.tb = tb, s.out = out;
     atomic_init(&s.stop, 0);
     /* batches, so that progress and cancellation are seen from the
@@ -1103,5 +1202,7 @@ done:
     free(plain);
     free(ta);
     free(tb);
+    free(sorted);
+    free(keys);
     return rc;
 }
