@@ -14,23 +14,22 @@ void geo_bbox_empty(geo_bbox *b)
     }
 }
 
+/* Written as selections, not branches, so they compile to min/max
+ * instructions: the same values (a NaN never replaces a bound; of equal
+ * bounds the one already there stays). */
 void geo_bbox_add(geo_bbox *b, const double p[3])
 {
     for (int k = 0; k < 3; k++) {
-        if (p[k] < b->lo[k])
-            b->lo[k] = p[k];
-        if (p[k] > b->hi[k])
-            b->hi[k] = p[k];
+        b->lo[k] = p[k] < b->lo[k] ? p[k] : b->lo[k];
+        b->hi[k] = p[k] > b->hi[k] ? p[k] : b->hi[k];
     }
 }
 
 void geo_bbox_union(geo_bbox *b, const geo_bbox *o)
 {
     for (int k = 0; k < 3; k++) {
-        if (o->lo[k] < b->lo[k])
-            b->lo[k] = o->lo[k];
-        if (o->hi[k] > b->hi[k])
-            b->hi[k] = o->hi[k];
+        b->lo[k] = o->lo[k] < b->lo[k] ? o->lo[k] : b->lo[k];
+        b->hi[k] = o->hi[k] > b->hi[k] ? o->hi[k] : b->hi[k];
     }
 }
 
@@ -113,22 +112,26 @@ static void select_kth(const builder *b, uint32_t *items, uint32_t lo,
     }
 }
 
+/* A node's box is the union of its children's (a leaf's: of its items'),
+ * formed after the children are built: the same box as the union of all
+ * its items, taken in the same order, without a pass over them per
+ * level. Only the centroids' bounds (the split axis) need that pass. */
 static void build_node(builder *b, uint32_t node, uint32_t lo, uint32_t hi)
 {
     geo_bvh *h = b->h;
     geo_bvh_node *n = &h->nodes[node];
     geo_bbox_empty(&n->box);
-    geo_bbox cb;
-    geo_bbox_empty(&cb);
-    for (uint32_t i = lo; i < hi; i++) {
-        geo_bbox_union(&n->box, &b->in[h->items[i]]);
-        geo_bbox_add(&cb, b->cent[h->items[i]]);
-    }
     if (hi - lo <= GEO_BVH_LEAF) {
+        for (uint32_t i = lo; i < hi; i++)
+            geo_bbox_union(&n->box, &b->in[h->items[i]]);
         n->child = lo;
         n->count = hi - lo;
         return;
     }
+    geo_bbox cb;
+    geo_bbox_empty(&cb);
+    for (uint32_t i = lo; i < hi; i++)
+        geo_bbox_add(&cb, b->cent[h->items[i]]);
     int axis = 0;
     for (int k = 1; k < 3; k++)
         if (cb.hi[k] - cb.lo[k] > cb.hi[axis] - cb.lo[axis])
@@ -141,6 +144,9 @@ static void build_node(builder *b, uint32_t node, uint32_t lo, uint32_t hi)
     n->count = 0;
     build_node(b, child, lo, mid);
     build_node(b, child + 1, mid, hi);
+    n = &h->nodes[node];
+    geo_bbox_union(&n->box, &h->nodes[child].box);
+    geo_bbox_union(&n->box, &h->nodes[child + 1].box);
 }
 
 geo_bvh *geo_bvh_build(const geo_bbox *boxes, uint32_t n, geo_err *err)

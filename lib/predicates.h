@@ -20,12 +20,51 @@
 #ifndef GEO_PREDICATES_H
 #define GEO_PREDICATES_H
 
+#include <math.h>
+
 /* Sign of (d − a) · ((b − a) × (c − a)): +1 when d lies on the side the
  * right-hand normal of the triangle a, b, c points to (for a facet listed
  * counter-clockwise seen from outside: d is outside), −1 on the other side,
  * 0 when the four points are exactly coplanar. This is seed 003's nf3. */
 int geo_orient3d(const double a[3], const double b[3], const double c[3],
                  const double d[3]);
+
+/* geo_orient3d(a, b, c, d) for many d against one triangle a, b, c (the
+ * sides of a polygon's vertices against another facet's reference plane):
+ * n = (b − a) × (c − a) is formed once in doubles, and each query is one
+ * dot product (d − a) · n with its own forward error bound. Each of the
+ * six monomials ±(d − a)ᵢ(b − a)ⱼ(c − a)ₖ of the determinant passes at
+ * most 8 roundings (three differences, the product and difference in n,
+ * the product with d − a, two sums), so the computed value is within
+ * γ₈·P of the exact one, P the sum of the monomials' magnitudes; P is
+ * computed from the same rounded factors with 8 roundings of its own, so
+ * 10u·P̂ (u = 2⁻⁵³) bounds the error. Above that bound (and above 2⁻⁹⁰⁰,
+ * where products may underflow) the sign is exact; otherwise, and for
+ * NaN or overflow, the answer comes from geo_orient3d. The answer is
+ * always geo_orient3d(a, b, c, d). The struct points to a, b, c (not
+ * copied: they must stay unchanged while it is used); read-only use is
+ * thread-safe. */
+typedef struct geo_orient3d_plane {
+    const double *a, *b, *c;
+    double n[3]; /* (b − a) × (c − a), rounded */
+    double m[3]; /* |products| summed per component of n, rounded */
+} geo_orient3d_plane;
+
+void geo_orient3d_plane_init(geo_orient3d_plane *pl, const double a[3],
+                             const double b[3], const double c[3]);
+
+static inline int geo_orient3d_plane_sign(const geo_orient3d_plane *pl,
+                                          const double d[3])
+{
+    const double *a = pl->a;
+    double x0 = d[0] - a[0], x1 = d[1] - a[1], x2 = d[2] - a[2];
+    double det = x0 * pl->n[0] + x1 * pl->n[1] + x2 * pl->n[2];
+    double perm =
+        fabs(x0) * pl->m[0] + fabs(x1) * pl->m[1] + fabs(x2) * pl->m[2];
+    if (fabs(det) > 10.0 * 0x1.0p-53 * perm && fabs(det) > 0x1.0p-900)
+        return det > 0 ? 1 : -1;
+    return geo_orient3d(pl->a, pl->b, pl->c, d);
+}
 
 /* Sign of (b − a) × (c − a) in the plane: +1 when a, b, c turn
  * counter-clockwise (c left of the directed line a→b), −1 clockwise,

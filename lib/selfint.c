@@ -180,6 +180,59 @@ static int turn_in_axis(const geo_poly *p, uint32_t f, int axis)
     return t;
 }
 
+/* The first of the facet's vertices fv[0..n) farthest from x (by the
+ * rounded distance, ties to the first). The square root is taken only
+ * for a squared distance above every one before: a smaller or equal one
+ * cannot have a larger root. */
+static uint32_t farthest(const geo_poly *p, const uint32_t *fv, uint32_t n,
+                         const double x[3])
+{
+    uint32_t k = 0;
+    double best = -1, best2 = -1;
+    for (uint32_t i = 0; i < n; i++) {
+        double d[3];
+        geo_vsub(V(p, fv[i]), x, d);
+        double d2 = geo_vdot(d, d);
+        if (!(d2 > best2))
+            continue;
+        best2 = d2;
+        double len = sqrt(d2);
+        if (len > best)
+            best = len, k = i;
+    }
+    return k;
+}
+
+/* Whether facet fv[0..n) is a strictly convex polygon in the projection
+ * dropping `axis`, turning `turn`: every corner turns strictly that way
+ * (corner[i] · turn > 0 for the exact corner signs given) and the edge
+ * direction goes round once. Each edge turns the direction by less than
+ * a half turn, so its half plane (upper: y > 0, or y = 0 and x > 0;
+ * exact comparisons of coordinates) changes at most once per corner and
+ * twice per revolution: twice in all means once round. A closed polygon
+ * turning one way at every corner and once round in all is the boundary
+ * of a convex polygon — simple, so the pairwise edge test is not
+ * needed. False means "not shown", not "not convex". */
+static bool strictly_convex(const geo_poly *p, const uint32_t *fv, uint32_t n,
+                            int axis, int turn, const int8_t *corner)
+{
+    for (uint32_t i = 0; i < n; i++)
+        if (corner[i] * turn <= 0)
+            return false;
+    int u = (axis + 1) % 3, w = (axis + 2) % 3;
+    uint32_t changes = 0;
+    const double *a = V(p, fv[n - 1]), *b = V(p, fv[0]);
+    bool up = b[w] > a[w] || (b[w] == a[w] && b[u] > a[u]);
+    for (uint32_t i = 0; i < n; i++) {
+        a = b;
+        b = V(p, fv[i + 1 < n ? i + 1 : 0]);
+        bool next = b[w] > a[w] || (b[w] == a[w] && b[u] > a[u]);
+        changes += next != up;
+        up = next;
+    }
+    return changes == 2;
+}
+
 void geo_facet_shape_of(const geo_poly *p, uint32_t f, geo_facet_shape *ret)
 {
     uint32_t n = geo_poly_facet_size(p, f);
@@ -194,19 +247,9 @@ void geo_facet_shape_of(const geo_poly *p, uint32_t f, geo_facet_shape *ret)
     for (uint32_t i = 0; i < n; i++)
         geo_vadd(m, V(p, fv[i]), m);
     geo_vscale(m, 1.0 / n, m);
-    uint32_t ia = 0, ib = 0, ic = 0;
-    double best = -1;
-    for (uint32_t i = 0; i < n; i++) {
-        double d = geo_vdist(V(p, fv[i]), m);
-        if (d > best)
-            best = d, ia = i;
-    }
-    best = -1;
-    for (uint32_t i = 0; i < n; i++) {
-        double d = geo_vdist(V(p, fv[i]), V(p, fv[ia]));
-        if (d > best)
-            best = d, ib = i;
-    }
+    uint32_t ia = farthest(p, fv, n, m), ib = farthest(p, fv, n, V(p, fv[ia])),
+             ic = 0;
+    double best;
     const double *A = V(p, fv[ia]), *B = V(p, fv[ib]);
     if (A[0] == B[0] && A[1] == B[1] && A[2] == B[2]) {
         ret->degenerate = true; /* a single distinct point */
@@ -247,11 +290,29 @@ void geo_facet_shape_of(const geo_poly *p, uint32_t f, geo_facet_shape *ret)
     ret->axis = (int8_t)axis;
 
     ret->turn = (int8_t)turn_in_axis(p, f, axis);
+    /* each corner's exact turn, once: the convexity test and the
+     * strictly convex shortcut of the simplicity test both read them
+     * (facets of more than 64 vertices: the pairwise test alone) */
+    enum { SMALL = 64 };
+    int8_t corner[SMALL];
+    bool shortcut = n <= SMALL;
+    for (uint32_t i = 0; i < n && shortcut; i++)
+        corner[i] = (int8_t)geo_orient2d_proj(V(p, fv[i ? i - 1 : n - 1]),
+                                              V(p, fv[i]),
+                                              V(p, fv[i + 1 < n ? i + 1 : 0]),
+                                              axis);
+    if (shortcut && strictly_convex(p, fv, n, axis, ret->turn, corner)) {
+        ret->simple = ret->convex = true;
+        return;
+    }
     ret->simple = !geo_facet_self_intersects(p, f, ret);
     ret->convex = ret->simple;
     for (uint32_t i = 0; i < n && ret->convex; i++)
-        ret->convex = geo_orient2d_proj(V(p, fv[(i + n - 1) % n]), V(p, fv[i]),
-                                        V(p, fv[(i + 1) % n]), axis) *
+        ret->convex = (shortcut ? corner[i]
+                                : geo_orient2d_proj(V(p, fv[(i + n - 1) % n]),
+                                                    V(p, fv[i]),
+                                                    V(p, fv[(i + 1) % n]),
+                                                    axis)) *
                           ret->turn >= 0;
 }
 
@@ -410,12 +471,29 @@ typedef struct facet_ref {
     uint32_t id, n;
     const uint32_t *v;
     const geo_facet_shape *s;
+    uint64_t mask; /* vertex_mask of its vertices */
 } facet_ref;
+
+/* One bit per vertex index (a multiplicative hash): facets whose masks
+ * share no bit share no vertex, so most candidate pairs skip matching. */
+static inline uint64_t vertex_bit(uint32_t v)
+{
+    return 1ULL << ((v * 0x9E3779B97F4A7C15ULL) >> 58);
+}
+
+static uint64_t vertex_mask(const uint32_t *v, uint32_t n)
+{
+    uint64_t m = 0;
+    for (uint32_t i = 0; i < n; i++)
+        m |= vertex_bit(v[i]);
+    return m;
+}
 
 static facet_ref facet_at(const geo_poly *p, uint32_t f,
                           const geo_facet_shape *s)
 {
-    facet_ref r = {f, geo_poly_facet_size(p, f), geo_poly_facet(p, f), s};
+    facet_ref r = {f, geo_poly_facet_size(p, f), geo_poly_facet(p, f), s, 0};
+    r.mask = vertex_mask(r.v, r.n);
     return r;
 }
 
@@ -423,6 +501,14 @@ static int side_of(const geo_poly *p, const facet_ref *F, const double x[3])
 {
     const uint32_t *r = F->s->ref;
     return geo_orient3d(V(p, r[0]), V(p, r[1]), V(p, r[2]), x);
+}
+
+/* F's reference plane prepared for many side_of queries. */
+static void plane_of(const geo_poly *p, const facet_ref *F,
+                     geo_orient3d_plane *ret)
+{
+    const uint32_t *r = F->s->ref;
+    geo_orient3d_plane_init(ret, V(p, r[0]), V(p, r[1]), V(p, r[2]));
 }
 
 /* Positions i, j of F are consecutive (an edge of F, either direction). */
@@ -704,17 +790,23 @@ static bool pair_test(const geo_poly *p, const facet_ref *F,
     int8_t *sf = sc->sf, *sg = sc->sg;
     int32_t *fpos = sc->fpos, *gpos = sc->gpos;
     uint32_t nshared = 0;
+    uint64_t common = F->mask & G->mask;
     for (uint32_t i = 0; i < F->n; i++)
         fpos[i] = -1;
     for (uint32_t j = 0; j < G->n; j++) {
         gpos[j] = -1;
-        for (uint32_t i = 0; i < F->n; i++)
-            if (F->v[i] == G->v[j]) {
-                gpos[j] = (int32_t)i;
-                fpos[i] = (int32_t)j;
-                nshared++;
-                break;
-            }
+        if (!(common & vertex_bit(G->v[j])))
+            continue;
+        /* the first position of G's vertex in F, without a branch per
+         * comparison */
+        int32_t first = -1;
+        for (uint32_t i = F->n; i-- > 0;)
+            first = F->v[i] == G->v[j] ? (int32_t)i : first;
+        if (first >= 0) {
+            gpos[j] = first;
+            fpos[first] = (int32_t)j;
+            nshared++;
+        }
     }
     if (nshared == 2 && F->s->convex && G->s->convex) {
         int32_t iu = -1, iw = -1;
@@ -727,8 +819,12 @@ static bool pair_test(const geo_poly *p, const facet_ref *F,
             return false;
     }
     bool pos = false, neg = false;
+    geo_orient3d_plane pl;
+    plane_of(p, F, &pl);
     for (uint32_t j = 0; j < G->n; j++) {
-        sg[j] = (int8_t)(gpos[j] >= 0 ? 0 : side_of(p, F, V(p, G->v[j])));
+        sg[j] = (int8_t)(gpos[j] >= 0
+                             ? 0
+                             : geo_orient3d_plane_sign(&pl, V(p, G->v[j])));
         pos |= sg[j] > 0;
         neg |= sg[j] < 0;
     }
@@ -737,8 +833,11 @@ static bool pair_test(const geo_poly *p, const facet_ref *F,
     if (!(pos && neg))
         return touching_hits(p, F, G, sg, gpos);
     pos = neg = false;
+    plane_of(p, G, &pl);
     for (uint32_t i = 0; i < F->n; i++) {
-        sf[i] = (int8_t)(fpos[i] >= 0 ? 0 : side_of(p, G, V(p, F->v[i])));
+        sf[i] = (int8_t)(fpos[i] >= 0
+                             ? 0
+                             : geo_orient3d_plane_sign(&pl, V(p, F->v[i])));
         pos |= sf[i] > 0;
         neg |= sf[i] < 0;
     }
@@ -879,6 +978,7 @@ typedef struct search {
     const geo_bvh *h;
     const geo_ctx *ctx;
     const geo_facet_shape *shapes;
+    const uint64_t *masks; /* vertex_mask of each facet */
     atomic_uchar *flags;
     uint32_t keep;
     uint32_t maxn;        /* largest facet size */
@@ -910,7 +1010,10 @@ static bool visit_pair(void *user, uint32_t a, uint32_t b)
     const geo_facet_shape *sa = &s->shapes[a], *sb = &s->shapes[b];
     if (sa->degenerate || sb->degenerate)
         return true;
-    facet_ref F = facet_at(s->p, a, sa), G = facet_at(s->p, b, sb);
+    facet_ref F = {a, geo_poly_facet_size(s->p, a), geo_poly_facet(s->p, a),
+                   sa, s->masks[a]};
+    facet_ref G = {b, geo_poly_facet_size(s->p, b), geo_poly_facet(s->p, b),
+                   sb, s->masks[b]};
     if (!pair_test(s->p, &F, &G, &vs->sc))
         return true;
     vs->out->count++;
@@ -932,18 +1035,29 @@ static void run_task(void *arg, size_t i)
     visit_state vs = {s, &s->out[t], {0}, 0};
     if (atomic_load(&s->stop))
         return;
-    if (scratch_reserve(&vs.sc, s->maxn) < 0) {
+    /* ordinary facets: scratch on the stack, no allocation per task */
+    enum { SMALL = 64 };
+    int8_t s1[SMALL], s2[SMALL];
+    int32_t p1[SMALL], p2[SMALL];
+    bool heap = s->maxn > SMALL;
+    if (!heap) {
+        pair_scratch small = {SMALL, s1, s2, p1, p2};
+        vs.sc = small;
+    } else if (scratch_reserve(&vs.sc, s->maxn) < 0) {
+        scratch_free(&vs.sc);
         s->out[t].err = -ENOMEM;
         atomic_store(&s->stop, 1);
         return;
     }
     geo_bvh_pairs(s->h, s->ta[t], s->tb[t], visit_pair, &vs);
-    scratch_free(&vs.sc);
+    if (heap)
+        scratch_free(&vs.sc);
 }
 
 typedef struct shape_job {
     const geo_poly *p;
     geo_facet_shape *shapes;
+    uint64_t *masks;
     atomic_uchar *flags;
     uint32_t block;
 } shape_job;
@@ -957,6 +1071,8 @@ static void run_shapes(void *arg, size_t i)
     for (uint32_t f = lo; f < hi; f++) {
         geo_facet_shape *s = &j->shapes[f];
         geo_facet_shape_of(j->p, f, s);
+        j->masks[f] = vertex_mask(geo_poly_facet(j->p, f),
+                                  geo_poly_facet_size(j->p, f));
         unsigned char fl = 0;
         if (s->degenerate)
             fl = GEO_SI_DEGENERATE;
@@ -991,6 +1107,7 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     search s = {0};
     geo_bvh *own = NULL;
     geo_facet_shape *shapes = malloc(((size_t)nf + 1) * sizeof *shapes);
+    uint64_t *masks = malloc(((size_t)nf + 1) * sizeof *masks);
     atomic_uchar *flags = malloc(((size_t)nf + 1) * sizeof *flags);
     uint8_t *plain = malloc((size_t)nf + 1);
     uint32_t *ta = malloc((size_t)o.max_tasks * sizeof *ta);
@@ -998,14 +1115,14 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     task_out *out = NULL;
     uint32_t ntasks = 0;
     pair_list all = {0};
-    if (!shapes || !flags || !plain || !ta || !tb)
+    if (!shapes || !masks || !flags || !plain || !ta || !tb)
         goto oom;
     uint32_t maxn = 3;
     for (uint32_t f = 0; f < nf; f++)
         if (geo_poly_facet_size(p, f) > maxn)
             maxn = geo_poly_facet_size(p, f);
 
-    shape_job sj = {p, shapes, flags, 4096};
+    shape_job sj = {p, shapes, masks, flags, 4096};
     geo_ctx_parallel_for(ctx, (nf + sj.block - 1) / sj.block, run_shapes, &sj);
     if ((rc = geo_ctx_progress(ctx, 0.05)) < 0)
         goto fail;
@@ -1022,7 +1139,8 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     out = calloc((size_t)ntasks + 1, sizeof *out);
     if (!out)
         goto oom;
-    s.p = p, s.h = bvh, s.ctx = ctx, s.shapes = shapes, s.flags = flags;
+    s.p = p, s.h = bvh, s.ctx = ctx, s.shapes = shapes, s.masks = masks;
+    s.flags = flags;
     s.keep = o.max_pairs, s.maxn = maxn, s.ta = ta, s.tb = tb, s.out = out;
     atomic_init(&s.stop, 0);
     /* batches, so that progress and cancellation are seen from the
@@ -1099,6 +1217,7 @@ done:
     free(all.v);
     geo_bvh_free(own);
     free(shapes);
+    free(masks);
     free(flags);
     free(plain);
     free(ta);

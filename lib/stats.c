@@ -36,10 +36,24 @@ static int cmp_u32(const void *x, const void *y)
     return (a > b) - (a < b);
 }
 
-static int cmp_u64(const void *x, const void *y)
+/* Distinct values among nb[0..n): a quadratic scan for the short lists
+ * of ordinary vertices (no call, no sort), a sort beyond. */
+static uint32_t distinct(uint32_t *nb, uint32_t n)
 {
-    uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
-    return (a > b) - (a < b);
+    uint32_t d = 0;
+    if (n <= 32) {
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t j = 0;
+            while (j < i && nb[j] != nb[i])
+                j++;
+            d += j == i;
+        }
+        return d;
+    }
+    qsort(nb, n, sizeof *nb, cmp_u32);
+    for (uint32_t i = 0; i < n; i++)
+        d += i == 0 || nb[i] != nb[i - 1];
+    return d;
 }
 
 /* Vertex degrees (distinct neighbours through the corners at each
@@ -64,10 +78,7 @@ static int degrees(const geo_poly *p, const geo_topo *t, geo_stats *s)
             nb[n++] = p->fidx[geo_topo_next(p, t, c)];
             nb[n++] = p->fidx[geo_topo_prev(p, t, c)];
         }
-        qsort(nb, n, sizeof *nb, cmp_u32);
-        uint32_t d = 0;
-        for (uint32_t i = 0; i < n; i++)
-            d += i == 0 || nb[i] != nb[i - 1];
+        uint32_t d = distinct(nb, n);
         deg[v] = d;
         if (d > maxd)
             maxd = d;
@@ -86,15 +97,37 @@ static int degrees(const geo_poly *p, const geo_topo *t, geo_stats *s)
     return 0;
 }
 
+/* Whether the angle atan2(y, c) (degrees) of two unit normals is surely
+ * at least tmax, without the arctangent: c < 0 means at least 90°, and
+ * y > c·tan(tmax)·(1 + 1e-9) means above tmax by far more than the
+ * rounding of atan2 and of the conversion to degrees. Only for
+ * 1e-6 ≤ tmax ≤ 89 (tan_max = 0 otherwise: never sure). A NaN is never
+ * sure. The thresholds are counted from the exact atan2 as before. */
+static bool surely_wider(double y, double c, double tan_max)
+{
+    if (tan_max == 0)
+        return false;
+    return c < 0 || y > c * tan_max * (1 + 1e-9);
+}
+
 /* Adjacent facet pairs (each once) whose normals are within each
- * threshold; zero-length edges; facets winding against their plane. */
+ * threshold; zero-length edges; facets winding against their plane.
+ * Each facet's neighbours above it are gathered through its corners with
+ * a stamp per facet, so a pair sharing several edges counts once (as
+ * agreeing when any of its edges agrees). */
 static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
 {
     uint32_t nf = p->nfacets, nc = t->ncorners;
     double (*nrm)[3] = malloc(((size_t)nf + 1) * sizeof *nrm);
-    uint64_t *pairs = malloc(((size_t)nc + 1) * sizeof *pairs);
-    if (!nrm || !pairs) {
-        free(nrm), free(pairs);
+    uint32_t *stamp = malloc(((size_t)nf + 1) * sizeof *stamp);
+    uint8_t *agree = malloc((size_t)nf + 1);
+    uint32_t maxn = 1;
+    for (uint32_t f = 0; f < nf; f++)
+        if (geo_poly_facet_size(p, f) > maxn)
+            maxn = geo_poly_facet_size(p, f);
+    uint32_t *list = malloc((size_t)maxn * sizeof *list);
+    if (!nrm || !stamp || !agree || !list) {
+        free(nrm), free(stamp), free(agree), free(list);
         return -ENOMEM;
     }
     for (uint32_t f = 0; f < nf; f++) {
@@ -102,10 +135,8 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
         geo_vnormalize(nrm[f]);
         if (geo_vdot(nrm[f], p->planes[f]) < 0)
             s->inverted_facets++;
+        stamp[f] = GEO_NONE;
     }
-    /* key: lower facet in the high half, the other facet and whether
-     * they disagree on the edge in the low half (facet indices < 2³¹) */
-    size_t np = 0;
     for (uint32_t c = 0; c < nc; c++) {
         uint32_t m = t->mate[c];
         const double *a = p->verts[p->fidx[c]];
@@ -113,30 +144,46 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
         if ((m == GEO_NONE || c < m) && a[0] == b[0] && a[1] == b[1] &&
             a[2] == b[2])
             s->degenerate_edges++;
-        if (m == GEO_NONE || m < c)
-            continue;
-        uint32_t f = t->corner_facet[c], g = t->corner_facet[m];
-        if (f == g)
-            continue;
-        uint32_t lo = f < g ? f : g, hi = f < g ? g : f;
-        uint32_t flipped = t->edge_kind[c] == GEO_EDGE_FLIPPED;
-        pairs[np++] = (uint64_t)lo << 32 | (uint64_t)hi << 1 | flipped;
     }
-    qsort(pairs, np, sizeof *pairs, cmp_u64);
-    for (size_t i = 0; i < np; i++) {
-        if (i > 0 && pairs[i] >> 1 == pairs[i - 1] >> 1)
-            continue;
-        uint32_t f = (uint32_t)(pairs[i] >> 32);
-        uint32_t g = (uint32_t)(pairs[i] & 0xffffffffu) >> 1;
-        double n2[3], x[3];
-        geo_vscale(nrm[g], pairs[i] & 1 ? -1.0 : 1.0, n2);
-        geo_vcross(nrm[f], n2, x);
-        double ang = atan2(geo_vlen(x), geo_vdot(nrm[f], n2)) * 180.0 / M_PI;
-        for (int k = 0; k < GEO_STATS_NCOPLANAR; k++)
-            if (ang < s->coplanar_deg[k])
-                s->near_coplanar[k]++;
+    double tmax = s->coplanar_deg[0];
+    for (int k = 1; k < GEO_STATS_NCOPLANAR; k++)
+        if (s->coplanar_deg[k] > tmax)
+            tmax = s->coplanar_deg[k];
+    double tan_max = tmax >= 1e-6 && tmax <= 89 ? tan(tmax * M_PI / 180.0)
+                                                : 0;
+    for (uint32_t f = 0; f < nf; f++) {
+        uint32_t nl = 0;
+        for (uint32_t c = p->fstart[f]; c < p->fstart[f + 1]; c++) {
+            uint32_t m = t->mate[c];
+            if (m == GEO_NONE)
+                continue;
+            uint32_t g = t->corner_facet[m];
+            if (g <= f)
+                continue;
+            uint8_t ag = t->edge_kind[c] != GEO_EDGE_FLIPPED;
+            if (stamp[g] != f) {
+                stamp[g] = f;
+                agree[g] = ag;
+                list[nl++] = g;
+            } else {
+                agree[g] |= ag;
+            }
+        }
+        for (uint32_t i = 0; i < nl; i++) {
+            uint32_t g = list[i];
+            double n2[3], x[3];
+            geo_vscale(nrm[g], agree[g] ? 1.0 : -1.0, n2);
+            geo_vcross(nrm[f], n2, x);
+            double y = geo_vlen(x), dot = geo_vdot(nrm[f], n2);
+            if (surely_wider(y, dot, tan_max))
+                continue;
+            double ang = atan2(y, dot) * 180.0 / M_PI;
+            for (int k = 0; k < GEO_STATS_NCOPLANAR; k++)
+                if (ang < s->coplanar_deg[k])
+                    s->near_coplanar[k]++;
+        }
     }
-    free(nrm), free(pairs);
+    free(nrm), free(stamp), free(agree), free(list);
     return 0;
 }
 
@@ -162,11 +209,19 @@ static int clusters(const geo_poly *p, geo_stats *s)
     for (uint32_t v = 0; v < nv; v++)
         parent[v] = v;
     double r = s->short_edge_radius;
+    /* an edge whose squared length is above r²·(1 + 1e-9) is surely not
+     * shorter than r (far beyond the rounding of r², of the sum and of
+     * the square root), so the square root is taken only near r */
+    double r2 = r * r * (1 + 1e-9);
     for (uint32_t f = 0; f < p->nfacets; f++) {
         uint32_t n = geo_poly_facet_size(p, f);
         const uint32_t *fv = geo_poly_facet(p, f);
         for (uint32_t i = 0; i < n; i++) {
-            uint32_t a = fv[i], b = fv[(i + 1) % n];
+            uint32_t a = fv[i], b = i + 1 < n ? fv[i + 1] : fv[0];
+            double d[3];
+            geo_vsub(p->verts[a], p->verts[b], d);
+            if (geo_vdot(d, d) > r2)
+                continue;
             if (geo_vdist(p->verts[a], p->verts[b]) < r) {
                 a = uf_find(parent, a);
                 b = uf_find(parent, b);
