@@ -194,17 +194,10 @@ int geo_orient2d(const double a[2], const double b[2], const double c[2])
     return orient2d_exact(a, b, c);
 }
 
-int geo_orient2d_proj(const double a[3], const double b[3], const double c[3],
-                      int drop)
+int geo_orient2d_proj_exact(const double a[3], const double b[3],
+                            const double c[3], int drop)
 {
     int u = (drop + 1) % 3, v = (drop + 2) % 3;
-    /* the filter of geo_orient2d on the projected coordinates in place */
-    double left = (a[u] - c[u]) * (b[v] - c[v]);
-    double right = (a[v] - c[v]) * (b[u] - c[u]);
-    double det = left - right;
-    double bound = O2D_BOUND * (fabs(left) + fabs(right));
-    if (fabs(det) > bound && fabs(det) > TINY)
-        return sign_of(det);
     double pa[2] = {a[u], a[v]}, pb[2] = {b[u], b[v]}, pc[2] = {c[u], c[v]};
     return orient2d_exact(pa, pb, pc);
 }

@@ -474,11 +474,14 @@ typedef struct facet_ref {
     uint64_t mask; /* vertex_mask of its vertices */
 } facet_ref;
 
-/* One bit per vertex index (a multiplicative hash): facets whose masks
- * share no bit share no vertex, so most candidate pairs skip matching. */
+/* One bit per vertex index: facets whose masks share no bit share no
+ * vertex, and a vertex whose bit the other facet lacks is not in it. */
 static inline uint64_t vertex_bit(uint32_t v)
 {
-    return 1ULL << ((v * 0x9E3779B97F4A7C15ULL) >> 58);
+    /* the low bits: neighbouring facets' vertices, numbered close
+     * together, spread over all 64 (a multiplicative hash measured
+     * slightly worse on scans) */
+    return 1ULL << (v & 63);
 }
 
 static uint64_t vertex_mask(const uint32_t *v, uint32_t n)
@@ -769,65 +772,30 @@ static bool separated_by_shared_edge(const geo_poly *p, const facet_ref *F,
                                      const facet_ref *G, const int32_t *gpos,
                                      uint32_t iu, uint32_t iw)
 {
-    int axis = F->s->axis;
-    const double *u = V(p, F->v[iu]), *w = V(p, F->v[iw]);
+    geo_orient2d_line uw;
+    geo_orient2d_line_init(&uw, V(p, F->v[iu]), V(p, F->v[iw]), F->s->axis);
     int side_f = 0;
     for (uint32_t i = 0; i < F->n && !side_f; i++)
         if (i != iu && i != iw)
-            side_f = geo_orient2d_proj(u, w, V(p, F->v[i]), axis);
+            side_f = geo_orient2d_line_sign(&uw, V(p, F->v[i]));
     if (!side_f)
         return false;
     for (uint32_t j = 0; j < G->n; j++)
-        if (gpos[j] < 0 &&
-            geo_orient2d_proj(u, w, V(p, G->v[j]), axis) != -side_f)
+        if (gpos[j] < 0 && geo_orient2d_line_sign(&uw, V(p, G->v[j])) != -side_f)
             return false;
     return true;
 }
 
-static bool pair_test(const geo_poly *p, const facet_ref *F,
-                      const facet_ref *G, pair_scratch *sc)
+/* The rest of pair_test once the sides sg of G's vertices against π_F
+ * (pos, neg: whether any is positive, negative) and the shared positions
+ * are known. */
+static bool sided_test(const geo_poly *p, const facet_ref *F,
+                       const facet_ref *G, pair_scratch *sc,
+                       uint32_t nshared, bool pos, bool neg)
 {
     int8_t *sf = sc->sf, *sg = sc->sg;
     int32_t *fpos = sc->fpos, *gpos = sc->gpos;
-    uint32_t nshared = 0;
-    uint64_t common = F->mask & G->mask;
-    for (uint32_t i = 0; i < F->n; i++)
-        fpos[i] = -1;
-    for (uint32_t j = 0; j < G->n; j++) {
-        gpos[j] = -1;
-        if (!(common & vertex_bit(G->v[j])))
-            continue;
-        /* the first position of G's vertex in F, without a branch per
-         * comparison */
-        int32_t first = -1;
-        for (uint32_t i = F->n; i-- > 0;)
-            first = F->v[i] == G->v[j] ? (int32_t)i : first;
-        if (first >= 0) {
-            gpos[j] = first;
-            fpos[first] = (int32_t)j;
-            nshared++;
-        }
-    }
-    if (nshared == 2 && F->s->convex && G->s->convex) {
-        int32_t iu = -1, iw = -1;
-        for (uint32_t i = 0; i < F->n; i++)
-            if (fpos[i] >= 0)
-                iu < 0 ? (iu = (int32_t)i) : (iw = (int32_t)i);
-        if (is_edge(F, iu, iw) && is_edge(G, fpos[iu], fpos[iw]) &&
-            separated_by_shared_edge(p, F, G, gpos, (uint32_t)iu,
-                                     (uint32_t)iw))
-            return false;
-    }
-    bool pos = false, neg = false;
     geo_orient3d_plane pl;
-    plane_of(p, F, &pl);
-    for (uint32_t j = 0; j < G->n; j++) {
-        sg[j] = (int8_t)(gpos[j] >= 0
-                             ? 0
-                             : geo_orient3d_plane_sign(&pl, V(p, G->v[j])));
-        pos |= sg[j] > 0;
-        neg |= sg[j] < 0;
-    }
     if (!pos && !neg)
         return coplanar_overlap(p, F, G, fpos, gpos, F->s->axis);
     if (!(pos && neg))
@@ -868,6 +836,78 @@ static bool pair_test(const geo_poly *p, const facet_ref *F,
         }
     }
     return false;
+}
+
+static bool pair_test(const geo_poly *p, const facet_ref *F,
+                      const facet_ref *G, pair_scratch *sc)
+{
+    int8_t *sg = sc->sg;
+    int32_t *fpos = sc->fpos, *gpos = sc->gpos;
+    uint64_t common = F->mask & G->mask;
+    bool pos = false, neg = false;
+    geo_orient3d_plane pl;
+    if (!common) {
+        /* no vertex in common (most pairs that are not neighbours): G
+         * strictly on one side of π_F is apart, as touching_hits would
+         * find with no side 0; anything else takes the general path */
+        plane_of(p, F, &pl);
+        bool zero = false;
+        for (uint32_t j = 0; j < G->n; j++) {
+            sg[j] = (int8_t)geo_orient3d_plane_sign(&pl, V(p, G->v[j]));
+            pos |= sg[j] > 0;
+            neg |= sg[j] < 0;
+            zero |= sg[j] == 0;
+        }
+        if (!zero && !(pos && neg))
+            return false;
+        for (uint32_t i = 0; i < F->n; i++)
+            fpos[i] = -1;
+        for (uint32_t j = 0; j < G->n; j++)
+            gpos[j] = -1;
+        return sided_test(p, F, G, sc, 0, pos, neg);
+    }
+    /* locals: the stores into fpos and gpos may alias F->n and G->n for
+     * the compiler, which would reload them in every iteration */
+    const uint32_t nf = F->n, ng = G->n, *fv = F->v, *gv = G->v;
+    uint32_t nshared = 0, at[2] = {0, 0};
+    for (uint32_t i = 0; i < nf; i++)
+        fpos[i] = -1;
+    for (uint32_t j = 0; j < ng; j++) {
+        gpos[j] = -1;
+        uint32_t v = gv[j];
+        if (!(common & vertex_bit(v)))
+            continue;
+        /* the first position of G's vertex in F, without a branch per
+         * comparison */
+        int32_t first = -1;
+        for (uint32_t i = nf; i-- > 0;)
+            first = fv[i] == v ? (int32_t)i : first;
+        if (first >= 0) {
+            gpos[j] = first;
+            fpos[first] = (int32_t)j;
+            if (nshared < 2)
+                at[nshared] = (uint32_t)first;
+            nshared++;
+        }
+    }
+    if (nshared == 2 && F->s->convex && G->s->convex) {
+        /* the two shared positions of F in increasing order */
+        uint32_t iu = at[0] < at[1] ? at[0] : at[1];
+        uint32_t iw = at[0] < at[1] ? at[1] : at[0];
+        if (is_edge(F, (int32_t)iu, (int32_t)iw) &&
+            is_edge(G, fpos[iu], fpos[iw]) &&
+            separated_by_shared_edge(p, F, G, gpos, iu, iw))
+            return false;
+    }
+    plane_of(p, F, &pl);
+    for (uint32_t j = 0; j < G->n; j++) {
+        sg[j] = (int8_t)(gpos[j] >= 0
+                             ? 0
+                             : geo_orient3d_plane_sign(&pl, V(p, G->v[j])));
+        pos |= sg[j] > 0;
+        neg |= sg[j] < 0;
+    }
+    return sided_test(p, F, G, sc, nshared, pos, neg);
 }
 
 int geo_facets_intersect(const geo_poly *p, uint32_t f, uint32_t g,
