@@ -254,6 +254,60 @@ static void test_orient2d_proj_and_normal_sign_exact(void **state)
     }
 }
 
+/* The prepared 2D line gives geo_orient2d_proj's sign (integer reference)
+ * for each dropped axis, on points a few units apart far from the
+ * origin, where cancellation is at its worst, and on random points over
+ * magnitudes 2^-40 .. 2^40. */
+static void test_orient2d_line_matches_orient2d_proj(void **state)
+{
+    (void)state;
+    uint64_t rng = 57;
+    int zeros = 0;
+    for (int t = 0; t < 20000; t++) {
+        int64_t P[5][3];
+        for (int i = 0; i < 5; i++)
+            for (int k = 0; k < 3; k++)
+                P[i][k] = ((int64_t)1 << 40) +
+                          (int64_t)(geo_rand_next(&rng) % 5) * (i + 1) +
+                          (int64_t)(geo_rand_next(&rng) % 3);
+        double D[5][3];
+        for (int i = 0; i < 5; i++)
+            for (int k = 0; k < 3; k++)
+                D[i][k] = (double)P[i][k] * 0x1p-30;
+        for (int drop = 0; drop < 3; drop++) {
+            geo_orient2d_line l;
+            geo_orient2d_line_init(&l, D[0], D[1], drop);
+            int u = (drop + 1) % 3, v = (drop + 2) % 3;
+            for (int q = 2; q < 5; q++) {
+                i128 det =
+                    (i128)(P[1][u] - P[0][u]) * (P[q][v] - P[0][v]) -
+                    (i128)(P[1][v] - P[0][v]) * (P[q][u] - P[0][u]);
+                assert_int_equal(geo_orient2d_line_sign(&l, D[q]),
+                                 sign128(det));
+                zeros += det == 0;
+            }
+        }
+    }
+    assert_true(zeros > 100);
+    for (int t = 0; t < 20000; t++) {
+        double Q[4][3];
+        for (int i = 0; i < 3; i++) {
+            double scale = ldexp(1.0, (int)(geo_rand_next(&rng) % 81) - 40);
+            for (int k = 0; k < 3; k++)
+                Q[i][k] = (2 * geo_rand_unit(&rng) - 1) * scale;
+        }
+        for (int k = 0; k < 3; k++) /* on the line, rounded */
+            Q[3][k] = Q[0][k] + (Q[1][k] - Q[0][k]) * 0.625;
+        for (int drop = 0; drop < 3; drop++) {
+            geo_orient2d_line l;
+            geo_orient2d_line_init(&l, Q[0], Q[1], drop);
+            for (int q = 2; q < 4; q++)
+                assert_int_equal(geo_orient2d_line_sign(&l, Q[q]),
+                                 geo_orient2d_proj(Q[0], Q[1], Q[q], drop));
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -265,6 +319,7 @@ int main(void)
         cmocka_unit_test(test_plane_sign_exact),
         cmocka_unit_test(test_orient2d_proj_axes),
         cmocka_unit_test(test_orient2d_proj_and_normal_sign_exact),
+        cmocka_unit_test(test_orient2d_line_matches_orient2d_proj),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
