@@ -72,8 +72,21 @@ static int degrees(const geo_poly *p, const geo_topo *t, geo_stats *s)
     }
     uint32_t maxd = 0;
     for (uint32_t v = 0; v < p->nverts; v++) {
+        uint32_t k0 = t->vstart[v], k1 = t->vstart[v + 1];
+        if (k1 - k0 < 3)
+            s->low_degree_vertices++;
+        /* an interior vertex's single closed fan crosses each of its
+         * edges once, and each edge there has exactly two corners (else
+         * it would be non-manifold, and so the vertex): as many distinct
+         * edges, hence neighbours, as corners */
+        if (t->vertex_kind[v] == GEO_VERTEX_INTERIOR) {
+            deg[v] = k1 - k0;
+            if (deg[v] > maxd)
+                maxd = deg[v];
+            continue;
+        }
         uint32_t n = 0;
-        for (uint32_t k = t->vstart[v]; k < t->vstart[v + 1]; k++) {
+        for (uint32_t k = k0; k < k1; k++) {
             uint32_t c = t->vcorners[k];
             nb[n++] = p->fidx[geo_topo_next(p, t, c)];
             nb[n++] = p->fidx[geo_topo_prev(p, t, c)];
@@ -82,8 +95,6 @@ static int degrees(const geo_poly *p, const geo_topo *t, geo_stats *s)
         deg[v] = d;
         if (d > maxd)
             maxd = d;
-        if (t->vstart[v + 1] - t->vstart[v] < 3)
-            s->low_degree_vertices++;
     }
     s->degree_count = calloc((size_t)maxd + 1, sizeof *s->degree_count);
     if (!s->degree_count) {
@@ -97,27 +108,30 @@ static int degrees(const geo_poly *p, const geo_topo *t, geo_stats *s)
     return 0;
 }
 
-/* Whether the angle atan2(y, c) (degrees) of two unit normals is surely
- * at least tmax, without the arctangent: c < 0 means at least 90°, and
- * y > c·tan(tmax)·(1 + 1e-9) means above tmax by far more than the
- * rounding of atan2 and of the conversion to degrees. Only for
- * 1e-6 ≤ tmax ≤ 89 (tan_max = 0 otherwise: never sure). A NaN is never
- * sure. The thresholds are counted from the exact atan2 as before. */
-static bool surely_wider(double y, double c, double tan_max)
+/* Whether the angle atan2(√yy, c) (degrees) of two unit normals is
+ * surely at least tmax, without the arctangent or the root: c < 0 means
+ * at least 90°, and yy > (c·tan(tmax))²·(1 + 1e-8) means a tangent above
+ * tan(tmax) by far more than the rounding of the root, of atan2 and of
+ * the conversion to degrees. Only for 1e-6 ≤ tmax ≤ 89 (tan_max = 0
+ * otherwise: never sure). A NaN is never sure. Pairs not surely wider are
+ * measured by atan2 as before. */
+static bool surely_wider(double yy, double c, double tan_max)
 {
     if (tan_max == 0)
         return false;
-    return c < 0 || y > c * tan_max * (1 + 1e-9);
+    double lim = c * tan_max;
+    return c < 0 || yy > lim * lim * (1 + 1e-8);
 }
 
 /* Adjacent facet pairs (each once) whose normals are within each
- * threshold; zero-length edges; facets winding against their plane.
+ * threshold; zero-length edges; facets winding against their plane; the
+ * total area.
  * Each facet's neighbours above it are gathered through its corners with
  * a stamp per facet, so a pair sharing several edges counts once (as
  * agreeing when any of its edges agrees). */
 static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
 {
-    uint32_t nf = p->nfacets, nc = t->ncorners;
+    uint32_t nf = p->nfacets;
     double (*nrm)[3] = malloc(((size_t)nf + 1) * sizeof *nrm);
     uint32_t *stamp = malloc(((size_t)nf + 1) * sizeof *stamp);
     uint8_t *agree = malloc((size_t)nf + 1);
@@ -130,21 +144,29 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
         free(nrm), free(stamp), free(agree), free(list);
         return -ENOMEM;
     }
+    /* the total area from the same Newell vectors, summed in facet order
+     * as geo_poly_area does */
+    s->area = 0;
     for (uint32_t f = 0; f < nf; f++) {
         geo_poly_facet_area_vector(p, f, nrm[f]);
+        s->area += 0.5 * geo_vlen(nrm[f]);
         geo_vnormalize(nrm[f]);
         if (geo_vdot(nrm[f], p->planes[f]) < 0)
             s->inverted_facets++;
         stamp[f] = GEO_NONE;
     }
-    for (uint32_t c = 0; c < nc; c++) {
-        uint32_t m = t->mate[c];
-        const double *a = p->verts[p->fidx[c]];
-        const double *b = p->verts[p->fidx[geo_topo_next(p, t, c)]];
-        if ((m == GEO_NONE || c < m) && a[0] == b[0] && a[1] == b[1] &&
-            a[2] == b[2])
-            s->degenerate_edges++;
-    }
+    for (uint32_t f = 0; f < nf; f++)
+        for (uint32_t c = p->fstart[f]; c < p->fstart[f + 1]; c++) {
+            uint32_t m = t->mate[c];
+            if (m != GEO_NONE && m < c)
+                continue;
+            const double *a = p->verts[p->fidx[c]];
+            const double *b = p->verts[p->fidx[c + 1 < p->fstart[f + 1]
+                                                   ? c + 1
+                                                   : p->fstart[f]]];
+            if (a[0] == b[0] && a[1] == b[1] && a[2] == b[2])
+                s->degenerate_edges++;
+        }
     double tmax = s->coplanar_deg[0];
     for (int k = 1; k < GEO_STATS_NCOPLANAR; k++)
         if (s->coplanar_deg[k] > tmax)
@@ -174,10 +196,10 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
             double n2[3], x[3];
             geo_vscale(nrm[g], agree[g] ? 1.0 : -1.0, n2);
             geo_vcross(nrm[f], n2, x);
-            double y = geo_vlen(x), dot = geo_vdot(nrm[f], n2);
-            if (surely_wider(y, dot, tan_max))
+            double yy = geo_vdot(x, x), dot = geo_vdot(nrm[f], n2);
+            if (surely_wider(yy, dot, tan_max))
                 continue;
-            double ang = atan2(y, dot) * 180.0 / M_PI;
+            double ang = atan2(sqrt(yy), dot) * 180.0 / M_PI;
             for (int k = 0; k < GEO_STATS_NCOPLANAR; k++)
                 if (ang < s->coplanar_deg[k])
                     s->near_coplanar[k]++;
@@ -196,8 +218,11 @@ static uint32_t uf_find(uint32_t *parent, uint32_t x)
     return x;
 }
 
-/* Union-find over edges shorter than the radius. */
-static int clusters(const geo_poly *p, geo_stats *s)
+/* Union-find over edges shorter than the radius, each edge once (from
+ * its lower corner; the union of the two lower roots keeps every root the
+ * smallest vertex of its set, so the order of the unions does not
+ * matter). */
+static int clusters(const geo_poly *p, const geo_topo *t, geo_stats *s)
 {
     uint32_t nv = p->nverts;
     uint32_t *parent = malloc(((size_t)nv + 1) * sizeof *parent);
@@ -217,6 +242,9 @@ static int clusters(const geo_poly *p, geo_stats *s)
         uint32_t n = geo_poly_facet_size(p, f);
         const uint32_t *fv = geo_poly_facet(p, f);
         for (uint32_t i = 0; i < n; i++) {
+            uint32_t m = t->mate[p->fstart[f] + i];
+            if (m != GEO_NONE && m < p->fstart[f] + i)
+                continue;
             uint32_t a = fv[i], b = i + 1 < n ? fv[i + 1] : fv[0];
             double d[3];
             geo_vsub(p->verts[a], p->verts[b], d);
@@ -292,15 +320,15 @@ int geo_inspect(const geo_poly *p, const geo_inspect_opts *opts,
     ret->orientable = orep.orientable;
 
     ret->volume = geo_poly_volume(p);
-    ret->area = geo_poly_area(p);
     ret->max_nonplanarity = geo_poly_max_nonplanarity(p);
-    ret->eps = o.eps > 0 ? o.eps : geo_poly_eps(p);
+    /* geo_poly_eps's and the radius' common size, taken once */
+    double size = geo_poly_size(p);
+    ret->eps = o.eps > 0 ? o.eps : 1e-10 * (1.0 + size);
     memcpy(ret->coplanar_deg, o.coplanar_deg, sizeof ret->coplanar_deg);
-    ret->short_edge_radius = o.short_edge_radius > 0
-                                 ? o.short_edge_radius
-                                 : 1e-3 * geo_poly_size(p);
+    ret->short_edge_radius =
+        o.short_edge_radius > 0 ? o.short_edge_radius : 1e-3 * size;
     if (degrees(p, t, ret) < 0 || neighbours(p, t, ret) < 0 ||
-        clusters(p, ret) < 0)
+        clusters(p, t, ret) < 0)
         goto oom;
     geo_topo_free(t);
     t = NULL;
