@@ -1047,6 +1047,14 @@ static bool visit_pair(void *user, uint32_t a, uint32_t b)
             return false;
         }
     }
+    /* the lower facet first: on facets that are not planar the test is
+     * not symmetric (each facet is its vertices projected along the
+     * query), and the answer must not depend on the tree's visit order */
+    if (a > b) {
+        uint32_t t = a;
+        a = b;
+        b = t;
+    }
     const geo_facet_shape *sa = &s->shapes[a], *sb = &s->shapes[b];
     if (sa->degenerate || sb->degenerate)
         return true;
@@ -1059,8 +1067,7 @@ static bool visit_pair(void *user, uint32_t a, uint32_t b)
     vs->out->count++;
     atomic_fetch_or_explicit(&s->flags[a], GEO_SI_PAIR, memory_order_relaxed);
     atomic_fetch_or_explicit(&s->flags[b], GEO_SI_PAIR, memory_order_relaxed);
-    uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
-    if (list_add(&vs->out->list, lo, hi, s->keep) < 0) {
+    if (list_add(&vs->out->list, a, b, s->keep) < 0) {
         vs->out->err = -ENOMEM;
         atomic_store(&s->stop, 1);
         return false;
@@ -1167,7 +1174,8 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     if ((rc = geo_ctx_progress(ctx, 0.05)) < 0)
         goto fail;
     if (!bvh) {
-        own = geo_bvh_build_facets(p, err);
+        /* the answer does not depend on the tree: the fastest to build */
+        own = geo_bvh_build_facets_morton(p, err);
         if (!own)
             goto oom;
         bvh = own;
