@@ -222,12 +222,13 @@ static bool strictly_convex(const geo_poly *p, const uint32_t *fv, uint32_t n,
     int u = (axis + 1) % 3, w = (axis + 2) % 3;
     uint32_t changes = 0;
     const double *a = V(p, fv[n - 1]), *b = V(p, fv[0]);
-    bool up = b[w] > a[w] || (b[w] == a[w] && b[u] > a[u]);
+    /* the half plane without short-circuit branches (unpredictable) */
+    int up = (b[w] > a[w]) | ((b[w] == a[w]) & (b[u] > a[u]));
     for (uint32_t i = 0; i < n; i++) {
         a = b;
         b = V(p, fv[i + 1 < n ? i + 1 : 0]);
-        bool next = b[w] > a[w] || (b[w] == a[w] && b[u] > a[u]);
-        changes += next != up;
+        int next = (b[w] > a[w]) | ((b[w] == a[w]) & (b[u] > a[u]));
+        changes += (uint32_t)(next ^ up);
         up = next;
     }
     return changes == 2;
@@ -264,8 +265,14 @@ void geo_facet_shape_of(const geo_poly *p, uint32_t f, geo_facet_shape *ret)
         geo_vsub(V(p, fv[i]), A, ac);
         geo_vcross(ab, ac, c);
         double d = geo_vdot(c, c);
-        if (d > best)
-            best = d, ic = i, memcpy(nrm, c, sizeof c);
+        /* selections, not a branch: the first largest */
+        ic = d > best ? i : ic;
+        best = d > best ? d : best;
+    }
+    if (best > -1) { /* the cross product again, for the chosen vertex */
+        double ac[3];
+        geo_vsub(V(p, fv[ic]), A, ac);
+        geo_vcross(ab, ac, nrm);
     }
     if (collinear3(A, B, V(p, fv[ic]))) {
         /* rounding may hide a non-collinear vertex: look exactly */
@@ -289,18 +296,33 @@ void geo_facet_shape_of(const geo_poly *p, uint32_t f, geo_facet_shape *ret)
             axis = k;
     ret->axis = (int8_t)axis;
 
-    ret->turn = (int8_t)turn_in_axis(p, f, axis);
-    /* each corner's exact turn, once: the convexity test and the
-     * strictly convex shortcut of the simplicity test both read them
-     * (facets of more than 64 vertices: the pairwise test alone) */
+    /* each corner's exact turn, once: the polygon's turn (at its lowest
+     * projected vertex, as turn_in_axis), the convexity test and the
+     * strictly convex shortcut of the simplicity test all read them
+     * (facets of more than 64 vertices: turn_in_axis and the pairwise
+     * test) */
     enum { SMALL = 64 };
-    int8_t corner[SMALL];
+    int8_t corner[SMALL] = {0};
     bool shortcut = n <= SMALL;
-    for (uint32_t i = 0; i < n && shortcut; i++)
-        corner[i] = (int8_t)geo_orient2d_proj(V(p, fv[i ? i - 1 : n - 1]),
-                                              V(p, fv[i]),
-                                              V(p, fv[i + 1 < n ? i + 1 : 0]),
-                                              axis);
+    if (shortcut) {
+        int u = (axis + 1) % 3, w = (axis + 2) % 3;
+        uint32_t lo = 0;
+        for (uint32_t i = 0; i < n; i++) {
+            const double *x = V(p, fv[i]), *l = V(p, fv[lo]);
+            lo = x[u] < l[u] || (x[u] == l[u] && x[w] < l[w]) ? i : lo;
+            corner[i] = (int8_t)geo_orient2d_proj(
+                V(p, fv[i ? i - 1 : n - 1]), x, V(p, fv[i + 1 < n ? i + 1 : 0]),
+                axis);
+        }
+        ret->turn = corner[lo];
+        if (ret->turn == 0) {
+            double nw[3];
+            geo_poly_facet_area_vector(p, f, nw);
+            ret->turn = nw[axis] < 0 ? -1 : 1;
+        }
+    } else {
+        ret->turn = (int8_t)turn_in_axis(p, f, axis);
+    }
     if (shortcut && strictly_convex(p, fv, n, axis, ret->turn, corner)) {
         ret->simple = ret->convex = true;
         return;
