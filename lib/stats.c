@@ -124,8 +124,7 @@ static bool surely_wider(double yy, double c, double tan_max)
 }
 
 /* Adjacent facet pairs (each once) whose normals are within each
- * threshold; zero-length edges; facets winding against their plane; the
- * total area.
+ * threshold; facets winding against their plane; the total area.
  * Each facet's neighbours above it are gathered through its corners with
  * a stamp per facet, so a pair sharing several edges counts once (as
  * agreeing when any of its edges agrees). */
@@ -155,18 +154,6 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
             s->inverted_facets++;
         stamp[f] = GEO_NONE;
     }
-    for (uint32_t f = 0; f < nf; f++)
-        for (uint32_t c = p->fstart[f]; c < p->fstart[f + 1]; c++) {
-            uint32_t m = t->mate[c];
-            if (m != GEO_NONE && m < c)
-                continue;
-            const double *a = p->verts[p->fidx[c]];
-            const double *b = p->verts[p->fidx[c + 1 < p->fstart[f + 1]
-                                                   ? c + 1
-                                                   : p->fstart[f]]];
-            if (a[0] == b[0] && a[1] == b[1] && a[2] == b[2])
-                s->degenerate_edges++;
-        }
     double tmax = s->coplanar_deg[0];
     for (int k = 1; k < GEO_STATS_NCOPLANAR; k++)
         if (s->coplanar_deg[k] > tmax)
@@ -221,7 +208,7 @@ static uint32_t uf_find(uint32_t *parent, uint32_t x)
 /* Union-find over edges shorter than the radius, each edge once (from
  * its lower corner; the union of the two lower roots keeps every root the
  * smallest vertex of its set, so the order of the unions does not
- * matter). */
+ * matter); in the same pass, the zero-length edges. */
 static int clusters(const geo_poly *p, const geo_topo *t, geo_stats *s)
 {
     uint32_t nv = p->nverts;
@@ -246,8 +233,11 @@ static int clusters(const geo_poly *p, const geo_topo *t, geo_stats *s)
             if (m != GEO_NONE && m < p->fstart[f] + i)
                 continue;
             uint32_t a = fv[i], b = i + 1 < n ? fv[i + 1] : fv[0];
+            const double *x = p->verts[a], *y = p->verts[b];
+            if (x[0] == y[0] && x[1] == y[1] && x[2] == y[2])
+                s->degenerate_edges++;
             double d[3];
-            geo_vsub(p->verts[a], p->verts[b], d);
+            geo_vsub(x, y, d);
             if (geo_vdot(d, d) > r2)
                 continue;
             if (geo_vdist(p->verts[a], p->verts[b]) < r) {
