@@ -1214,8 +1214,13 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     s.keep = o.max_pairs, s.maxn = maxn, s.ta = ta, s.tb = tb, s.out = out;
     atomic_init(&s.stop, 0);
     /* batches, so that progress and cancellation are seen from the
-     * calling thread between them */
-    uint32_t nbatch = 16, per = (ntasks + nbatch - 1) / nbatch;
+     * calling thread between them: up to 16, one per 16,384 facets (each
+     * batch wakes the caller's pool, which costs more than a small
+     * model's whole search; the tasks check cancellation themselves) */
+    uint32_t nbatch = 1 + nf / 16384;
+    if (nbatch > 16)
+        nbatch = 16;
+    uint32_t per = (ntasks + nbatch - 1) / nbatch;
     if (per == 0)
         per = 1;
     for (uint32_t b0 = 0; b0 < ntasks; b0 += per) {
