@@ -4,19 +4,14 @@
  *  1. the side of every vertex, decided once and exactly (geo_plane_sign);
  *  2. one new vertex per crossed edge, shared by the edge's two facets
  *     through the mate corner;
- *  3. per cut facet, the ordered list of events on its section line
- *     l = facet ∩ plane: crossed edges and on-plane vertices (the paper's
- *     list with its ordering coordinate, kept sorted by binary-search
- *     insertion with an exact comparison), each with its direction: ENTRY
- *     (+1, the facet's inside begins along l), EXIT (−1, it ends), PASS (0,
- *     a reflex on-plane vertex inside a segment of l) — a convex on-plane
- *     vertex touching l from one side is the paper's "hanging" vertex and
- *     is not listed; a reflex one touching from the kept side is an EXIT
- *     and an ENTRY at once (DOUBLE);
- *  4. the facet's kept pieces by the paper's two cycles: along the
- *     boundary while it stays on the kept side (cycle B), then along l from
- *     an EXIT back to the ENTRY that opens its segment (cycle A); each such
- *     segment of l, reversed, is an edge of a new facet;
+ *  3.–4. per cut facet, the events on its section line l = facet ∩ plane
+ *     sorted exactly (ENTRY, EXIT, PASS, DOUBLE; convex on-plane vertices
+ *     hanging), the direction sweep, and its kept pieces by the paper's
+ *     cycles B and A, each segment of l walked by cycle A being, reversed,
+ *     an edge of a new facet: lib/cut_facet.c, the one implementation the
+ *     merge's local §3.4 cut (lib/merge_cut.c) calls too; here it gets
+ *     the exact sides of stage 1 and the crossing vertices of stage 2,
+ *     and its pieces become facets of the output with the facet's plane;
  *  5. the section components: the edges of the new facets chained at their
  *     shared vertices. A crossed edge's vertex is shared by exactly the two
  *     facets of that edge, so following the chain is the paper's transition
@@ -28,6 +23,10 @@
  *     section too;
  *  6. dropping the removed side, the hanging on-plane vertices, and
  *     renumbering (geo_poly_compact).
+ *
+ * What differs in the §3.4 variant (opts.main_facet) is only checked
+ * here: the main facet on or above the plane, one component, one new
+ * facet.
  *
  * Invariants: side[] is never recomputed; every crossing point is computed
  * once; the kept pieces of a facet and the new facets use the same vertex

@@ -13,16 +13,19 @@
  * refused too. The result is the same model; the cost is proportional to
  * the cut-off cap, not to the model.
  *
- * Each facet crossing π is cut by the paper's stages as in cut.c: nodes
- * (vertices and crossing points; one new vertex per crossed edge, shared
- * by its two facets), the events on l = facet ∩ π sorted exactly along l
- * (geo_plane_crossing_cmp), the direction sweep, and the pieces by
- * cycles B and A; every segment of l walked by cycle A is, reversed, an
- * edge of the section. Edges lying in π join the section where the facet
- * on one side of them is kept and the other is not (§3.4 item 2: the main
- * facet's own edges in π enter the section this way, in its
- * counter-clockwise order). Sides are decided once: 0 within geo_poly_eps
- * of π (the lifted points lie on π to rounding), else the sign. */
+ * Each facet crossing π is cut by the same code as in geo_cut,
+ * lib/cut_facet.c (nodes, events on l = facet ∩ π sorted exactly, the
+ * direction sweep, the pieces by cycles B and A; every segment of l
+ * walked by cycle A is, reversed, an edge of the section); what this file
+ * keeps is what differs: which facets are visited (the cap), the sides
+ * (below), the crossing vertices (one per crossed edge, created on first
+ * use in an edge map, shared by its two facets), the proof of one
+ * component and the assembly of the new main facet. Edges lying in π join
+ * the section where the facet on one side of them is kept and the other
+ * is not (§3.4 item 2: the main facet's own edges in π enter the section
+ * this way, in its counter-clockwise order). Sides are decided once: 0
+ * within geo_poly_eps of π (the lifted points lie on π to rounding), else
+ * the sign; they are read into a per-facet array for the shared code. */
 #include "merge_impl.h"
 
 #include <errno.h>
