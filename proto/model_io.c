@@ -142,10 +142,8 @@ geo_poly *proto_model_read_mem(const void *data, size_t len, proto_format fmt,
     return proto_model_read_mem_ex(data, len, fmt, lim, NULL, err);
 }
 
-/* Reads the whole of fd into a malloc'd buffer, failing past max bytes
- * (checked on the size before reading when fd is a regular file). */
-static int slurp(int fd, size_t max, char **ret, size_t *ret_len,
-                 geo_err *err)
+int proto_read_fd_all(int fd, size_t max, char **ret, size_t *ret_len,
+                      geo_err *err)
 {
     struct stat st;
     if (fstat(fd, &st) < 0)
@@ -230,7 +228,7 @@ geo_poly *proto_model_read_file_ex(const char *path, proto_format fmt,
     }
     char *data = NULL;
     size_t len = 0;
-    int r = slurp(fd, lim->max_bytes, &data, &len, err);
+    int r = proto_read_fd_all(fd, lim->max_bytes, &data, &len, err);
     close(fd);
     geo_poly *p = NULL;
     if (r == 0)
