@@ -1,10 +1,11 @@
 /* gem_check.c — the shared checks of the F-rep triangulation tests on
- * cut gems (gem_check.h). */
+ * cut gems (gem_check.h). No cmocka here: the support objects are linked
+ * into the benchmarks and tools too, so problems come back as messages. */
 #include "gem_check.h"
 
-#include "testutil.h"
-
-#include <math.h>
+#include <stdarg.h>
+#include <stdbool.h>
+#include <stdio.h>
 #include <stdlib.h>
 
 #include "frep_json.h"
@@ -12,74 +13,92 @@
 #include "selfint.h"
 #include "topo.h"
 
-geo_frep *gem_frep_from_json(json_t *j)
+static char problem[512];
+
+static const char *say(const char *fmt, ...)
+    __attribute__((format(printf, 1, 2)));
+
+static const char *say(const char *fmt, ...)
 {
-    geo_err err = {{0}};
-    geo_frep *f = proto_frep_from_json(j, NULL, "gem", &err);
-    if (!f)
-        fail_msg("%s", err.msg);
-    return f;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(problem, sizeof problem, fmt, ap);
+    va_end(ap);
+    return problem;
 }
 
-geo_poly *gem_triangulate(const geo_frep *f, uint32_t q, geo_tri_report *rep)
+geo_frep *gem_frep_from_json(json_t *j, geo_err *err)
+{
+    return proto_frep_from_json(j, NULL, "gem", err);
+}
+
+geo_poly *gem_triangulate(const geo_frep *f, uint32_t q, geo_tri_report *rep,
+                          geo_err *err)
 {
     geo_tri_opts o;
     geo_tri_opts_default(&o);
     o.quad_levels = q;
     o.binary_levels = q + 1;
     geo_poly *m = NULL;
-    geo_err err = {{0}};
-    int rc = geo_frep_triangulate(f, &o, NULL, &m, rep, &err);
-    if (rc != 0)
-        fail_msg("triangulate: %d %s", rc, err.msg);
+    if (geo_frep_triangulate(f, &o, NULL, &m, rep, err) != 0)
+        return geo_poly_free(m);
     return m;
 }
 
-/* Closed, manifold, outward, a sphere's topology, no self-intersections
- * (counted again here, independently of the report), every vertex on
- * the surface, normals exact where the ring lies on one facet. */
-void gem_assert_valid(const geo_poly *m, const geo_tri_report *rep,
-                      const char *what)
+const char *gem_problem(const geo_poly *m, const geo_tri_report *rep,
+                        const char *what)
 {
     geo_topo *t = geo_topo_build(m, NULL);
-    assert_non_null(t);
-    if (!geo_topo_is_closed_manifold(t))
-        fail_msg("%s: not a closed manifold", what);
+    if (!t)
+        return say("%s: no topology", what);
+    bool closed = geo_topo_is_closed_manifold(t);
     geo_topo_free(t);
-    assert_true(geo_poly_volume(m) > 0);
+    if (!closed)
+        return say("%s: not a closed manifold", what);
+    if (!(geo_poly_volume(m) > 0))
+        return say("%s: volume not positive", what);
     geo_selfint si;
-    assert_int_equal(geo_selfint_find(m, NULL, NULL, NULL, &si, NULL), 0);
-    if (si.count != 0)
-        fail_msg("%s: %llu self-intersections", what,
-                 (unsigned long long)si.count);
-    assert_int_equal(si.ndegenerate, 0);
+    if (geo_selfint_find(m, NULL, NULL, NULL, &si, NULL) != 0)
+        return say("%s: the self-intersection search failed", what);
+    uint64_t count = si.count, ndeg = si.ndegenerate;
     geo_selfint_clear(&si);
+    if (count != 0)
+        return say("%s: %llu self-intersections", what,
+                   (unsigned long long)count);
+    if (ndeg != 0)
+        return say("%s: %llu degenerate facets", what,
+                   (unsigned long long)ndeg);
     const geo_frep_metrics *q = &rep->quality;
-    assert_int_equal(rep->self_intersections, 0);
-    assert_int_equal(q->euler, 2);
-    assert_int_equal(q->flipped_edges, 0);
-    assert_int_equal(rep->fill.nopen, 0);
-    assert_true(q->dev_max < 1e-9 * rep->voxel[0]);
+    if (rep->self_intersections != 0)
+        return say("%s: the report counts self-intersections", what);
+    if (q->euler != 2)
+        return say("%s: Euler characteristic %d", what, (int)q->euler);
+    if (q->flipped_edges != 0)
+        return say("%s: %u flipped edges", what, (unsigned)q->flipped_edges);
+    if (rep->fill.nopen != 0)
+        return say("%s: %u holes left open", what, (unsigned)rep->fill.nopen);
+    if (!(q->dev_max < 1e-9 * rep->voxel[0]))
+        return say("%s: vertex deviation %g", what, q->dev_max);
     /* a fair share of the vertices lies inside facets (at Q_LEV 6 most
      * of a small gem's vertices are near some edge) */
     if (!(q->nsmooth > m->nverts / 8))
-        fail_msg("%s: %u of %u vertices away from edges", what, q->nsmooth,
-                 m->nverts);
+        return say("%s: %u of %u vertices away from edges", what,
+                   q->nsmooth, m->nverts);
     if (!(q->sdev_max < 1.0))
-        fail_msg("%s: normal deviation away from edges %g°", what,
-                 q->sdev_max);
+        return say("%s: normal deviation away from edges %g°", what,
+                   q->sdev_max);
+    return NULL;
 }
 
-/* The largest distance of the polytope's true edges from the mesh (d[0])
- * and, away from the corners, the median and 99th percentile. */
-void gem_edge_distances(json_t *j, const geo_poly *m, double voxel,
-                        double d[5])
+int gem_edge_distances(json_t *j, const geo_poly *m, double voxel,
+                       double d[5])
 {
-    double *planes, *segs;
+    double *planes = NULL, *segs = NULL;
     int np = gf_halfspaces(j, &planes);
-    assert_true(np > 0);
-    int ns = gf_polytope_edges((const double(*)[4])planes, np, &segs);
-    assert_true(ns > 0);
-    gf_edge_distances(m, segs, ns, 0.25 * voxel, 1.5 * voxel, d);
+    int ns = np > 0 ? gf_polytope_edges((const double(*)[4])planes, np, &segs)
+                    : 0;
+    if (ns > 0)
+        gf_edge_distances(m, segs, ns, 0.25 * voxel, 1.5 * voxel, d);
     free(planes), free(segs);
+    return ns > 0 ? 0 : -1;
 }
