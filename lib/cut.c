@@ -1,7 +1,14 @@
 /* cut.c — plane cut of an arbitrary polyhedron (seed 000 §3).
  *
  * Stages (the paper's, with the topology of lib/topo.h as preprocessing):
- *  1. the side of every vertex, decided once and exactly (geo_plane_sign);
+ *  1. the side of every vertex, decided once: on the plane when
+ *     |plane(v)| ≤ geo_poly_eps(p)·|n| (the tolerance of lib/poly.h),
+ *     else the exact sign (geo_plane_sign). Without the tolerance a
+ *     plane put through a vertex in floating point (d = −n·v rounded)
+ *     leaves the vertex a rounding error off it, and the crossings on
+ *     its edges round onto the vertex itself: zero-length edges and
+ *     facets touching themselves. Beyond the tolerance a crossing lies
+ *     at least that far from both ends of its edge;
  *  2. one new vertex per crossed edge, shared by the edge's two facets
  *     through the mate corner;
  *  3.–4. per cut facet, the events on its section line l = facet ∩ plane
@@ -34,6 +41,7 @@
 #include "cut.h"
 
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -54,6 +62,7 @@ typedef struct cutter {
     uint32_t *xv;        /* per corner: crossing vertex id or GEO_NONE */
     double *xerr;        /* per crossing vertex (id − p->nverts): bound on
                             its distance from the exact crossing */
+    double on_tol;       /* |plane(v)| up to which v lies on the plane */
     size_t capxerr;
     geo_poly *out;
     geo_err *err;
@@ -71,6 +80,25 @@ typedef struct cutter {
 
     uint32_t pieces, split_facets, removed_facets, new_vertices;
 } cutter;
+
+/* plane(x) in floating point, for the tolerance of "lies on the plane"
+ * (its sign, where it matters, comes from geo_plane_sign). */
+static double plane_value(const double plane[4], const double x[3])
+{
+    return plane[0] * x[0] + plane[1] * x[1] + plane[2] * x[2] + plane[3];
+}
+
+/* A bound on the distance of on-plane vertex v from the plane (within
+ * the tolerance, it need not lie on it exactly), with room for the
+ * rounding of its computation. */
+static double onplane_bound(const cutter *k, uint32_t v)
+{
+    const double *x = k->p->verts[v];
+    double mag = fabs(k->plane[0] * x[0]) + fabs(k->plane[1] * x[1]) +
+                 fabs(k->plane[2] * x[2]) + fabs(k->plane[3]);
+    double d = fabs(plane_value(k->plane, x)) + 8 * DBL_EPSILON * mag;
+    return d / geo_vlen(k->plane) * (1 + 8 * DBL_EPSILON);
+}
 
 static int push_kin(cutter *k, uint32_t corner)
 {
@@ -261,7 +289,8 @@ static int place_section(cutter *k, const uint32_t *lv, uint32_t *lstart,
             loc[v] = nl;
             ids[nl] = v;
             plane_xy(k, v, drop, osign, xy[nl]);
-            perr[nl] = v < k->p->nverts ? 0.0 : k->xerr[v - k->p->nverts];
+            perr[nl] = v < k->p->nverts ? onplane_bound(k, v)
+                                        : k->xerr[v - k->p->nverts];
             nl++;
         }
         lidx[i] = loc[v];
@@ -710,8 +739,11 @@ int geo_cut(const geo_poly *p, const double plane[4],
     if (!k.side)
         goto oom;
     uint32_t nneg = 0, npos = 0;
+    k.on_tol = geo_poly_eps(p) * geo_vlen(plane);
     for (uint32_t v = 0; v < p->nverts; v++) {
-        k.side[v] = (int8_t)geo_plane_sign(plane, p->verts[v]);
+        k.side[v] = (int8_t)(fabs(plane_value(plane, p->verts[v])) <= k.on_tol
+                                 ? 0
+                                 : geo_plane_sign(plane, p->verts[v]));
         if (k.t->vertex_kind[v] == GEO_VERTEX_ISOLATED)
             continue;
         nneg += k.side[v] < 0;

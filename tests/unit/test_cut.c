@@ -785,6 +785,72 @@ static geo_poly *load(const char *name)
     return p;
 }
 
+/* Planes through a vertex as users compute them, d = −n·v in floating
+ * point, so that the vertex lies off the plane by a rounding error (and
+ * the crossings on its edges would round onto it): the vertex counts as
+ * on the plane (lib/poly.h's tolerance), every result is valid, and
+ * only true pinches are refused (-ENOTSUP). */
+static void test_planes_through_vertices_in_floating_point(void **state)
+{
+    (void)state;
+    geo_poly *models[] = {tu_notch_cube(), l_prism(),
+                          cs_sphere(24, 32, 0.25), cs_frame(),
+                          load("brilliant.scan-k100.json")};
+    for (size_t i = 0; i < sizeof models / sizeof models[0]; i++) {
+        geo_poly *p = models[i];
+        assert_non_null(p);
+        uint64_t seed = 900 + i;
+        double vol = geo_poly_volume(p);
+        int refused = 0, total = 0;
+        for (int t = 0; t < 60; t++) {
+            double n[3], pl[4], neg[4];
+            do {
+                for (int k = 0; k < 3; k++)
+                    n[k] = 2 * geo_rand_unit(&seed) - 1;
+            } while (geo_vdot(n, n) > 1 || geo_vdot(n, n) < 1e-4);
+            uint32_t v = (uint32_t)(geo_rand_unit(&seed) * p->nverts);
+            const double *x = p->verts[v < p->nverts ? v : 0];
+            pl[0] = n[0], pl[1] = n[1], pl[2] = n[2];
+            pl[3] = -(n[0] * x[0] + n[1] * x[1] + n[2] * x[2]);
+            for (int k = 0; k < 4; k++)
+                neg[k] = -pl[k];
+            const double *planes[2] = {pl, neg};
+            double vols[2] = {0, 0};
+            int codes[2];
+            for (int h = 0; h < 2; h++) {
+                geo_poly *o = geo_poly_new();
+                geo_cut_report rep;
+                geo_err err = {{0}};
+                codes[h] = geo_cut(p, planes[h], NULL, NULL, o, &rep, &err);
+                total++;
+                if (codes[h] == -ENOTSUP) {
+                    refused++;
+                } else if (codes[h] != 0) {
+                    fail_msg("model %zu plane %d: %s", i, t, err.msg);
+                } else if (!rep.empty) {
+                    const char *why = cs_check_valid(o, tol_of(p));
+                    if (!why)
+                        why = inspect_problem(o);
+                    if (why)
+                        fail_msg("model %zu plane %d (%.17g,%.17g,%.17g,"
+                                 "%.17g) through vertex %u: %s", i, t, pl[0],
+                                 pl[1], pl[2], pl[3], v, why);
+                    vols[h] = geo_poly_volume(o);
+                }
+                geo_poly_free(o);
+            }
+            if (codes[0] == 0 && codes[1] == 0 &&
+                !(fabs(vols[0] + vols[1] - vol) <= 1e-9 * vol))
+                fail_msg("model %zu plane %d: %.17g + %.17g != %.17g", i, t,
+                         vols[0], vols[1], vol);
+        }
+        if (refused * 5 > total)
+            fail_msg("model %zu: %d of %d cuts refused", i, refused, total);
+        geo_poly_free(p);
+    }
+}
+
+
 static void test_sample_models_random_planes(void **state)
 {
     (void)state;
@@ -902,6 +968,7 @@ int main(void)
         cmocka_unit_test(test_random_planes_nonconvex_models),
         cmocka_unit_test(test_convex_cut_equals_halfspace_intersection),
         cmocka_unit_test(test_sample_models_random_planes),
+        cmocka_unit_test(test_planes_through_vertices_in_floating_point),
         cmocka_unit_test(test_sample_files_match_the_built_models),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
