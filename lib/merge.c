@@ -83,6 +83,8 @@ geo_mw *geo_mw_new(geo_edit *e, const geo_merge_opts *opts, geo_err *err)
             w->origin[k] = 0.5 * (lo[k] + hi[k]);
     }
     w->eps = 1e-10 * (1 + size);
+    w->max_cut = opts->max_deviation > 0 ? opts->max_deviation
+                                         : opts->rel_deviation * size;
     w->gen = 1;
     if (geo_mw_stamp(w) < 0) {
         geo_err_set(err, -ENOMEM, "out of memory");

@@ -159,6 +159,22 @@ static bool has_edge(const geo_edit *e, uint32_t a, uint32_t b, uint32_t skip)
     return false;
 }
 
+/* -EINVAL when vertex v (above π) lies deeper above it than the
+ * deviation bound: merging nearly coplanar facets cuts off slivers, and
+ * a plane that would cut off more (the group on a saddle, its
+ * surroundings rising above its plane) is not a merge but a cut through
+ * the model. */
+static int check_depth(const geo_mw *w, uint32_t v, const double *plane,
+                       geo_err *err)
+{
+    double h = geo_plane_eval(plane, w->e->verts[v]);
+    if (h > w->max_cut)
+        return geo_err_set(err, -EINVAL, "vertices[%u]: the merged plane "
+                           "would cut the model %.3g mm deep here, beyond "
+                           "the deviation bound %.3g mm", v, h, w->max_cut);
+    return 0;
+}
+
 /* The region above π that touches the main facet: facets listed in
  * w->buf_b[0 .. *ret_n), marked in fmark; main included first. */
 static int find_region(geo_mw *w, uint32_t main, const double *plane,
@@ -178,6 +194,9 @@ static int find_region(geo_mw *w, uint32_t main, const double *plane,
             return geo_err_set(err, -EINVAL, "vertices[%u]: below the plane "
                                "after lifting", v);
         if (s > 0 && w->vmark[v] != w->gen) {
+            int r = check_depth(w, v, plane, err);
+            if (r < 0)
+                return r;
             w->vmark[v] = w->gen;
             if (geo_mw_grow(&w->buf_a, &w->cap_a, (size_t)nq + 1) < 0)
                 return -ENOMEM;
@@ -198,6 +217,9 @@ static int find_region(geo_mw *w, uint32_t main, const double *plane,
                 uint32_t u = geo_edit_fv(e, g)[j];
                 if (w->vmark[u] == w->gen || geo_mw_side(w, u, plane) <= 0)
                     continue;
+                int r = check_depth(w, u, plane, err);
+                if (r < 0)
+                    return r;
                 w->vmark[u] = w->gen;
                 if (geo_mw_grow(&w->buf_a, &w->cap_a, (size_t)nq + 1) < 0)
                     return -ENOMEM;

@@ -21,6 +21,9 @@
 typedef struct geo_mw {
     geo_edit *e;
     double eps;            /* planarity tolerance of the model */
+    double max_cut;        /* the deepest a vertex may lie above the
+                              merged plane and be cut off, mm: the
+                              deviation bound (geo_merge_max_deviation) */
     double origin[3];      /* reference point of volume sums */
     enum geo_merge_plane plane_mode;
     enum geo_lift_order lift_order;
