@@ -140,15 +140,18 @@ int geo_merge_report_finish(geo_merge_report *rep, const geo_edit *e,
 
 /* The criterion of automatic groups (merge_groups.c, README "Automatic
  * correction"): every member's normal within acos(cosmax) of the group's
- * least-squares plane and every vertex within max_dev of it; when noise
- * > 0, also each facet that joins within rms_factor·noise +
+ * least-squares plane and every vertex within max(max_dev,
+ * roof_factor·sin(inclination)·width·step) of it, width being the
+ * group's extent along its plane's middle axis of inertia, the
+ * inclination the plane's angle with the horizontal and step the
+ * scanner's view step (radians, 0 when unknown); when noise > 0, also
+ * each facet that joins within rms_factor·noise +
  * step_factor·extent·step (area RMS distance, mm) of the plane the group
- * had before it, extent being the diagonal of the grown group's box and
- * step the scanner's view step (radians, 0 when unknown). */
-/* The factors of the noise test (README "Automatic correction" says how
- * they were chosen). */
+ * had before it, extent being the diagonal of the grown group's box. */
+/* The factors (README "Automatic correction" says how they were chosen). */
 #define GEO_GROUP_RMS_FACTOR 3.0
 #define GEO_GROUP_STEP_FACTOR 0.1
+#define GEO_GROUP_ROOF_FACTOR 0.25
 
 typedef struct geo_group_crit {
     double cosmax;
