@@ -60,6 +60,11 @@ typedef struct geo_mw {
     uint32_t nmoved, capmoved;
 
     uint32_t statement_violations;
+
+    /* when set, the merged facet gets this plane instead of a fitted one
+     * (the bevel pass: a strip joins its neighbour in the neighbour's
+     * plane) */
+    const double *fixed_plane;
 } geo_mw;
 
 /* A new workspace over e (borrowed; the caller frees it after the
@@ -102,8 +107,8 @@ int geo_mw_contour(geo_mw *w, const uint32_t *group, uint32_t n,
                    uint32_t *ret_main, uint32_t *ret_nverts,
                    geo_merge_group *rep, geo_err *err);
 
-/* §2.5: the least-squares plane of the main facet's vertices (weighted
- * by w->weight), normal along the facet's Newell vector. */
+/* §2.5: the plane of the merged facet as w->plane_mode says (normal
+ * along the facet's Newell vector), or w->fixed_plane when set. */
 int geo_mw_plane(geo_mw *w, uint32_t main, double ret_plane[4],
                  geo_err *err);
 
@@ -189,6 +194,15 @@ void geo_mw_facet_moments(const geo_edit *e, uint32_t f, const double o[3],
  * area least-squares plane; 0 when there is no such group. 0 or
  * -ENOMEM. */
 int geo_mw_surface_noise(geo_mw *w, const geo_group_crit *c, double *ret);
+
+/* One pass removing bevel strips (merge_bevel.c): each facet that is a
+ * strip along the edge of two larger neighbours, within a few times
+ * c->max_dev of both their planes, is merged into one of them with that neighbour's plane
+ * kept. Groups go into rep; *ret_merged counts them. 0, -ENOMEM or
+ * -ECANCELED. */
+int geo_mw_bevel_pass(geo_mw *w, const geo_group_crit *c, const geo_ctx *ctx,
+                      geo_merge_report *rep, uint32_t *ret_merged,
+                      geo_err *err);
 
 /* Side of v against plane with the tolerance: 0 when |plane(v)| ≤ eps,
  * else the sign; decided once and cached until geo_mw_side_reset (which

@@ -9,7 +9,7 @@
  *                 [--ks 100,400,800] [--angle DEG] [--rel-dev R]
  *                 [--sim-noise MM] [--group-noise MM|0|-1] [--views K]
  *                 [--plane contour|weighted|area] [--order event|paper]
- *                 [--no-collapse] [--models DIR]
+ *                 [--no-collapse] [--no-bevels] [--models DIR]
  *
  * One Markdown table row per scan: cut, seed, K, facets (truth / scan /
  * corrected), Hausdorff distance to the stone of the scan and of the
@@ -96,6 +96,10 @@ int main(int argc, char **argv)
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (strcmp(a, "--no-collapse") == 0) {
             o.collapse_clusters = false;
+            continue;
+        }
+        if (strcmp(a, "--no-bevels") == 0) {
+            o.merge.bevels = false;
             continue;
         }
         if (!v) {
