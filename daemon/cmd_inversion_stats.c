@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "cmd_replanar_args.h"
 #include "inversion.h"
 #include "model_io.h"
 #include "parallel.h"
@@ -82,23 +83,25 @@ int cmd_inversion_stats(int argc, char **argv)
         {"seed", required_argument, NULL, 'S'},
         {"magnitudes", required_argument, NULL, 'm'},
         {"threads", required_argument, NULL, 'j'},
-        {"schedule", required_argument, NULL, 's'},
-        {"max-steps", required_argument, NULL, 'x'},
         {"runs", no_argument, NULL, 'r'},
         {"first-selfint", no_argument, NULL, 'F'},
-        {"fit", required_argument, NULL, 'f'},
-        {"scaled-k", required_argument, NULL, 'K'},
+        CLI_REPLANAR_LONGOPTS,
         {NULL, 0, NULL, 0},
     };
     geo_inversion_opts o;
     geo_inversion_opts_default(&o);
-    uint64_t seed = 1, samples = o.samples, threads = 0, max_steps = 0;
-    enum geo_replanar_fit fit = GEO_REPLANAR_FIT_THROUGH_FIXED;
-    enum geo_replanar_scaled_k scaled_k = GEO_REPLANAR_SCALED_K_S2SUM;
+    uint64_t seed = 1, samples = o.samples, threads = 0;
+    cli_replanar_args rp;
+    cli_replanar_args_init(&rp, o.schedule);
     optind = 1;
     opterr = 0;
     int c;
     while ((c = getopt_long(argc, argv, "", longopts, NULL)) != -1) {
+        int taken = cli_replanar_option(CMD, c, optarg, &rp);
+        if (taken == 1)
+            continue;
+        if (taken)
+            return taken;
         switch (c) {
         case 'n':
             if (!parse_u64(optarg, &samples) || samples == 0 ||
@@ -123,31 +126,11 @@ int cmd_inversion_stats(int argc, char **argv)
                 return cli_usage_error(CMD, "--threads: expected 1 to 1024: "
                                             "'%s'", optarg);
             break;
-        case 's':
-            if (geo_replanar_schedule_parse(optarg, &o.schedule) < 0)
-                return cli_usage_error(CMD, "--schedule: unknown '%s'",
-                                       optarg);
-            break;
-        case 'x':
-            if (!parse_u64(optarg, &max_steps) || max_steps == 0 ||
-                max_steps > UINT32_MAX)
-                return cli_usage_error(CMD, "--max-steps: expected a "
-                                            "positive integer: '%s'", optarg);
-            break;
         case 'r':
             o.keep_runs = true;
             break;
         case 'F':
             o.first_selfint = true;
-            break;
-        case 'f':
-            if (geo_replanar_fit_parse(optarg, &fit) < 0)
-                return cli_usage_error(CMD, "--fit: unknown '%s'", optarg);
-            break;
-        case 'K':
-            if (geo_replanar_scaled_k_parse(optarg, &scaled_k) < 0)
-                return cli_usage_error(CMD, "--scaled-k: unknown '%s'",
-                                       optarg);
             break;
         default:
             return cli_usage_error(CMD, "unknown or incomplete option '%s'",
@@ -157,11 +140,8 @@ int cmd_inversion_stats(int argc, char **argv)
     if (optind != argc - 1)
         return cli_usage_error(CMD, "expected one MODEL");
     o.samples = (uint32_t)samples;
-    geo_replanar_opts_default(&o.replanar, o.schedule);
-    if (max_steps)
-        o.replanar.max_steps = (uint32_t)max_steps;
-    o.replanar.fit = fit;
-    o.replanar.scaled_k = scaled_k;
+    o.schedule = rp.schedule;
+    cli_replanar_opts(&rp, &o.replanar);
 
     const char *path = argv[optind];
     geo_err err = {{0}};

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "cmd_replanar_args.h"
 #include "model_io.h"
 #include "replanar.h"
 #include "replanar_json.h"
@@ -106,29 +107,29 @@ int cmd_move(int argc, char **argv)
         {"vertex", required_argument, NULL, 'v'},
         {"to", required_argument, NULL, 't'},
         {"by", required_argument, NULL, 'b'},
-        {"schedule", required_argument, NULL, 's'},
-        {"max-steps", required_argument, NULL, 'n'},
         {"count-selfint", no_argument, NULL, 'c'},
         {"log", required_argument, NULL, 'l'},
         {"force", no_argument, NULL, 'f'},
         {"output", required_argument, NULL, 'o'},
-        {"fit", required_argument, NULL, 'F'},
-        {"scaled-k", required_argument, NULL, 'K'},
+        CLI_REPLANAR_LONGOPTS,
         {NULL, 0, NULL, 0},
     };
     uint32_t vertex = 0;
     bool have_vertex = false, have_to = false, have_by = false, force = false;
     double to[3] = {0, 0, 0}, by[3] = {0, 0, 0};
-    enum geo_replanar_schedule schedule = GEO_REPLANAR_LOCAL_EXP;
     const char *log_path = NULL, *out = NULL;
-    uint32_t max_steps = 0;
     bool count_si = false;
-    enum geo_replanar_fit fit = GEO_REPLANAR_FIT_THROUGH_FIXED;
-    enum geo_replanar_scaled_k scaled_k = GEO_REPLANAR_SCALED_K_S2SUM;
+    cli_replanar_args rp;
+    cli_replanar_args_init(&rp, GEO_REPLANAR_LOCAL_EXP);
     optind = 1;
     opterr = 0;
     int c;
     while ((c = getopt_long(argc, argv, "o:", longopts, NULL)) != -1) {
+        int taken = cli_replanar_option(CMD, c, optarg, &rp);
+        if (taken == 1)
+            continue;
+        if (taken)
+            return taken;
         switch (c) {
         case 'v':
             if (!parse_u32(optarg, &vertex))
@@ -148,16 +149,6 @@ int cmd_move(int argc, char **argv)
                                        optarg);
             have_by = true;
             break;
-        case 's':
-            if (geo_replanar_schedule_parse(optarg, &schedule) < 0)
-                return cli_usage_error(CMD, "--schedule: unknown '%s'",
-                                       optarg);
-            break;
-        case 'n':
-            if (!parse_u32(optarg, &max_steps) || max_steps == 0)
-                return cli_usage_error(CMD, "--max-steps: expected a "
-                                            "positive integer: '%s'", optarg);
-            break;
         case 'c':
             count_si = true;
             break;
@@ -169,15 +160,6 @@ int cmd_move(int argc, char **argv)
             break;
         case 'o':
             out = optarg;
-            break;
-        case 'F':
-            if (geo_replanar_fit_parse(optarg, &fit) < 0)
-                return cli_usage_error(CMD, "--fit: unknown '%s'", optarg);
-            break;
-        case 'K':
-            if (geo_replanar_scaled_k_parse(optarg, &scaled_k) < 0)
-                return cli_usage_error(CMD, "--scaled-k: unknown '%s'",
-                                       optarg);
             break;
         default:
             return cli_usage_error(CMD, "unknown or incomplete option '%s'",
@@ -193,12 +175,8 @@ int cmd_move(int argc, char **argv)
     if (!out)
         return cli_usage_error(CMD, "-o OUT is required");
     geo_replanar_opts o;
-    geo_replanar_opts_default(&o, schedule);
-    if (max_steps)
-        o.max_steps = max_steps;
+    cli_replanar_opts(&rp, &o);
     o.count_selfint = count_si;
-    o.fit = fit;
-    o.scaled_k = scaled_k;
 
     const char *path = argv[optind];
     geo_err err = {{0}};
@@ -206,9 +184,10 @@ int cmd_move(int argc, char **argv)
     if (!p)
         return cli_input_error(CMD, "%s", err.msg);
     if (vertex >= p->nverts) {
+        uint32_t nv = p->nverts;
         geo_poly_free(p);
         return cli_input_error(CMD, "%s: --vertex %u out of range (%u "
-                                    "vertices)", path, vertex, p->nverts);
+                                    "vertices)", path, vertex, nv);
     }
     if (have_by)
         for (int k = 0; k < 3; k++)
@@ -216,7 +195,7 @@ int cmd_move(int argc, char **argv)
 
     geo_replanar_log log = {0};
     geo_replanar_result res;
-    int rc = geo_move_vertex(p, vertex, to, schedule, &o, NULL,
+    int rc = geo_move_vertex(p, vertex, to, rp.schedule, &o, NULL,
                              log_path ? &log : NULL, &res, &err);
     int status = CLI_OK;
     if (rc < 0) {
@@ -227,7 +206,7 @@ int cmd_move(int argc, char **argv)
         status = cli_input_error(CMD, "%s: cannot write the log", log_path);
         goto done;
     }
-    json_t *j = proto_replanar_result_to_json(&res, schedule);
+    json_t *j = proto_replanar_result_to_json(&res, rp.schedule);
     if (!j) {
         status = cli_input_error(CMD, "out of memory");
         goto done;

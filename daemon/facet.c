@@ -1,4 +1,5 @@
 /* facet.c — entry point of the `facet` tool: dispatches to a command. */
+#include <errno.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
@@ -93,8 +94,17 @@ int main(int argc, char **argv)
         return CLI_OK;
     }
     for (int i = 0; i < NCOMMANDS; i++)
-        if (strcmp(argv[1], commands[i].name) == 0)
-            return commands[i].run(argc - 1, argv + 1);
+        if (strcmp(argv[1], commands[i].name) == 0) {
+            int rc = commands[i].run(argc - 1, argv + 1);
+            /* a result lost on a full disk or a closed pipe is a failure */
+            if (fflush(stdout) != 0 || ferror(stdout)) {
+                fprintf(stderr, "facet %s: standard output: %s\n",
+                        argv[1], strerror(errno));
+                if (rc == CLI_OK)
+                    rc = CLI_INPUT;
+            }
+            return rc;
+        }
     fprintf(stderr, "facet: unknown command '%s'\n", argv[1]);
     usage(stderr);
     return CLI_USAGE;

@@ -75,6 +75,7 @@ typedef struct http_req {
     unsigned status;         /* of the queued response */
     uint64_t bytes_in, bytes_out;
     bool has_body;           /* Content-Length > 0 or chunked */
+    uint64_t content_length; /* as announced; 0 when unknown */
     bool admitted;           /* routed, authorised, preconditions met */
     /* body */
     char *body;

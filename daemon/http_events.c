@@ -61,9 +61,7 @@ static int set_pending(sse *s, char *text)
 
 static int event_for(sse *s, const job_rec *j)
 {
-    json_t *o = job_to_json(j);
-    char *data = o ? json_dumps(o, JSON_COMPACT) : NULL;
-    json_decref(o);
+    char *data = job_to_text(j, NULL);
     if (!data)
         return -ENOMEM;
     const char *kind = (int)j->state != s->last_state ? "state" : "progress";

@@ -36,6 +36,21 @@ static enum MHD_Result store_failure(http_req *r, int code, const geo_err *e)
 static enum MHD_Result reply_job(http_req *r, unsigned status, job_rec *j,
                                  const char *const *headers, json_t *extra)
 {
+    if (!extra) {
+        size_t n;
+        char *text = job_to_text(j, &n);
+        char *nl = text ? realloc(text, n + 2) : NULL;
+        if (!nl) {
+            free(text);
+            return http_problem(r, 500, "out-of-memory", "Out of memory",
+                                NULL, NULL, "the response could not be built");
+        }
+        /* the trailing newline of http_reply_json */
+        nl[n++] = '\n';
+        nl[n] = '\0';
+        return http_reply(r, status, "application/json", nl, n, true,
+                          headers);
+    }
     json_t *o = job_to_json(j);
     if (o && extra)
         json_object_update(o, extra);

@@ -225,7 +225,11 @@ static void append_body(http_req *r, const char *data, size_t n)
         return;
     }
     if (r->len + n + 1 > r->cap) {
-        size_t cap = r->cap ? r->cap : 16384;
+        /* the announced length at once (checked against MaxBody when the
+         * request was admitted): no copying as the buffer grows */
+        size_t cap = r->cap                        ? r->cap
+                     : r->content_length + 1 > 16384 ? r->content_length + 1
+                                                      : 16384;
         while (cap < r->len + n + 1)
             cap *= 2;
         if (cap > max + 1)
@@ -274,6 +278,11 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
         const char *cl = http_header(r, MHD_HTTP_HEADER_CONTENT_LENGTH);
         const char *te = http_header(r, MHD_HTTP_HEADER_TRANSFER_ENCODING);
         r->has_body = te || (cl && strcmp(cl, "0") != 0);
+        if (cl && !te) {
+            uint64_t v = strtoull(cl, NULL, 10);
+            if (v <= atomic_load(&r->env->max_body))
+                r->content_length = v;
+        }
         if (!r->has_body)
             return MHD_YES;
         bool answered;

@@ -91,6 +91,12 @@ void job_time_format(int64_t ms, char *buf, size_t size);
  * NULL on out-of-memory. The caller owns the result. */
 json_t *job_to_json(const job_rec *r);
 
+/* The same view as compact JSON text, byte for byte what
+ * json_dumps(job_to_json(r), JSON_COMPACT) gives, written directly
+ * (daemon/job_text.c); the length in *ret_len (may be NULL). A malloc'd
+ * NUL-terminated string for the caller, or NULL on out-of-memory. */
+char *job_to_text(const job_rec *r, size_t *ret_len);
+
 /* FNV-1a 64-bit hash of n bytes (idempotency checks; stored, so it never
  * changes). */
 uint64_t job_hash64(const void *data, size_t n);

@@ -14,23 +14,22 @@ void geo_bbox_empty(geo_bbox *b)
     }
 }
 
+/* Written as selections, not branches, so they compile to min/max
+ * instructions: the same values (a NaN never replaces a bound; of equal
+ * bounds the one already there stays). */
 void geo_bbox_add(geo_bbox *b, const double p[3])
 {
     for (int k = 0; k < 3; k++) {
-        if (p[k] < b->lo[k])
-            b->lo[k] = p[k];
-        if (p[k] > b->hi[k])
-            b->hi[k] = p[k];
+        b->lo[k] = p[k] < b->lo[k] ? p[k] : b->lo[k];
+        b->hi[k] = p[k] > b->hi[k] ? p[k] : b->hi[k];
     }
 }
 
 void geo_bbox_union(geo_bbox *b, const geo_bbox *o)
 {
     for (int k = 0; k < 3; k++) {
-        if (o->lo[k] < b->lo[k])
-            b->lo[k] = o->lo[k];
-        if (o->hi[k] > b->hi[k])
-            b->hi[k] = o->hi[k];
+        b->lo[k] = o->lo[k] < b->lo[k] ? o->lo[k] : b->lo[k];
+        b->hi[k] = o->hi[k] > b->hi[k] ? o->hi[k] : b->hi[k];
     }
 }
 
@@ -113,22 +112,26 @@ static void select_kth(const builder *b, uint32_t *items, uint32_t lo,
     }
 }
 
+/* A node's box is the union of its children's (a leaf's: of its items'),
+ * formed after the children are built: the same box as the union of all
+ * its items, taken in the same order, without a pass over them per
+ * level. Only the centroids' bounds (the split axis) need that pass. */
 static void build_node(builder *b, uint32_t node, uint32_t lo, uint32_t hi)
 {
     geo_bvh *h = b->h;
     geo_bvh_node *n = &h->nodes[node];
     geo_bbox_empty(&n->box);
-    geo_bbox cb;
-    geo_bbox_empty(&cb);
-    for (uint32_t i = lo; i < hi; i++) {
-        geo_bbox_union(&n->box, &b->in[h->items[i]]);
-        geo_bbox_add(&cb, b->cent[h->items[i]]);
-    }
     if (hi - lo <= GEO_BVH_LEAF) {
+        for (uint32_t i = lo; i < hi; i++)
+            geo_bbox_union(&n->box, &b->in[h->items[i]]);
         n->child = lo;
         n->count = hi - lo;
         return;
     }
+    geo_bbox cb;
+    geo_bbox_empty(&cb);
+    for (uint32_t i = lo; i < hi; i++)
+        geo_bbox_add(&cb, b->cent[h->items[i]]);
     int axis = 0;
     for (int k = 1; k < 3; k++)
         if (cb.hi[k] - cb.lo[k] > cb.hi[axis] - cb.lo[axis])
@@ -141,6 +144,9 @@ static void build_node(builder *b, uint32_t node, uint32_t lo, uint32_t hi)
     n->count = 0;
     build_node(b, child, lo, mid);
     build_node(b, child + 1, mid, hi);
+    n = &h->nodes[node];
+    geo_bbox_union(&n->box, &h->nodes[child].box);
+    geo_bbox_union(&n->box, &h->nodes[child + 1].box);
 }
 
 geo_bvh *geo_bvh_build(const geo_bbox *boxes, uint32_t n, geo_err *err)
@@ -190,7 +196,144 @@ geo_bvh *geo_bvh_build_facets(const geo_poly *p, geo_err *err)
     return h;
 }
 
-/* An explicit stack: depth is bounded by the tree height (≤ 2·log2 n). */
+/* The 10 low bits of x spread to every third bit (bits 0, 3, ..., 27). */
+static uint32_t spread10(uint32_t x)
+{
+    x &= 1023;
+    x = (x | x << 16) & 0x030000FFu;
+    x = (x | x << 8) & 0x0300F00Fu;
+    x = (x | x << 4) & 0x030C30C3u;
+    x = (x | x << 2) & 0x09249249u;
+    return x;
+}
+
+typedef struct morton_builder {
+    geo_bvh *h;
+    const geo_bbox *in;   /* input boxes by item index */
+    const uint32_t *code; /* Morton code by item index */
+} morton_builder;
+
+static void build_morton_node(const morton_builder *b, uint32_t node,
+                              uint32_t lo, uint32_t hi)
+{
+    geo_bvh *h = b->h;
+    geo_bvh_node *n = &h->nodes[node];
+    geo_bbox_empty(&n->box);
+    if (hi - lo <= GEO_BVH_LEAF) {
+        for (uint32_t i = lo; i < hi; i++)
+            geo_bbox_union(&n->box, &b->in[h->items[i]]);
+        n->child = lo;
+        n->count = hi - lo;
+        return;
+    }
+    uint32_t mid = lo + (hi - lo) / 2;
+    uint32_t c0 = b->code[h->items[lo]], c1 = b->code[h->items[hi - 1]];
+    if (c0 != c1) {
+        /* the first item whose code has the highest differing bit set:
+         * codes are sorted, so a binary search; lo < mid < hi */
+        uint32_t bit = 31 - (uint32_t)__builtin_clz(c0 ^ c1);
+        uint32_t l = lo + 1, r = hi - 1;
+        while (l < r) {
+            uint32_t m = l + (r - l) / 2;
+            if (b->code[h->items[m]] >> bit & 1)
+                r = m;
+            else
+                l = m + 1;
+        }
+        mid = l;
+    }
+    uint32_t child = h->nnodes;
+    h->nnodes += 2;
+    n->child = child;
+    n->count = 0;
+    build_morton_node(b, child, lo, mid);
+    build_morton_node(b, child + 1, mid, hi);
+    n = &h->nodes[node];
+    geo_bbox_union(&n->box, &h->nodes[child].box);
+    geo_bbox_union(&n->box, &h->nodes[child + 1].box);
+}
+
+geo_bvh *geo_bvh_build_morton(const geo_bbox *boxes, uint32_t n, geo_err *err)
+{
+    geo_bvh *h = calloc(1, sizeof *h);
+    uint32_t *code = NULL, *tmp = NULL;
+    if (!h)
+        goto oom;
+    h->nitems = n;
+    h->nodes = malloc((2 * (size_t)n + 1) * sizeof *h->nodes);
+    h->items = malloc(((size_t)n + 1) * sizeof *h->items);
+    h->boxes = malloc(((size_t)n + 1) * sizeof *h->boxes);
+    code = malloc(((size_t)n + 1) * sizeof *code);
+    tmp = malloc(((size_t)n + 1) * sizeof *tmp);
+    if (!h->nodes || !h->items || !h->boxes || !code || !tmp)
+        goto oom;
+    geo_bbox cb;
+    geo_bbox_empty(&cb);
+    for (uint32_t i = 0; i < n; i++) {
+        double c[3];
+        for (int k = 0; k < 3; k++)
+            c[k] = 0.5 * (boxes[i].lo[k] + boxes[i].hi[k]);
+        geo_bbox_add(&cb, c);
+    }
+    double scale[3];
+    for (int k = 0; k < 3; k++)
+        scale[k] = cb.hi[k] > cb.lo[k] ? 1024.0 / (cb.hi[k] - cb.lo[k]) : 0;
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t q[3];
+        for (int k = 0; k < 3; k++) {
+            double x = (0.5 * (boxes[i].lo[k] + boxes[i].hi[k]) - cb.lo[k]) *
+                       scale[k];
+            q[k] = x >= 0 ? (x < 1023 ? (uint32_t)x : 1023) : 0;
+        }
+        code[i] = spread10(q[0]) << 2 | spread10(q[1]) << 1 | spread10(q[2]);
+        h->items[i] = i;
+    }
+    /* least significant digit first, 10 bits a pass, stable */
+    for (int shift = 0; shift < 30; shift += 10) {
+        uint32_t count[1025] = {0};
+        for (uint32_t i = 0; i < n; i++)
+            count[(code[i] >> shift & 1023) + 1]++;
+        for (int d = 0; d < 1024; d++)
+            count[d + 1] += count[d];
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t it = h->items[i];
+            tmp[count[code[it] >> shift & 1023]++] = it;
+        }
+        memcpy(h->items, tmp, (size_t)n * sizeof *tmp);
+    }
+    if (n > 0) {
+        morton_builder b = {h, boxes, code};
+        h->nnodes = 1;
+        build_morton_node(&b, 0, 0, n);
+    }
+    for (uint32_t i = 0; i < n; i++)
+        h->boxes[i] = boxes[h->items[i]];
+    free(code);
+    free(tmp);
+    return h;
+oom:
+    free(code);
+    free(tmp);
+    geo_err_set(err, -ENOMEM, "out of memory building the BVH");
+    return geo_bvh_free(h);
+}
+
+geo_bvh *geo_bvh_build_facets_morton(const geo_poly *p, geo_err *err)
+{
+    geo_bbox *boxes = malloc(((size_t)p->nfacets + 1) * sizeof *boxes);
+    if (!boxes) {
+        geo_err_set(err, -ENOMEM, "out of memory building the BVH");
+        return NULL;
+    }
+    for (uint32_t f = 0; f < p->nfacets; f++)
+        geo_poly_facet_bbox(p, f, &boxes[f]);
+    geo_bvh *h = geo_bvh_build_morton(boxes, p->nfacets, err);
+    free(boxes);
+    return h;
+}
+
+/* An explicit stack: depth is bounded by the tree height (median splits:
+ * ≤ 2·log2 n; Morton splits: ≤ 30 + log2 n) plus one. */
 enum { STACK = 128 };
 
 bool geo_bvh_query_box(const geo_bvh *h, const geo_bbox *q,

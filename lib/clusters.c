@@ -381,8 +381,8 @@ int geo_collapse_clusters(geo_poly *p, const geo_collapse_opts *opts,
     else
         geo_collapse_opts_default(&o);
     geo_collapse_report local, *rep = report ? report : &local;
-    memset(&local, 0, sizeof local);
-    geo_collapse_report_clear(rep);
+    /* an output only: callers hand in uninitialised reports */
+    memset(rep, 0, sizeof *rep);
     int r = geo_poly_validate_indices(p, err);
     if (r < 0)
         return r;

@@ -78,7 +78,8 @@ typedef struct geo_collapse_report {
 void geo_collapse_report_clear(geo_collapse_report *r);
 
 /* Collapses the clusters of p (see above). opts NULL means defaults;
- * report may be NULL. Returns 0 (p changed in place, or left as it was
+ * report may be NULL; *report is overwritten, never read (release an
+ * earlier one with geo_collapse_report_clear first). Returns 0 (p changed in place, or left as it was
  * when nothing could be collapsed), -EINVAL when p is not a closed
  * manifold with valid indices, -ENOMEM, -ECANCELED (p unchanged). */
 int geo_collapse_clusters(geo_poly *p, const geo_collapse_opts *opts,

@@ -101,6 +101,11 @@ int geo_correct_auto(geo_poly *p, const geo_correct_opts *opts,
     rep->volume_before = geo_poly_volume(p);
     if ((r = geo_inspect(p, NULL, ctx, &rep->before, err)) < 0)
         goto done;
+    if (p->nfacets == 0) {
+        r = geo_err_set(err, -EINVAL, "the model has no facets: nothing to "
+                        "correct");
+        goto done;
+    }
     if (!rep->before.closed || rep->before.nonmanifold_vertices) {
         r = geo_err_set(err, -EINVAL, "the model is not a closed manifold "
                         "(%u boundary, %u non-manifold edges, %u non-manifold "
@@ -198,7 +203,7 @@ int geo_correct_auto(geo_poly *p, const geo_correct_opts *opts,
     }
     if ((r = geo_inspect(q, NULL, ctx, &rep->after, err)) < 0)
         goto done;
-    if ((r = geo_hausdorff(p, q, &rep->hausdorff, err)) < 0)
+    if ((r = geo_hausdorff_ctx(p, q, ctx, &rep->hausdorff, err)) < 0)
         goto done;
     uint32_t nm = 0;
     for (uint32_t v = 0; v < nin; v++)

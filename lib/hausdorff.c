@@ -9,7 +9,59 @@
 #include <string.h>
 
 #include "bvh.h"
+#include "selfint.h"
 #include "vec.h"
+
+/* Facets of the target above this size are looked at as triangles. */
+enum { FAN_MIN = 32 };
+
+/* b with every convex facet of more than FAN_MIN vertices fanned into
+ * triangles that keep its plane: they cover the polygon exactly, so the
+ * distance to the surface is unchanged, but a query near such a facet
+ * (a prism's 60,000-gon cap) costs O(log n) instead of O(n). *ret is NULL
+ * when no facet needs it (then b is used as is). 0 or -ENOMEM. */
+static int fan_large_facets(const geo_poly *b, geo_poly **ret)
+{
+    *ret = NULL;
+    uint32_t nbig = 0;
+    for (uint32_t f = 0; f < b->nfacets; f++)
+        nbig += geo_poly_facet_size(b, f) > FAN_MIN;
+    if (nbig == 0)
+        return 0;
+    geo_poly *q = geo_poly_new();
+    if (!q || geo_poly_reserve(q, b->nverts, b->nfacets, 0) < 0) {
+        geo_poly_free(q);
+        return -ENOMEM;
+    }
+    memcpy(q->verts, b->verts, (size_t)b->nverts * sizeof *b->verts);
+    q->nverts = b->nverts;
+    for (uint32_t f = 0; f < b->nfacets; f++) {
+        uint32_t n = geo_poly_facet_size(b, f);
+        const uint32_t *vs = geo_poly_facet(b, f);
+        geo_facet_shape sh;
+        if (n > FAN_MIN)
+            geo_facet_shape_of(b, f, &sh);
+        if (n <= FAN_MIN || !sh.convex) {
+            int64_t g = geo_poly_add_facet(q, vs, n);
+            if (g < 0)
+                goto oom;
+            memcpy(q->planes[g], b->planes[f], sizeof q->planes[g]);
+            continue;
+        }
+        for (uint32_t i = 1; i + 1 < n; i++) {
+            uint32_t t[3] = {vs[0], vs[i], vs[i + 1]};
+            int64_t g = geo_poly_add_facet(q, t, 3);
+            if (g < 0)
+                goto oom;
+            memcpy(q->planes[g], b->planes[f], sizeof q->planes[g]);
+        }
+    }
+    *ret = q;
+    return 0;
+oom:
+    geo_poly_free(q);
+    return -ENOMEM;
+}
 
 static double seg_dist2(const double p[3], const double a[3], const double b[3])
 {
@@ -117,23 +169,37 @@ static double dist2(const geo_poly *b, const geo_bvh *h, const double p[3],
     return best;
 }
 
-int geo_hausdorff_directed(const geo_poly *a, const geo_poly *b, double *ret,
-                           geo_err *err)
+static int directed(const geo_poly *a, const geo_poly *b, const geo_ctx *ctx,
+                    double *ret, geo_err *err)
 {
     if (b->nfacets == 0)
         return geo_err_set(err, -EINVAL, "hausdorff: the second surface has "
                            "no facets");
+    geo_poly *fanned;
+    if (fan_large_facets(b, &fanned) < 0)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    if (fanned)
+        b = fanned;
     geo_bvh *h = geo_bvh_build_facets(b, err);
-    if (!h)
+    if (!h) {
+        geo_poly_free(fanned);
         return -ENOMEM;
+    }
     double worst = 0;
     uint32_t hint = UINT32_MAX;
     uint8_t *seen = calloc((size_t)a->nverts + 1, 1);
     if (!seen) {
         geo_bvh_free(h);
+        geo_poly_free(fanned);
         return geo_err_set(err, -ENOMEM, "out of memory");
     }
+    int rc = 0;
     for (uint32_t f = 0; f < a->nfacets; f++) {
+        /* a sample near a large non-convex facet costs O(its size) */
+        if ((f & 255) == 255 && geo_ctx_canceled(ctx)) {
+            rc = geo_err_set(err, -ECANCELED, "hausdorff: canceled");
+            break;
+        }
         uint32_t n = geo_poly_facet_size(a, f);
         const uint32_t *vs = geo_poly_facet(a, f);
         double c[3] = {0, 0, 0};
@@ -155,18 +221,31 @@ int geo_hausdorff_directed(const geo_poly *a, const geo_poly *b, double *ret,
     }
     free(seen);
     geo_bvh_free(h);
+    geo_poly_free(fanned);
     *ret = sqrt(worst);
-    return 0;
+    return rc;
+}
+
+int geo_hausdorff_directed(const geo_poly *a, const geo_poly *b, double *ret,
+                           geo_err *err)
+{
+    return directed(a, b, NULL, ret, err);
+}
+
+int geo_hausdorff_ctx(const geo_poly *a, const geo_poly *b,
+                      const geo_ctx *ctx, double *ret, geo_err *err)
+{
+    double ab, ba;
+    int r = directed(a, b, ctx, &ab, err);
+    if (r == 0)
+        r = directed(b, a, ctx, &ba, err);
+    if (r == 0)
+        *ret = fmax(ab, ba);
+    return r;
 }
 
 int geo_hausdorff(const geo_poly *a, const geo_poly *b, double *ret,
                   geo_err *err)
 {
-    double ab, ba;
-    int r = geo_hausdorff_directed(a, b, &ab, err);
-    if (r == 0)
-        r = geo_hausdorff_directed(b, a, &ba, err);
-    if (r == 0)
-        *ret = fmax(ab, ba);
-    return r;
+    return geo_hausdorff_ctx(a, b, NULL, ret, err);
 }

@@ -8,7 +8,9 @@
  * The distance of a point to B is exact up to rounding (nearest point on
  * each candidate facet: inside the polygon, on an edge, or at a vertex),
  * candidates coming from a BVH over B's facets searched nearest box
- * first, so the cost is O((V + E + F) log F). The symmetric estimate is
+ * first, so the cost is O((V + E + F) log F) (convex facets above 32
+ * vertices are searched as their fans of triangles: same distance, no
+ * O(n) walk of a large facet per sample). The symmetric estimate is
  * the larger of the two directions; it can only underestimate the true
  * Hausdorff distance (the maximum may fall between samples), by at most
  * the sampled surface's largest facet diameter in the worst case and far
@@ -29,5 +31,10 @@ int geo_hausdorff_directed(const geo_poly *a, const geo_poly *b, double *ret,
 /* Symmetric estimate: max of both directions. Errors as above. */
 int geo_hausdorff(const geo_poly *a, const geo_poly *b, double *ret,
                   geo_err *err);
+
+/* The same, stopping with -ECANCELED when ctx (may be NULL) is canceled:
+ * a large non-convex facet makes each sample near it cost O(its size). */
+int geo_hausdorff_ctx(const geo_poly *a, const geo_poly *b,
+                      const geo_ctx *ctx, double *ret, geo_err *err);
 
 #endif

@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "edgemap.h"
+#include "spchol.h"
 #include "topo.h"
 #include "trimesh.h"
 #include "vec.h"
@@ -65,6 +66,7 @@ typedef struct filler {
     geo_poly *p;
     geo_fill_opts o;
     geo_edgemap edges;  /* undirected edges, current + committed patches */
+    double up[3];        /* unit mean normal of the loop being filled */
     uint32_t (*tris)[3]; /* patch triangles of all holes */
     size_t ntris, cap;
     uint64_t *log;       /* edges added for the loop being filled */
@@ -114,16 +116,19 @@ static bool has_edge(const filler *F, uint32_t a, uint32_t b)
     return geo_edgemap_get(&F->edges, geo_edge_ukey(a, b)) != UINT32_MAX;
 }
 
-/* ω of triangle (a, b, c); INFINITY for a degenerate one. */
-static double tri_weight(const filler *F, uint32_t a, uint32_t b, uint32_t c)
+/* ω of triangle (a, b, c); INFINITY for a degenerate one. ret_n gets
+ * the cross product of its edges (as listed: twice the area along the
+ * normal). */
+static double tri_weight(const filler *F, uint32_t a, uint32_t b, uint32_t c,
+                         double ret_n[3])
 {
     const double *pa = F->p->verts[a], *pb = F->p->verts[b],
                  *pc = F->p->verts[c];
-    double e1[3], e2[3], n[3];
+    double e1[3], e2[3];
     geo_vsub(pb, pa, e1);
     geo_vsub(pc, pa, e2);
-    geo_vcross(e1, e2, n);
-    double area = 0.5 * geo_vlen(n);
+    geo_vcross(e1, e2, ret_n);
+    double area = 0.5 * geo_vlen(ret_n);
     double per = geo_vdist(pa, pb) + geo_vdist(pb, pc) + geo_vdist(pc, pa);
     if (!(area > 1e-14 * per * per))
         return INFINITY;
@@ -165,13 +170,73 @@ static bool angle_less(double a1, double w1, double a2, double w2)
     return w1 < w2;
 }
 
+/* Whether unit normals n1 and n2 (both known) point more than 120° apart:
+ * the two facets fold onto each other (the bound fair() uses too). */
+static bool turned_back(const double n1[3], const double n2[3])
+{
+    return geo_vdot(n1, n1) > 0 && geo_vdot(n2, n2) > 0 &&
+           geo_vdot(n1, n2) < -0.5;
+}
+
+/* Whether triangle (w_i, w_m, w_k) of an n-gon, with edge cross product
+ * nt (not degenerate), obeys dp's rules at strictness strict. */
+static bool admissible(const filler *F, double (*en)[3], int strict,
+                       uint32_t i, uint32_t m, uint32_t k, uint32_t n,
+                       const double nt[3])
+{
+    if (strict >= 2 && !(geo_vdot(nt, F->up) > 0))
+        return false;
+    if (strict < 1 || !en)
+        return true;
+    double u[3];
+    geo_vscale(nt, 1.0 / geo_vlen(nt), u);
+    return !((m == i + 1 && turned_back(u, en[i])) ||
+             (k == m + 1 && turned_back(u, en[m])) ||
+             (i == 0 && k == n - 1 && turned_back(u, en[n - 1])));
+}
+
+/* Whether every edge of polygon w[0..n) lies on some triangle of its
+ * vertices that dp admits at strictness strict — else dp cannot succeed
+ * (a loop closing a cone steeper than 60° with a flat lid, say), and
+ * this O(n²) look saves its O(n³) run. */
+static bool edges_coverable(const filler *F, const uint32_t *w, uint32_t n,
+                            double (*en)[3], int strict)
+{
+    for (uint32_t j = 0; j < n; j++) {
+        bool found = false;
+        for (uint32_t x = 0; x < n && !found; x++) {
+            uint32_t j1 = (j + 1) % n;
+            if (x == j || x == j1)
+                continue;
+            /* the triangle's corners in polygon order */
+            uint32_t c[3] = {j, j1, x}, t;
+            for (int a = 0; a < 2; a++)
+                for (int b = 0; b < 2 - a; b++)
+                    if (c[b] > c[b + 1])
+                        t = c[b], c[b] = c[b + 1], c[b + 1] = t;
+            double nt[3];
+            if (isfinite(tri_weight(F, w[c[0]], w[c[1]], w[c[2]], nt)))
+                found = admissible(F, en, strict, c[0], c[1], c[2], n, nt);
+        }
+        if (!found)
+            return false;
+    }
+    return true;
+}
+
 /* Liepa's dynamic programme on polygon w[0..n). en, when not NULL, holds
  * for each polygon edge w[i] → w[i+1 mod n] the unit normal of the facet
- * across it (zero: none); GEO_FILL_ANGLE uses it. Returns 0, 1 when no
- * admissible triangulation exists, or -ENOMEM. Commits its triangles and
- * chords on success. */
+ * across it (zero: none); TN[i,k] is the normal of the triangle the
+ * chosen triangulation of (w_i … w_k) puts on the chord (i, k) (the facet
+ * across, for a polygon edge), which GEO_FILL_ANGLE weighs by. strict
+ * restricts the triangles: from 1 on, none may turn back over the facet
+ * across a polygon edge (turned_back: the patch would fold onto the mesh
+ * around the hole); from 2 on, each must also face the side F->up points
+ * to (on a loop that is simple seen along its mean normal this is a
+ * patch without folds). Returns 0, 1 when no admissible triangulation
+ * exists, or -ENOMEM. Commits its triangles and chords on success. */
 static int dp(filler *F, const uint32_t *w, uint32_t n,
-              double (*en)[3], geo_hole_report *rep)
+              double (*en)[3], int strict, geo_hole_report *rep)
 {
     size_t nn = (size_t)n * n;
     bool angle = F->o.weight == GEO_FILL_ANGLE;
@@ -186,6 +251,8 @@ static int dp(filler *F, const uint32_t *w, uint32_t n,
         rc = -ENOMEM;
         goto out;
     }
+    static const double zero[3] = {0, 0, 0};
+    const double *closing = en ? en[n - 1] : zero;
     for (uint32_t i = 0; i < n; i++)
         for (uint32_t k = i + 1; k < n; k++) {
             bool side = k == i + 1 || (i == 0 && k == n - 1);
@@ -195,62 +262,58 @@ static int dp(filler *F, const uint32_t *w, uint32_t n,
     for (uint32_t i = 0; i + 1 < n; i++) {
         size_t ik = (size_t)i * n + i + 1;
         W[ik] = 0.0;
-        if (angle) {
+        if (angle)
             A[ik] = 0.0;
-            /* the facet across a loop edge, seen from the patch */
-            static const double zero[3] = {0, 0, 0};
+        if (TN) /* the facet across a loop edge, seen from the patch */
             memcpy(TN[ik], en ? en[i] : zero, sizeof TN[ik]);
-        }
     }
     for (uint32_t gap = 2; gap < n; gap++)
         for (uint32_t i = 0; i + gap < n; i++) {
             uint32_t k = i + gap;
             size_t ik = (size_t)i * n + k;
+            bool top = i == 0 && k == n - 1;
             double best = INFINITY, besta = INFINITY;
             uint32_t bm = i + 1;
             if (angle)
                 A[ik] = INFINITY;
-            if (ok[ik] && angle) {
-                for (uint32_t m = i + 1; m < k; m++) {
-                    size_t im = (size_t)i * n + m, mk = (size_t)m * n + k;
-                    double a = A[im] > A[mk] ? A[im] : A[mk];
-                    double ws = W[im] + W[mk];
-                    if (!angle_less(a, ws, besta, best))
-                        continue;
-                    double t = tri_weight(F, w[i], w[m], w[k]);
-                    if (!isfinite(t))
-                        continue;
-                    double nt[3];
-                    tri_normal(F, w[i], w[m], w[k], nt);
-                    double d1 = normal_angle(nt, TN[im]);
-                    double d2 = normal_angle(nt, TN[mk]);
-                    a = a > d1 ? a : d1;
-                    a = a > d2 ? a : d2;
-                    if (i == 0 && k == n - 1 && en) {
-                        double d3 = normal_angle(nt, en[n - 1]);
-                        a = a > d3 ? a : d3;
-                    }
-                    if (angle_less(a, ws + t, besta, best)) {
-                        besta = a;
-                        best = ws + t;
-                        bm = m;
-                    }
-                }
-                A[ik] = besta;
-                if (isfinite(best))
-                    tri_normal(F, w[i], w[bm], w[k], TN[ik]);
-            } else if (ok[ik]) {
-                for (uint32_t m = i + 1; m < k; m++) {
-                    double a = W[(size_t)i * n + m], b = W[(size_t)m * n + k];
-                    if (a + b >= best)
-                        continue;
-                    double t = a + b + tri_weight(F, w[i], w[m], w[k]);
-                    if (t < best) {
-                        best = t;
-                        bm = m;
-                    }
+            for (uint32_t m = i + 1; m < k && ok[ik] && angle; m++) {
+                size_t im = (size_t)i * n + m, mk = (size_t)m * n + k;
+                double ws = W[im] + W[mk];
+                double a = A[im] > A[mk] ? A[im] : A[mk];
+                if (!angle_less(a, ws, besta, best))
+                    continue;
+                double nt[3];
+                double t = tri_weight(F, w[i], w[m], w[k], nt);
+                if (!isfinite(t) || !admissible(F, en, strict, i, m, k, n, nt))
+                    continue;
+                geo_vnormalize(nt);
+                a = fmax(a, normal_angle(nt, TN[im]));
+                a = fmax(a, normal_angle(nt, TN[mk]));
+                if (top)
+                    a = fmax(a, normal_angle(nt, closing));
+                if (angle_less(a, ws + t, besta, best)) {
+                    besta = a;
+                    best = ws + t;
+                    bm = m;
                 }
             }
+            for (uint32_t m = i + 1; m < k && ok[ik] && !angle; m++) {
+                double ws = W[(size_t)i * n + m] + W[(size_t)m * n + k];
+                if (ws >= best)
+                    continue;
+                double nt[3];
+                double t = ws + tri_weight(F, w[i], w[m], w[k], nt);
+                if (t < best && admissible(F, en, strict, i, m, k, n, nt)) {
+                    best = t;
+                    bm = m;
+                }
+            }
+            if (angle)
+                A[ik] = besta;
+            if (TN && isfinite(best))
+                tri_normal(F, w[i], w[bm], w[k], TN[ik]);
+            else if (TN)
+                memcpy(TN[ik], zero, sizeof TN[ik]);
             W[ik] = best;
             M[ik] = bm;
         }
@@ -290,27 +353,113 @@ out:
     return rc;
 }
 
-/* Triangulates polygon w[0..n) (edge normals en as in dp, may be NULL),
- * cutting it by bridges while it is longer than max_dp_vertices. 0, 1 (no
- * admissible triangulation) or -ENOMEM. Recursion depth is O(log n): each
- * cut leaves at most 2n/3 + 1. */
-static int fill_poly(filler *F, const uint32_t *w, uint32_t n,
-                     double (*en)[3], geo_hole_report *rep)
+/* Unit Newell normal of polygon w[0..n) (zero when it has none): the
+ * polygon turns counter-clockwise seen from its tip. */
+static void newell_normal(const filler *F, const uint32_t *w, uint32_t n,
+                          double ret[3])
 {
-    if (n <= F->o.max_dp_vertices)
-        return dp(F, w, n, en, rep);
-    /* the bridge: the chord shortest relative to the loop length it cuts
-     * off (the smaller side's arc), which on a round loop is a diameter
-     * meeting the loop squarely, not a chord leaving thin wedges */
+    ret[0] = ret[1] = ret[2] = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        const double *a = F->p->verts[w[i]], *b = F->p->verts[w[(i + 1) % n]];
+        ret[0] += (a[1] - b[1]) * (a[2] + b[2]);
+        ret[1] += (a[2] - b[2]) * (a[0] + b[0]);
+        ret[2] += (a[0] - b[0]) * (a[1] + b[1]);
+    }
+    if (geo_vnormalize(ret) == 0)
+        ret[0] = ret[1] = ret[2] = 0;
+}
+
+/* Whether the chord from w[a] to w[b] leaves w[a] inside the polygon's
+ * angle there (from the next edge counter-clockwise to the previous one),
+ * seen along the polygon's mean normal nw. */
+static bool within_corner(const filler *F, const uint32_t *w, uint32_t n,
+                          const double nw[3], uint32_t a, uint32_t b)
+{
+    const double *pa = F->p->verts[w[a]];
+    double e[3], x[3], y[3], c[3];
+    geo_vsub(F->p->verts[w[(a + 1) % n]], pa, e);
+    geo_vsub(F->p->verts[w[(a + n - 1) % n]], pa, x);
+    geo_vsub(F->p->verts[w[b]], pa, y);
+    /* counter-clockwise angle from e, in [0, 2π) */
+    geo_vcross(e, x, c);
+    double ax = atan2(geo_vdot(c, nw), geo_vdot(e, x));
+    geo_vcross(e, y, c);
+    double ay = atan2(geo_vdot(c, nw), geo_vdot(e, y));
+    if (ax < 0)
+        ax += 2 * M_PI;
+    if (ay < 0)
+        ay += 2 * M_PI;
+    return ay > 0 && ay < ax;
+}
+
+/* Twice the signed area of triangle (p, q, r) seen along nw. */
+static double orient_along(const double nw[3], const double p[3],
+                           const double q[3], const double r[3])
+{
+    double u[3], v[3], c[3];
+    geo_vsub(q, p, u);
+    geo_vsub(r, p, v);
+    geo_vcross(u, v, c);
+    return geo_vdot(c, nw);
+}
+
+/* Whether chord w[a]–w[b] crosses or touches an edge of polygon w[0..n)
+ * other than those at its ends, seen along nw (floating point: choosing
+ * a bridge decides nothing about the mesh's topology). */
+static bool chord_crosses(const filler *F, const uint32_t *w, uint32_t n,
+                          const double nw[3], uint32_t a, uint32_t b)
+{
+    const double *pa = F->p->verts[w[a]], *pb = F->p->verts[w[b]];
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t j = (i + 1) % n;
+        if (i == a || j == a || i == b || j == b)
+            continue;
+        const double *p = F->p->verts[w[i]], *q = F->p->verts[w[j]];
+        double d1 = orient_along(nw, pa, pb, p), d2 = orient_along(nw, pa, pb, q);
+        if ((d1 > 0 && d2 > 0) || (d1 < 0 && d2 < 0))
+            continue;
+        double d3 = orient_along(nw, p, q, pa), d4 = orient_along(nw, p, q, pb);
+        if (!((d3 > 0 && d4 > 0) || (d3 < 0 && d4 < 0)))
+            return true;
+    }
+    return false;
+}
+
+typedef struct chord {
+    double score;
+    uint32_t lo, hi;
+} chord;
+
+static int cmp_chord(const void *a, const void *b)
+{
+    double x = ((const chord *)a)->score, y = ((const chord *)b)->score;
+    return x < y ? -1 : x > y;
+}
+
+/* The bridge of polygon w[0..n): of the chords from ≤ 256 evenly spaced
+ * vertices to the opposite third of the loop, the one shortest relative
+ * to the loop length it cuts off (the smaller side's arc) — on a round
+ * loop a diameter meeting the loop squarely, not a chord leaving thin
+ * wedges — among those that, seen along the polygon's mean normal, leave
+ * both ends inside the polygon's angle there and cross no edge (of the
+ * 64 best): a chord over the mesh leaves pieces that can only be closed
+ * by folding over the loop's facets (a jagged rim's teeth stick out past
+ * a chord grazing it). Without such a chord, the best one. 0, 1 (no
+ * admissible chord) or -ENOMEM. */
+static int choose_bridge(const filler *F, const uint32_t *w, uint32_t n,
+                         uint32_t *ret_a, uint32_t *ret_b)
+{
+    uint32_t nstarts = n < 256 ? n : 256, nc = 0;
     double *arc = malloc(((size_t)n + 1) * sizeof *arc);
-    if (!arc)
+    chord *c = malloc(((size_t)nstarts * (n / 3 + 2) + 1) * sizeof *c);
+    if (!arc || !c) {
+        free(arc), free(c);
         return -ENOMEM;
+    }
     arc[0] = 0;
     for (uint32_t i = 0; i < n; i++)
         arc[i + 1] = arc[i] + geo_vdist(F->p->verts[w[i]],
                                         F->p->verts[w[(i + 1) % n]]);
-    uint32_t nstarts = n < 256 ? n : 256, ba = 0, bb = 0;
-    double best = INFINITY;
     for (uint32_t si = 0; si < nstarts; si++) {
         uint32_t a = (uint32_t)((uint64_t)si * n / nstarts);
         for (uint32_t d = n / 3; d <= 2 * n / 3; d++) {
@@ -321,18 +470,58 @@ static int fill_poly(filler *F, const uint32_t *w, uint32_t n,
             double cut = arc[hi] - arc[lo];
             if (arc[n] - cut < cut)
                 cut = arc[n] - cut;
-            double score = cut > 0 ? len / cut : INFINITY;
-            if (score < best) {
-                best = score;
-                ba = lo;
-                bb = hi;
-            }
+            if (cut > 0 && isfinite(len / cut))
+                c[nc++] = (chord){len / cut, lo, hi};
         }
     }
     free(arc);
-    if (!isfinite(best))
-        return 1;
-    int rc = add_edge(F, w[ba], w[bb]);
+    int rc = 1;
+    if (nc > 0) {
+        qsort(c, nc, sizeof *c, cmp_chord);
+        double nw[3];
+        newell_normal(F, w, n, nw);
+        uint32_t pick = 0, tried = 0;
+        for (uint32_t k = 0; k < nc && tried < 64; k++) {
+            if (!within_corner(F, w, n, nw, c[k].lo, c[k].hi) ||
+                !within_corner(F, w, n, nw, c[k].hi, c[k].lo))
+                continue;
+            tried++;
+            if (!chord_crosses(F, w, n, nw, c[k].lo, c[k].hi)) {
+                pick = k;
+                break;
+            }
+        }
+        *ret_a = c[pick].lo;
+        *ret_b = c[pick].hi;
+        rc = 0;
+    }
+    free(c);
+    return rc;
+}
+
+/* Triangulates polygon w[0..n) (edge normals en as in dp, may be NULL),
+ * cutting it by bridges while it is longer than max_dp_vertices. 0, 1 (no
+ * admissible triangulation) or -ENOMEM. Recursion depth is O(log n): each
+ * cut leaves at most 2n/3 + 1. */
+static int fill_poly(filler *F, const uint32_t *w, uint32_t n,
+                     double (*en)[3], geo_hole_report *rep)
+{
+    if (n <= F->o.max_dp_vertices) {
+        /* a patch that folds only when nothing else fits: the minimum
+         * area alone lays inverted slivers along jagged loops (three
+         * teeth of a round loop's rim span one) and folds over the
+         * loop's facets */
+        int rc = 1;
+        for (int strict = 2; strict >= 0 && rc == 1; strict--)
+            if (strict == 0 || edges_coverable(F, w, n, en, strict))
+                rc = dp(F, w, n, en, strict, rep);
+        return rc;
+    }
+    uint32_t ba, bb;
+    int rc = choose_bridge(F, w, n, &ba, &bb);
+    if (rc != 0)
+        return rc;
+    rc = add_edge(F, w[ba], w[bb]);
     if (rc < 0)
         return rc;
     rep->nbridges++;
@@ -352,16 +541,7 @@ static int fill_poly(filler *F, const uint32_t *w, uint32_t n,
          * oriented like the patch), so the first half does not tilt
          * freely at the bridge and leave the second half a fold */
         memcpy(en1, en + ba, (size_t)(n1 - 1) * sizeof *en1);
-        double nw[3] = {0, 0, 0};
-        for (uint32_t i = 0; i < n; i++) {
-            const double *a = F->p->verts[w[i]], *b = F->p->verts[w[(i + 1) % n]];
-            nw[0] += (a[1] - b[1]) * (a[2] + b[2]);
-            nw[1] += (a[2] - b[2]) * (a[0] + b[0]);
-            nw[2] += (a[0] - b[0]) * (a[1] + b[1]);
-        }
-        if (geo_vnormalize(nw) == 0)
-            nw[0] = nw[1] = nw[2] = 0;
-        memcpy(en1[n1 - 1], nw, sizeof nw);
+        newell_normal(F, w, n, en1[n1 - 1]);
         memcpy(en2, en + bb, (size_t)(n - bb) * sizeof *en2);
         memcpy(en2 + (n - bb), en, (size_t)ba * sizeof *en2);
         memset(en2[n2 - 1], 0, sizeof en2[0]);
@@ -401,6 +581,7 @@ static int fill_loop(filler *F, const uint32_t *w, uint32_t n,
     }
     size_t first = F->ntris;
     F->nlog = 0;
+    newell_normal(F, w, n, F->up);
     int rc = fill_poly(F, w, n, en, rep);
     if (rc < 0)
         return rc;
@@ -418,7 +599,36 @@ static int fill_loop(filler *F, const uint32_t *w, uint32_t n,
     return 0;
 }
 
+/* Least-squares plane of facet f, as geo_poly_facet_fit_plane gives it
+ * unweighted; for a triangle, directly the plane through its corners
+ * (what the fit finds, without the eigen-solver). */
+static void fit_plane(const geo_poly *p, uint32_t f, double ret[4])
+{
+    if (geo_poly_facet_size(p, f) != 3) {
+        geo_poly_facet_fit_plane(p, f, GEO_PLANE_UNWEIGHTED, ret);
+        return;
+    }
+    const uint32_t *v = geo_poly_facet(p, f);
+    double n[3], c[3];
+    geo_poly_facet_area_vector(p, f, n);
+    if (geo_vnormalize(n) == 0) {
+        /* collinear: as the fit falls back to */
+        geo_poly_facet_fit_plane(p, f, GEO_PLANE_UNWEIGHTED, ret);
+        return;
+    }
+    for (int k = 0; k < 3; k++)
+        c[k] = (p->verts[v[0]][k] + p->verts[v[1]][k] + p->verts[v[2]][k]) /
+               3.0;
+    memcpy(ret, n, sizeof n);
+    ret[3] = -geo_vdot(n, c);
+}
+
 /* ---- refinement ---- */
+
+/* What a facet of the refinement region is (its tag in the tmesh; split
+ * pieces inherit it): one of the mesh's, or a triangle of a patch made
+ * here. */
+enum { REGION_GIVEN = 1, REGION_PATCH = 2 };
 
 typedef struct refiner {
     geo_fill_opts o;
@@ -770,8 +980,7 @@ static int write_back(geo_poly *p, const uint8_t *in_region,
         int64_t nf = geo_poly_add_facet(q, m->t[t], 3);
         if (nf < 0)
             goto oom;
-        geo_poly_facet_fit_plane(q, (uint32_t)nf, GEO_PLANE_UNWEIGHTED,
-                                 q->planes[nf]);
+        fit_plane(q, (uint32_t)nf, q->planes[nf]);
     }
     geo_poly tmp = *p;
     *p = *q;
@@ -798,7 +1007,7 @@ static int refine(geo_poly *p, uint8_t *in_region, const geo_fill_opts *o,
         if (!in_region[f])
             continue;
         const uint32_t *fv = geo_poly_facet(p, f);
-        int64_t t = geo_tmesh_add(&R.m, fv[0], fv[1], fv[2], 1);
+        int64_t t = geo_tmesh_add(&R.m, fv[0], fv[1], fv[2], in_region[f]);
         if (t == -EEXIST)
             in_region[f] = 0; /* not manifold there: leave it alone */
         else if (t < 0)
@@ -877,6 +1086,11 @@ static int refine(geo_poly *p, uint8_t *in_region, const geo_fill_opts *o,
                     goto out;
                 continue;
             }
+            /* a chord of a minimum-weight patch is no feature of the
+             * surface: kept from flips it left fans of slivers at the
+             * loop, which folded the faired patch */
+            if (R.m.tag[t] == REGION_PATCH || R.m.tag[h2 / 3] == REGION_PATCH)
+                continue;
             if (geo_tmesh_normal(&R.m, t, n1) > 0 &&
                 geo_tmesh_normal(&R.m, h2 / 3, n2) > 0 &&
                 geo_vdot(n1, n2) < R.cos_hard - 1e-12 &&
@@ -903,12 +1117,6 @@ typedef struct adjacency {
     uint32_t *start; /* nverts + 1 */
     uint32_t *nb;    /* sorted, unique neighbours */
 } adjacency;
-
-static int cmp_u32(const void *a, const void *b)
-{
-    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
-    return x < y ? -1 : x > y;
-}
 
 static int build_adjacency(const geo_poly *p, adjacency *A)
 {
@@ -945,7 +1153,13 @@ static int build_adjacency(const geo_poly *p, adjacency *A)
     uint32_t out = 0;
     for (uint32_t v = 0; v < nv; v++) {
         uint32_t s0 = A->start[v], s1 = A->start[v + 1];
-        qsort(A->nb + s0, s1 - s0, sizeof *A->nb, cmp_u32);
+        /* a vertex has a handful of neighbours: insertion sort */
+        for (uint32_t i = s0 + 1; i < s1; i++) {
+            uint32_t x = A->nb[i], j = i;
+            for (; j > s0 && A->nb[j - 1] > x; j--)
+                A->nb[j] = A->nb[j - 1];
+            A->nb[j] = x;
+        }
         A->start[v] = out;
         for (uint32_t i = s0; i < s1; i++)
             if (i == s0 || A->nb[i] != A->nb[i - 1])
@@ -1104,6 +1318,164 @@ static void solve_length(const geo_poly *p, const adjacency *A, uint32_t v,
         fx = f[best];
     }
     memcpy(ret, x, sizeof x);
+}
+
+/* The unknowns of the U² = 0 system: S[0 .. *ret_nu) the free vertices
+ * that are not pinned and have neighbours, then S[*ret_nu .. *ret_m) their
+ * neighbours that are fixed (the ring); loc maps a vertex to its place in
+ * S or UINT32_MAX. S and loc are malloc'd. 0 or -ENOMEM. */
+static int fair_unknowns(const geo_poly *p, const adjacency *A,
+                         uint32_t first_free, const uint8_t *pinned,
+                         uint32_t **ret_S, uint32_t **ret_loc,
+                         uint32_t *ret_nu, uint32_t *ret_m)
+{
+    uint32_t nv = p->nverts, nfree = nv - first_free, m = 0;
+    size_t ring = 0;
+    for (uint32_t k = 0; k < nfree; k++)
+        ring += A->start[first_free + k + 1] - A->start[first_free + k];
+    uint32_t *loc = malloc(((size_t)nv + 1) * sizeof *loc);
+    uint32_t *S = malloc((nfree + ring + 1) * sizeof *S);
+    if (!loc || !S) {
+        free(loc), free(S);
+        return -ENOMEM;
+    }
+    memset(loc, 0xff, (size_t)nv * sizeof *loc);
+    for (uint32_t k = 0; k < nfree; k++) {
+        uint32_t v = first_free + k;
+        if (!pinned[k] && A->start[v + 1] > A->start[v]) {
+            loc[v] = m;
+            S[m++] = v;
+        }
+    }
+    uint32_t nu = m;
+    for (uint32_t u = 0; u < nu; u++)
+        for (uint32_t q = A->start[S[u]]; q < A->start[S[u] + 1]; q++)
+            if (loc[A->nb[q]] == UINT32_MAX) {
+                loc[A->nb[q]] = m;
+                S[m++] = A->nb[q];
+            }
+    *ret_S = S;
+    *ret_loc = loc;
+    *ret_nu = nu;
+    *ret_m = m;
+    return 0;
+}
+
+/* b = −K·x̃ over the unknowns (K = L·D⁻¹·L, x̃ the positions with the
+ * unknowns at zero): the right-hand side of K_ff·x_f = −K_fb·x_b. z is
+ * scratch over S. */
+static void fair_rhs(const geo_poly *p, const adjacency *A, const uint32_t *S,
+                     const uint32_t *loc, uint32_t nu, uint32_t m,
+                     double (*z)[3], double (*b)[3])
+{
+#define DEG(v) ((double)(A->start[(v) + 1] - A->start[(v)]))
+    for (uint32_t s2 = 0; s2 < m; s2++) {
+        uint32_t v = S[s2];
+        double acc[3] = {0, 0, 0};
+        if (s2 >= nu)
+            geo_vscale(p->verts[v], DEG(v), acc);
+        for (uint32_t q = A->start[v]; q < A->start[v + 1]; q++)
+            if (loc[A->nb[q]] >= nu)
+                geo_vsub(acc, p->verts[A->nb[q]], acc);
+        geo_vscale(acc, 1.0 / DEG(v), z[s2]);
+    }
+    for (uint32_t u = 0; u < nu; u++) {
+        uint32_t v = S[u];
+        double acc[3];
+        geo_vscale(z[u], DEG(v), acc);
+        for (uint32_t q = A->start[v]; q < A->start[v + 1]; q++)
+            geo_vsub(acc, z[loc[A->nb[q]]], acc);
+        geo_vscale(acc, -1.0, b[u]);
+    }
+#undef DEG
+}
+
+/* Bound on the entries of the Cholesky factor of a fairing system (12
+ * bytes each, so at most 192 MB): the 14,300 free vertices of a 1,000-
+ * vertex hole need 1.7 million; the factor grows as n log n. */
+#define GEO_FAIR_DIRECT_MAX_NNZ (16u << 20)
+
+/* U²(p) = 0 at every free vertex at once, for w = 1, solved directly:
+ * K_ff = (L·D⁻¹·L)_ff is assembled once — K[u][t] = Σ_s L[s][u]·L[s][t]
+ * / D_s over the vertices s next to both — and factored by lib/spchol.h
+ * (nested dissection; O(n^1.5) against conjugate gradients' O(n²) for a
+ * patch of n vertices, and exact). Writes the solution into p; returns
+ * 0, -ERANGE (the factor would be too large), -EDOM (K_ff is not
+ * positive definite: some free vertices see no fixed one), -ENOMEM or
+ * -ECANCELED; p is unchanged on error. */
+static int fair_direct(geo_poly *p, const adjacency *A, uint32_t first_free,
+                       const uint8_t *pinned, geo_fill_stats *st,
+                       const geo_ctx *ctx)
+{
+    uint32_t *S = NULL, *loc = NULL, nu = 0, m = 0;
+    uint32_t *rp = NULL, *ci = NULL, *pos = NULL;
+    double *val = NULL, (*z)[3] = NULL, (*b)[3] = NULL;
+    geo_spchol *fac = NULL;
+    int rc = fair_unknowns(p, A, first_free, pinned, &S, &loc, &nu, &m);
+    if (rc < 0 || nu == 0)
+        goto out;
+    rc = -ENOMEM;
+#define DEG(v) (A->start[(v) + 1] - A->start[(v)])
+    /* row u's entries are among the neighbours' neighbours */
+    size_t cap = 0;
+    for (uint32_t u = 0; u < nu; u++) {
+        uint32_t v = S[u];
+        cap += DEG(v) + 1;
+        for (uint32_t q = A->start[v]; q < A->start[v + 1]; q++)
+            cap += DEG(A->nb[q]) + 1;
+    }
+    rp = malloc(((size_t)nu + 1) * sizeof *rp);
+    ci = malloc((cap + 1) * sizeof *ci);
+    val = malloc((cap + 1) * sizeof *val);
+    pos = malloc(((size_t)nu + 1) * sizeof *pos);
+    z = malloc(((size_t)m + 1) * sizeof *z);
+    b = malloc(((size_t)nu + 1) * sizeof *b);
+    if (!rp || !ci || !val || !pos || !z || !b || cap >= UINT32_MAX)
+        goto out;
+    memset(pos, 0xff, (size_t)nu * sizeof *pos);
+    rp[0] = 0;
+    uint32_t nz = 0;
+    for (uint32_t u = 0; u < nu; u++) {
+        uint32_t v = S[u], row0 = nz;
+        for (uint32_t qs = A->start[v]; qs <= A->start[v + 1]; qs++) {
+            /* s runs over v's neighbours, then v itself */
+            uint32_t sv = qs < A->start[v + 1] ? A->nb[qs] : v;
+            double ds = (double)DEG(sv);
+            double a = (sv == v ? ds : -1.0) / ds; /* L[s][v] / D_s */
+            for (uint32_t qt = A->start[sv]; qt <= A->start[sv + 1]; qt++) {
+                uint32_t tv = qt < A->start[sv + 1] ? A->nb[qt] : sv;
+                uint32_t t = loc[tv];
+                if (t >= nu)
+                    continue;
+                double add = a * (tv == sv ? ds : -1.0);
+                if (pos[t] == UINT32_MAX) {
+                    pos[t] = nz;
+                    ci[nz] = t;
+                    val[nz++] = add;
+                } else {
+                    val[pos[t]] += add;
+                }
+            }
+        }
+        for (uint32_t q = row0; q < nz; q++)
+            pos[ci[q]] = UINT32_MAX;
+        rp[u + 1] = nz;
+    }
+#undef DEG
+    rc = geo_spchol_factor(nu, rp, ci, val, GEO_FAIR_DIRECT_MAX_NNZ, ctx, &fac);
+    if (rc < 0)
+        goto out;
+    fair_rhs(p, A, S, loc, nu, m, z, b);
+    if ((rc = geo_spchol_solve3(fac, b)) < 0)
+        goto out;
+    for (uint32_t u = 0; u < nu; u++)
+        memcpy(p->verts[S[u]], b[u], sizeof b[u]);
+    st->nfair_sweeps++;
+out:
+    geo_spchol_free(fac);
+    free(S), free(loc), free(rp), free(ci), free(val), free(pos), free(z),
+        free(b);
+    return rc;
 }
 
 /* U²(p) = 0 at every free vertex at once, for w = 1. With L = D − Adj
@@ -1276,8 +1648,9 @@ out:
 /* 1 when a facet flagged in touched has no area or meets another flagged
  * facet at an edge at a dihedral angle above 120° (the surface folds back
  * on itself there), else 0; -ENOMEM. Bends are fine: a patch faired into
- * a dome turns its rim triangles far from where the flat patch had them. */
-static int folds(const geo_poly *p, const uint8_t *touched)
+ * a dome turns its rim triangles far from where the flat patch had them.
+ * bad, when not NULL, gets 1 for every such facet (both of a fold). */
+static int folds(const geo_poly *p, const uint8_t *touched, uint8_t *bad)
 {
     geo_edgemap he;
     size_t n = 0;
@@ -1286,7 +1659,8 @@ static int folds(const geo_poly *p, const uint8_t *touched)
     if (geo_edgemap_init(&he, n) < 0)
         return -ENOMEM;
     int rc = 0;
-    for (uint32_t f = 0; f < p->nfacets && rc == 0; f++) {
+    for (uint32_t f = 0; f < p->nfacets && (rc == 0 || (rc == 1 && bad));
+         f++) {
         if (!touched[f])
             continue;
         const uint32_t *fv = geo_poly_facet(p, f);
@@ -1295,22 +1669,98 @@ static int folds(const geo_poly *p, const uint8_t *touched)
         geo_poly_facet_area_vector(p, f, nf);
         if (geo_vnormalize(nf) == 0) {
             rc = 1;
-            break;
+            if (bad)
+                bad[f] = 1;
         }
-        for (uint32_t i = 0; i < k && rc == 0; i++) {
+        for (uint32_t i = 0; i < k && rc >= 0; i++) {
             uint32_t a = fv[i], b = fv[(i + 1) % k];
             uint32_t g = geo_edgemap_get(&he, geo_edge_key(b, a));
             if (g != UINT32_MAX) {
                 double ng[3];
                 geo_poly_facet_area_vector(p, g, ng);
                 geo_vnormalize(ng);
-                rc = geo_vdot(nf, ng) < -0.5;
+                if (geo_vdot(nf, ng) < -0.5) {
+                    rc = 1;
+                    if (bad)
+                        bad[f] = bad[g] = 1;
+                }
             } else if (geo_edgemap_put(&he, geo_edge_key(a, b), f) < 0) {
                 rc = -ENOMEM;
             }
         }
     }
     geo_edgemap_destroy(&he);
+    return rc;
+}
+
+/* Solves U² = 0 for w = 1 (fair_direct, or fair_cg for a factor too
+ * large) without folds. With uniform weights the solution depends on
+ * the connectivity alone, and a free vertex in front of a tooth of a
+ * jagged rim — three of its four neighbours on the loop — is drawn over
+ * the tooth. The free corners of folded facets are then held where the
+ * unfaired patch had them, lifted along its normal as far as the
+ * solution lifted them, and the others solved again (at most four
+ * times). flat: the free vertices' unfaired positions; held: per free
+ * vertex, fixed (pinned ones on entry; changed). 1 solved without
+ * folds, 0 still folded, or a negative errno. */
+static int fair_solve(geo_poly *p, const adjacency *A, uint32_t first_free,
+                      uint8_t *held, const double (*flat)[3],
+                      const uint8_t *touches_free, geo_fill_stats *st,
+                      const geo_ctx *ctx)
+{
+    uint32_t nfree = p->nverts - first_free;
+    uint8_t *bad = malloc((size_t)p->nfacets + 1);
+    double(*vn)[3] = calloc((size_t)nfree + 1, sizeof *vn);
+    int rc = -ENOMEM;
+    if (!bad || !vn)
+        goto out;
+    /* the unfaired patch's vertex normals (planes hold the facets'
+     * Newell vectors from before) */
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        if (!touches_free[f])
+            continue;
+        const uint32_t *fv = geo_poly_facet(p, f);
+        for (uint32_t i = 0; i < geo_poly_facet_size(p, f); i++)
+            if (fv[i] >= first_free)
+                geo_vadd(vn[fv[i] - first_free], p->planes[f],
+                         vn[fv[i] - first_free]);
+    }
+    for (int round = 0; round < 4; round++) {
+        rc = fair_direct(p, A, first_free, held, st, ctx);
+        if (rc == -ERANGE || rc == -EDOM)
+            rc = fair_cg(p, A, first_free, held, st, ctx);
+        if (rc < 0)
+            goto out;
+        memset(bad, 0, p->nfacets);
+        if ((rc = folds(p, touches_free, bad)) <= 0) {
+            rc = rc == 0 ? 1 : rc;
+            goto out;
+        }
+        uint32_t nheld = 0;
+        for (uint32_t f = 0; f < p->nfacets; f++) {
+            if (!bad[f])
+                continue;
+            const uint32_t *fv = geo_poly_facet(p, f);
+            for (uint32_t i = 0; i < geo_poly_facet_size(p, f); i++) {
+                uint32_t v = fv[i], k = v - first_free;
+                if (v < first_free || held[k])
+                    continue;
+                double d[3], nrm[3];
+                geo_vsub(p->verts[v], flat[k], d);
+                memcpy(nrm, vn[k], sizeof nrm);
+                if (geo_vnormalize(nrm) == 0)
+                    nrm[0] = nrm[1] = nrm[2] = 0;
+                geo_vmadd(flat[k], geo_vdot(d, nrm), nrm, p->verts[v]);
+                held[k] = 1;
+                nheld++;
+            }
+        }
+        rc = 0;
+        if (nheld == 0)
+            break; /* the folds are among fixed vertices */
+    }
+out:
+    free(bad), free(vn);
     return rc;
 }
 
@@ -1358,14 +1808,19 @@ static int fair(geo_poly *p, uint32_t first_free, const geo_fill_opts *o,
     if (o->fair == GEO_FAIR_UNIFORM && !o->project) {
         for (uint32_t k = 0; k < nfree; k++)
             memcpy(nxt[k], p->verts[first_free + k], sizeof nxt[k]);
-        if ((rc = fair_cg(p, &A, first_free, pinned, st, ctx)) < 0)
-            goto out;
-        int folded = folds(p, touches_free);
-        if (folded < 0) {
-            rc = folded;
+        uint8_t *held = malloc((size_t)nfree + 1);
+        if (!held) {
+            rc = -ENOMEM;
             goto out;
         }
-        solved = folded == 0;
+        memcpy(held, pinned, nfree);
+        rc = fair_solve(p, &A, first_free, held,
+                        (const double(*)[3])nxt, touches_free, st, ctx);
+        free(held);
+        if (rc < 0)
+            goto out;
+        solved = rc == 1;
+        rc = 0;
         if (!solved)
             for (uint32_t k = 0; k < nfree; k++)
                 memcpy(p->verts[first_free + k], nxt[k], sizeof nxt[k]);
@@ -1445,8 +1900,7 @@ static int fair(geo_poly *p, uint32_t first_free, const geo_fill_opts *o,
         uint32_t k = geo_poly_facet_size(p, f);
         for (uint32_t i = 0; i < k; i++)
             if (fv[i] >= first_free) {
-                geo_poly_facet_fit_plane(p, f, GEO_PLANE_UNWEIGHTED,
-                                         p->planes[f]);
+                fit_plane(p, f, p->planes[f]);
                 break;
             }
     }
@@ -1482,8 +1936,9 @@ static int refine_and_fair(geo_poly *q, uint8_t *in_region,
 {
     uint32_t nv0 = q->nverts, nreg = 0;
     for (uint32_t f = 0; f < q->nfacets; f++) {
-        in_region[f] = in_region[f] && geo_poly_facet_size(q, f) == 3;
-        nreg += in_region[f];
+        if (geo_poly_facet_size(q, f) != 3)
+            in_region[f] = 0;
+        nreg += in_region[f] != 0;
     }
     int rc = 0;
     if (o->refine && nreg && (rc = refine(q, in_region, o, st, ctx)) < 0)
@@ -1509,7 +1964,8 @@ int geo_refine_region(geo_poly *p, const uint8_t *region,
     if (!q || !in_region) {
         rc = -ENOMEM;
     } else {
-        memcpy(in_region, region, p->nfacets);
+        for (uint32_t f = 0; f < p->nfacets; f++)
+            in_region[f] = region[f] ? REGION_GIVEN : 0;
         rc = refine_and_fair(q, in_region, &o, &st, ctx);
     }
     if (rc == 0) {
@@ -1584,8 +2040,7 @@ int geo_fill_holes(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
                 goto oom;
     }
     w = malloc(((size_t)t->nboundary_edges + 1) * sizeof *w);
-    if (o.weight == GEO_FILL_ANGLE &&
-        !(en = malloc(((size_t)t->nboundary_edges + 1) * sizeof *en)))
+    if (!(en = malloc(((size_t)t->nboundary_edges + 1) * sizeof *en)))
         goto oom;
     cs = malloc(((size_t)nloops + 2) * sizeof *cs);
     st.holes = calloc((size_t)nloops + 1, sizeof *st.holes);
@@ -1651,8 +2106,7 @@ int geo_fill_holes(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
         int64_t nf = geo_poly_add_facet(q, F.tris[k], 3);
         if (nf < 0)
             goto oom;
-        geo_poly_facet_fit_plane(q, (uint32_t)nf, GEO_PLANE_UNWEIGHTED,
-                                 q->planes[nf]);
+        fit_plane(q, (uint32_t)nf, q->planes[nf]);
     }
     if ((rc = geo_ctx_progress(ctx, 0.5)) < 0)
         goto fail;
@@ -1660,7 +2114,9 @@ int geo_fill_holes(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
     if (!in_region)
         goto oom;
     for (uint32_t f = 0; f < q->nfacets; f++)
-        in_region[f] = f >= nf0 || (o.also_refine && o.also_refine[f]);
+        in_region[f] = f >= nf0 ? REGION_PATCH
+                       : o.also_refine && o.also_refine[f] ? REGION_GIVEN
+                                                           : 0;
     if ((rc = refine_and_fair(q, in_region, &o, &st, ctx)) < 0)
         goto fail;
     geo_poly tmp = *p;

@@ -24,14 +24,28 @@
  *    memory. A chord
  *    that already is an edge of the mesh has infinite weight, so a patch
  *    never creates a non-manifold edge; a collinear triangle too.
+ *    No folds: with every weight, a triangle is admitted only if it faces
+ *    the side the loop's mean (Newell) normal points to and does not turn
+ *    by more than 120° against the facet across a loop edge it lies on;
+ *    when no triangulation obeys that, only the second rule holds, and
+ *    when none obeys that either, none. Both are rules per triangle, so
+ *    the programme still finds the least weight among the triangulations
+ *    obeying them; an edge no admissible triangle can lie on (a flat lid
+ *    on a steep cone) skips the run at once. On a jagged loop the least
+ *    area alone laid inverted slivers across three teeth of the rim and
+ *    folded over the rim's facets.
  *    Bounded cost: a loop longer than max_dp_vertices is first cut by a
- *    bridge — the admissible chord between a vertex and one in the
- *    opposite third of the loop (≤ 256 evenly spaced start vertices are
- *    tried) that is shortest relative to the loop length it cuts off (on
- *    a round loop a diameter, not a chord leaving thin wedges) — into two
- *    loops, recursively, so a loop of n vertices costs
- *    O(n · max_dp_vertices²) instead of O(n³). Loops longer than
- *    max_hole_vertices are left open (GEO_HOLE_TOO_LARGE).
+ *    bridge — a chord between a vertex and one in the opposite third of
+ *    the loop (≤ 256 evenly spaced start vertices are tried) that is
+ *    shortest relative to the loop length it cuts off (on a round loop a
+ *    diameter, not a chord leaving thin wedges), among those that, seen
+ *    along the loop's mean normal, leave both ends inside the loop's
+ *    angle and cross no loop edge (a chord grazing a jagged rim runs over
+ *    its teeth and leaves a piece that can only be closed by folding);
+ *    without such a chord, the shortest — into two loops, recursively, so
+ *    a loop of n vertices costs O(n · max_dp_vertices²) instead of O(n³).
+ *    Loops longer than max_hole_vertices are left open
+ *    (GEO_HOLE_TOO_LARGE).
  * 3. Refinement (opts.refine). The region is every patch plus the facets
  *    the caller flags in also_refine (triangles only; the F-rep
  *    triangulator flags triangles that project with zero area). s(v) of a
@@ -46,9 +60,11 @@
  *    inside the other triangle's circumsphere) and the flipped pair neither
  *    folds, nor bends by more than hard_angle_deg, nor makes an edge that
  *    opts.crosses_feature rejects. A hard edge — an edge of
- *    the region as given whose dihedral angle exceeds hard_angle_deg (or
- *    that opts.hard_edge says lies along a feature of the surface), or a
- *    piece of one — is never flipped; it is split at
+ *    the region as given whose dihedral angle exceeds hard_angle_deg,
+ *    unless it is a chord of a patch made here (a minimum-weight patch's
+ *    bends are no feature of the surface), or that opts.hard_edge says
+ *    lies along a feature of the surface, or a piece of one — is never
+ *    flipped; it is split at
  *    S = (s(P)·Q + s(Q)·P)/(s(P)+s(Q)) when √2·|PQ| > (s(P)+s(Q))/2, each
  *    of its two triangles into two (fig. 12). Passes repeat until no
  *    triangle splits. The region's boundary edges and vertices stay fixed.
@@ -61,11 +77,21 @@
  *    linear in p and solved in closed form — and, without opts.project,
  *    for all free vertices at once: the conditions form the symmetric
  *    positive definite system (L·D⁻¹·L)_ff·x_f = −(L·D⁻¹·L)_fb·x_b
- *    (L = D − Adj the graph Laplacian, D the neighbour counts), solved
- *    by conjugate gradients to a residual of 1e-4 of the first (at most
- *    5,000 iterations; a solution that folds the surface, a dihedral
- *    angle above 120° or a collapsed facet, falls back to the sweeps
- *    below); for w = |p − p_i|
+ *    (L = D − Adj the graph Laplacian, D the neighbour counts; the fixed
+ *    vertices it reads are the loop and one ring of the mesh outside it,
+ *    with the loop vertices' full neighbour counts, as in Liepa's
+ *    fairing), assembled once and solved exactly by a sparse Cholesky
+ *    factorisation (lib/spchol.h), or, when the factor would exceed
+ *    16·2²⁰ entries (192 MB), by conjugate gradients to a residual of
+ *    1e-4 of the first (at most 5,000 iterations). With w = 1 the
+ *    solution depends on the connectivity alone, and a free vertex in
+ *    front of a tooth of a jagged rim (three of its four neighbours on
+ *    the loop) can be drawn over the tooth: when the solution folds the
+ *    surface (a dihedral angle above 120° or a collapsed facet), the
+ *    free corners of the folded facets are held at their unfaired place
+ *    lifted along the unfaired normal as far as the solution lifted
+ *    them, and the others are solved again, at most four times; if it
+ *    still folds, the sweeps below run instead; for w = |p − p_i|
  *    (GEO_FAIR_LENGTH) |U²(p)| is minimised by steepest descent with a
  *    line search by quadratic interpolation through three points. Both
  *    sweep over all free vertices (Jacobi) for fair_iterations sweeps or
@@ -189,7 +215,8 @@ typedef struct geo_fill_stats {
     uint32_t nsplits;         /* centroid splits */
     uint32_t nflips;          /* edge restorations */
     uint32_t nhard_splits;    /* hard edges split */
-    uint32_t nfair_sweeps;    /* fairing sweeps run (or CG iterations) */
+    uint32_t nfair_sweeps;    /* fairing sweeps run (or CG iterations, and
+                                 1 per direct solve) */
 } geo_fill_stats;
 
 /* Fills every hole of p as described above. 0 or a negative errno (see

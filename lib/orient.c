@@ -189,8 +189,16 @@ int geo_orient_analyze(const geo_poly *p, const geo_topo *t,
         shell[f0] = s;
         colour[f0] = 0;
         queue[tail++] = f0;
+        /* edges the colouring violates, each counted from its lower
+         * corner: an odd cycle, the shell is not orientable. A facet's
+         * colour is set once, when it is reached, so an edge is checked
+         * when its lower corner's facet is taken from the queue: if the
+         * other facet is not coloured yet it gets the wanted colour, and
+         * the edge agrees. */
+        uint32_t n1 = 0;
         while (head < tail) {
             uint32_t f = queue[head++];
+            n1 += colour[f];
             for (uint32_t c = p->fstart[f]; c < p->fstart[f + 1]; c++) {
                 uint32_t m = t->mate[c];
                 if (m == GEO_NONE) {
@@ -204,25 +212,12 @@ int geo_orient_analyze(const geo_poly *p, const geo_topo *t,
                     shell[g] = s;
                     colour[g] = want;
                     queue[tail++] = g;
+                } else if (c < m && colour[g] != want) {
+                    ret->nconflict_edges++;
                 }
             }
         }
-        /* edges the colouring violates, each counted from its lower
-         * corner: an odd cycle, the shell is not orientable */
-        uint32_t n1 = 0, size = tail - first[s];
-        for (uint32_t k = first[s]; k < tail; k++) {
-            uint32_t f = queue[k];
-            n1 += colour[f];
-            for (uint32_t c = p->fstart[f]; c < p->fstart[f + 1]; c++) {
-                uint32_t m = t->mate[c];
-                if (m == GEO_NONE || m < c)
-                    continue;
-                uint8_t want = colour[f] ^
-                               (t->edge_kind[c] == GEO_EDGE_FLIPPED);
-                if (colour[t->corner_facet[m]] != want)
-                    ret->nconflict_edges++;
-            }
-        }
+        uint32_t size = tail - first[s];
         /* colour 0 holds the shell's lowest facet (f0): flip colour 1
          * unless it is the strict majority */
         flip_colour[s] = n1 > size - n1 ? 0 : 1;

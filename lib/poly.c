@@ -22,6 +22,10 @@ geo_poly *geo_poly_new(void)
         return NULL;
     }
     p->cap_facets = 0;
+    /* the arrays are never NULL, even for an empty model, so that every
+     * kernel may memcpy a whole (empty) array */
+    if (geo_poly_reserve(p, 1, 1, 1) < 0)
+        return geo_poly_free(p);
     return p;
 }
 

@@ -194,17 +194,10 @@ int geo_orient2d(const double a[2], const double b[2], const double c[2])
     return orient2d_exact(a, b, c);
 }
 
-int geo_orient2d_proj(const double a[3], const double b[3], const double c[3],
-                      int drop)
+int geo_orient2d_proj_exact(const double a[3], const double b[3],
+                            const double c[3], int drop)
 {
     int u = (drop + 1) % 3, v = (drop + 2) % 3;
-    /* the filter of geo_orient2d on the projected coordinates in place */
-    double left = (a[u] - c[u]) * (b[v] - c[v]);
-    double right = (a[v] - c[v]) * (b[u] - c[u]);
-    double det = left - right;
-    double bound = O2D_BOUND * (fabs(left) + fabs(right));
-    if (fabs(det) > bound && fabs(det) > TINY)
-        return sign_of(det);
     double pa[2] = {a[u], a[v]}, pb[2] = {b[u], b[v]}, pc[2] = {c[u], c[v]};
     return orient2d_exact(pa, pb, pc);
 }
@@ -252,6 +245,21 @@ int geo_orient3d(const double a[3], const double b[3], const double c[3],
     if (fabs(det) > O3D_BOUND * permanent && fabs(det) > TINY)
         return -sign_of(det);
     return orient3d_exact(a, b, c, d);
+}
+
+void geo_orient3d_plane_init(geo_orient3d_plane *pl, const double a[3],
+                             const double b[3], const double c[3])
+{
+    pl->a = a, pl->b = b, pl->c = c;
+    double ba[3], ca[3];
+    for (int k = 0; k < 3; k++)
+        ba[k] = b[k] - a[k], ca[k] = c[k] - a[k];
+    for (int k = 0; k < 3; k++) {
+        int i = (k + 1) % 3, j = (k + 2) % 3;
+        double p1 = ba[i] * ca[j], p2 = ba[j] * ca[i];
+        pl->n[k] = p1 - p2;
+        pl->m[k] = fabs(p1) + fabs(p2);
+    }
 }
 
 /* plane(p) exactly as an expansion; acc has room for 8. */

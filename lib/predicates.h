@@ -20,6 +20,8 @@
 #ifndef GEO_PREDICATES_H
 #define GEO_PREDICATES_H
 
+#include <math.h>
+
 /* Sign of (d − a) · ((b − a) × (c − a)): +1 when d lies on the side the
  * right-hand normal of the triangle a, b, c points to (for a facet listed
  * counter-clockwise seen from outside: d is outside), −1 on the other side,
@@ -27,17 +29,112 @@
 int geo_orient3d(const double a[3], const double b[3], const double c[3],
                  const double d[3]);
 
+/* geo_orient3d(a, b, c, d) for many d against one triangle a, b, c (the
+ * sides of a polygon's vertices against another facet's reference plane):
+ * n = (b − a) × (c − a) is formed once in doubles, and each query is one
+ * dot product (d − a) · n with its own forward error bound. Each of the
+ * six monomials ±(d − a)ᵢ(b − a)ⱼ(c − a)ₖ of the determinant passes at
+ * most 8 roundings (three differences, the product and difference in n,
+ * the product with d − a, two sums), so the computed value is within
+ * γ₈·P of the exact one, P the sum of the monomials' magnitudes; P is
+ * computed from the same rounded factors with 8 roundings of its own, so
+ * 10u·P̂ (u = 2⁻⁵³) bounds the error. Above that bound (and above 2⁻⁹⁰⁰,
+ * where products may underflow) the sign is exact; otherwise, and for
+ * NaN or overflow, the answer comes from geo_orient3d. The answer is
+ * always geo_orient3d(a, b, c, d). The struct points to a, b, c (not
+ * copied: they must stay unchanged while it is used); read-only use is
+ * thread-safe. */
+typedef struct geo_orient3d_plane {
+    const double *a, *b, *c;
+    double n[3]; /* (b − a) × (c − a), rounded */
+    double m[3]; /* |products| summed per component of n, rounded */
+} geo_orient3d_plane;
+
+void geo_orient3d_plane_init(geo_orient3d_plane *pl, const double a[3],
+                             const double b[3], const double c[3]);
+
+static inline int geo_orient3d_plane_sign(const geo_orient3d_plane *pl,
+                                          const double d[3])
+{
+    const double *a = pl->a;
+    double x0 = d[0] - a[0], x1 = d[1] - a[1], x2 = d[2] - a[2];
+    double det = x0 * pl->n[0] + x1 * pl->n[1] + x2 * pl->n[2];
+    double perm =
+        fabs(x0) * pl->m[0] + fabs(x1) * pl->m[1] + fabs(x2) * pl->m[2];
+    if (fabs(det) > 10.0 * 0x1.0p-53 * perm && fabs(det) > 0x1.0p-900)
+        return det > 0 ? 1 : -1;
+    return geo_orient3d(pl->a, pl->b, pl->c, d);
+}
+
 /* Sign of (b − a) × (c − a) in the plane: +1 when a, b, c turn
  * counter-clockwise (c left of the directed line a→b), −1 clockwise,
  * 0 when exactly collinear. Only [0] and [1] of each point are read. */
 int geo_orient2d(const double a[2], const double b[2], const double c[2]);
 
+/* The exact path of geo_orient2d_proj (expansion arithmetic), for its
+ * inline filter below; callers use geo_orient2d_proj. */
+int geo_orient2d_proj_exact(const double a[3], const double b[3],
+                            const double c[3], int drop);
+
 /* orient2d of 3D points projected by dropping coordinate `drop` (0, 1 or
  * 2); the remaining axes keep their cyclic order (drop z: x,y; drop x:
  * y,z; drop y: z,x), so a counter-clockwise triangle seen from the +drop
- * axis gives +1. */
-int geo_orient2d_proj(const double a[3], const double b[3], const double c[3],
-                      int drop);
+ * axis gives +1. Inline: the filter of geo_orient2d (Shewchuk's bound
+ * (3 + 16u)u on the sum of the two products' magnitudes) on the
+ * projected coordinates in place; the exact path out of line. */
+static inline int geo_orient2d_proj(const double a[3], const double b[3],
+                                    const double c[3], int drop)
+{
+    int u = drop == 2 ? 0 : drop + 1, v = drop == 0 ? 2 : drop - 1;
+    double left = (a[u] - c[u]) * (b[v] - c[v]);
+    double right = (a[v] - c[v]) * (b[u] - c[u]);
+    double det = left - right;
+    double bound = (3.0 + 16.0 * 0x1.0p-53) * 0x1.0p-53 *
+                   (fabs(left) + fabs(right));
+    if (fabs(det) > bound && fabs(det) > 0x1.0p-900)
+        return det > 0 ? 1 : -1;
+    return geo_orient2d_proj_exact(a, b, c, drop);
+}
+
+/* geo_orient2d_proj(a, b, c, drop) for many c against one line a → b
+ * (the vertices of a facet against a shared edge): b − a is formed once,
+ * each query is (b − a) × (c − a) in the projection. Each of its two
+ * monomials passes at most 4 roundings (two differences, the product, the
+ * difference), so the computed value is within γ₄·P of the exact one, P
+ * the sum of the monomials' magnitudes; P is computed from the same
+ * rounded factors with 4 roundings of its own, so 6u·P̂ bounds the error.
+ * Above that bound (and above 2⁻⁹⁰⁰) the sign is exact; otherwise, and
+ * for NaN or overflow, the answer comes from geo_orient2d_proj. The
+ * answer is always geo_orient2d_proj(a, b, c, drop). The struct points to
+ * a and b (not copied); read-only use is thread-safe. */
+typedef struct geo_orient2d_line {
+    const double *a, *b;
+    int drop, u, v;  /* dropped axis; the kept ones in cyclic order */
+    double du, dv;   /* b − a in the kept axes, rounded */
+} geo_orient2d_line;
+
+static inline void geo_orient2d_line_init(geo_orient2d_line *l,
+                                          const double a[3],
+                                          const double b[3], int drop)
+{
+    l->a = a, l->b = b, l->drop = drop;
+    l->u = drop == 2 ? 0 : drop + 1;
+    l->v = drop == 0 ? 2 : drop - 1;
+    l->du = b[l->u] - a[l->u];
+    l->dv = b[l->v] - a[l->v];
+}
+
+static inline int geo_orient2d_line_sign(const geo_orient2d_line *l,
+                                         const double c[3])
+{
+    double xu = c[l->u] - l->a[l->u], xv = c[l->v] - l->a[l->v];
+    double left = l->du * xv, right = l->dv * xu;
+    double det = left - right;
+    if (fabs(det) > 6.0 * 0x1.0p-53 * (fabs(left) + fabs(right)) &&
+        fabs(det) > 0x1.0p-900)
+        return det > 0 ? 1 : -1;
+    return geo_orient2d_proj(l->a, l->b, c, l->drop);
+}
 
 /* Exact sign of plane[0]·p[0] + plane[1]·p[1] + plane[2]·p[2] + plane[3]
  * for the given doubles (the plane's coefficients are taken as exact):

@@ -180,6 +180,60 @@ static int turn_in_axis(const geo_poly *p, uint32_t f, int axis)
     return t;
 }
 
+/* The first of the facet's vertices fv[0..n) farthest from x (by the
+ * rounded distance, ties to the first). The square root is taken only
+ * for a squared distance above every one before: a smaller or equal one
+ * cannot have a larger root. */
+static uint32_t farthest(const geo_poly *p, const uint32_t *fv, uint32_t n,
+                         const double x[3])
+{
+    uint32_t k = 0;
+    double best = -1, best2 = -1;
+    for (uint32_t i = 0; i < n; i++) {
+        double d[3];
+        geo_vsub(V(p, fv[i]), x, d);
+        double d2 = geo_vdot(d, d);
+        if (!(d2 > best2))
+            continue;
+        best2 = d2;
+        double len = sqrt(d2);
+        if (len > best)
+            best = len, k = i;
+    }
+    return k;
+}
+
+/* Whether facet fv[0..n) is a strictly convex polygon in the projection
+ * dropping `axis`, turning `turn`: every corner turns strictly that way
+ * (corner[i] · turn > 0 for the exact corner signs given) and the edge
+ * direction goes round once. Each edge turns the direction by less than
+ * a half turn, so its half plane (upper: y > 0, or y = 0 and x > 0;
+ * exact comparisons of coordinates) changes at most once per corner and
+ * twice per revolution: twice in all means once round. A closed polygon
+ * turning one way at every corner and once round in all is the boundary
+ * of a convex polygon — simple, so the pairwise edge test is not
+ * needed. False means "not shown", not "not convex". */
+static bool strictly_convex(const geo_poly *p, const uint32_t *fv, uint32_t n,
+                            int axis, int turn, const int8_t *corner)
+{
+    for (uint32_t i = 0; i < n; i++)
+        if (corner[i] * turn <= 0)
+            return false;
+    int u = (axis + 1) % 3, w = (axis + 2) % 3;
+    uint32_t changes = 0;
+    const double *a = V(p, fv[n - 1]), *b = V(p, fv[0]);
+    /* the half plane without short-circuit branches (unpredictable) */
+    int up = (b[w] > a[w]) | ((b[w] == a[w]) & (b[u] > a[u]));
+    for (uint32_t i = 0; i < n; i++) {
+        a = b;
+        b = V(p, fv[i + 1 < n ? i + 1 : 0]);
+        int next = (b[w] > a[w]) | ((b[w] == a[w]) & (b[u] > a[u]));
+        changes += (uint32_t)(next ^ up);
+        up = next;
+    }
+    return changes == 2;
+}
+
 void geo_facet_shape_of(const geo_poly *p, uint32_t f, geo_facet_shape *ret)
 {
     uint32_t n = geo_poly_facet_size(p, f);
@@ -194,19 +248,9 @@ void geo_facet_shape_of(const geo_poly *p, uint32_t f, geo_facet_shape *ret)
     for (uint32_t i = 0; i < n; i++)
         geo_vadd(m, V(p, fv[i]), m);
     geo_vscale(m, 1.0 / n, m);
-    uint32_t ia = 0, ib = 0, ic = 0;
-    double best = -1;
-    for (uint32_t i = 0; i < n; i++) {
-        double d = geo_vdist(V(p, fv[i]), m);
-        if (d > best)
-            best = d, ia = i;
-    }
-    best = -1;
-    for (uint32_t i = 0; i < n; i++) {
-        double d = geo_vdist(V(p, fv[i]), V(p, fv[ia]));
-        if (d > best)
-            best = d, ib = i;
-    }
+    uint32_t ia = farthest(p, fv, n, m), ib = farthest(p, fv, n, V(p, fv[ia])),
+             ic = 0;
+    double best;
     const double *A = V(p, fv[ia]), *B = V(p, fv[ib]);
     if (A[0] == B[0] && A[1] == B[1] && A[2] == B[2]) {
         ret->degenerate = true; /* a single distinct point */
@@ -221,8 +265,14 @@ void geo_facet_shape_of(const geo_poly *p, uint32_t f, geo_facet_shape *ret)
         geo_vsub(V(p, fv[i]), A, ac);
         geo_vcross(ab, ac, c);
         double d = geo_vdot(c, c);
-        if (d > best)
-            best = d, ic = i, memcpy(nrm, c, sizeof c);
+        /* selections, not a branch: the first largest */
+        ic = d > best ? i : ic;
+        best = d > best ? d : best;
+    }
+    if (best > -1) { /* the cross product again, for the chosen vertex */
+        double ac[3];
+        geo_vsub(V(p, fv[ic]), A, ac);
+        geo_vcross(ab, ac, nrm);
     }
     if (collinear3(A, B, V(p, fv[ic]))) {
         /* rounding may hide a non-collinear vertex: look exactly */
@@ -246,12 +296,45 @@ void geo_facet_shape_of(const geo_poly *p, uint32_t f, geo_facet_shape *ret)
             axis = k;
     ret->axis = (int8_t)axis;
 
-    ret->turn = (int8_t)turn_in_axis(p, f, axis);
+    /* each corner's exact turn, once: the polygon's turn (at its lowest
+     * projected vertex, as turn_in_axis), the convexity test and the
+     * strictly convex shortcut of the simplicity test all read them
+     * (facets of more than 64 vertices: turn_in_axis and the pairwise
+     * test) */
+    enum { SMALL = 64 };
+    int8_t corner[SMALL] = {0};
+    bool shortcut = n <= SMALL;
+    if (shortcut) {
+        int u = (axis + 1) % 3, w = (axis + 2) % 3;
+        uint32_t lo = 0;
+        for (uint32_t i = 0; i < n; i++) {
+            const double *x = V(p, fv[i]), *l = V(p, fv[lo]);
+            lo = x[u] < l[u] || (x[u] == l[u] && x[w] < l[w]) ? i : lo;
+            corner[i] = (int8_t)geo_orient2d_proj(
+                V(p, fv[i ? i - 1 : n - 1]), x, V(p, fv[i + 1 < n ? i + 1 : 0]),
+                axis);
+        }
+        ret->turn = corner[lo];
+        if (ret->turn == 0) {
+            double nw[3];
+            geo_poly_facet_area_vector(p, f, nw);
+            ret->turn = nw[axis] < 0 ? -1 : 1;
+        }
+    } else {
+        ret->turn = (int8_t)turn_in_axis(p, f, axis);
+    }
+    if (shortcut && strictly_convex(p, fv, n, axis, ret->turn, corner)) {
+        ret->simple = ret->convex = true;
+        return;
+    }
     ret->simple = !geo_facet_self_intersects(p, f, ret);
     ret->convex = ret->simple;
     for (uint32_t i = 0; i < n && ret->convex; i++)
-        ret->convex = geo_orient2d_proj(V(p, fv[(i + n - 1) % n]), V(p, fv[i]),
-                                        V(p, fv[(i + 1) % n]), axis) *
+        ret->convex = (shortcut ? corner[i]
+                                : geo_orient2d_proj(V(p, fv[(i + n - 1) % n]),
+                                                    V(p, fv[i]),
+                                                    V(p, fv[(i + 1) % n]),
+                                                    axis)) *
                           ret->turn >= 0;
 }
 
@@ -410,19 +493,77 @@ typedef struct facet_ref {
     uint32_t id, n;
     const uint32_t *v;
     const geo_facet_shape *s;
+    uint64_t mask; /* vertex_mask of its vertices */
+    /* NULL, or the facet's keys (vertex << 32 | position) sorted: large
+     * facets get them once per search, so that matching a small facet's
+     * vertices against them costs O(|G| log |F|), not O(|F|·|G|) */
+    const uint64_t *sorted;
 } facet_ref;
+
+/* One bit per vertex index: facets whose masks share no bit share no
+ * vertex, and a vertex whose bit the other facet lacks is not in it. */
+static inline uint64_t vertex_bit(uint32_t v)
+{
+    /* the low bits: neighbouring facets' vertices, numbered close
+     * together, spread over all 64 (a multiplicative hash measured
+     * slightly worse on scans) */
+    return 1ULL << (v & 63);
+}
+
+static uint64_t vertex_mask(const uint32_t *v, uint32_t n)
+{
+    uint64_t m = 0;
+    for (uint32_t i = 0; i < n; i++)
+        m |= vertex_bit(v[i]);
+    return m;
+}
 
 static facet_ref facet_at(const geo_poly *p, uint32_t f,
                           const geo_facet_shape *s)
 {
-    facet_ref r = {f, geo_poly_facet_size(p, f), geo_poly_facet(p, f), s};
+    facet_ref r = {f, geo_poly_facet_size(p, f), geo_poly_facet(p, f), s, 0,
+                   NULL};
+    r.mask = vertex_mask(r.v, r.n);
     return r;
+}
+
+/* The first position of vertex v in F, or −1: a binary search in its
+ * sorted keys when it has them, else a scan without a branch per
+ * comparison. */
+static int32_t position_in(const facet_ref *F, uint32_t v)
+{
+    if (!F->sorted) {
+        int32_t first = -1;
+        for (uint32_t i = F->n; i-- > 0;)
+            first = F->v[i] == v ? (int32_t)i : first;
+        return first;
+    }
+    uint64_t key = (uint64_t)v << 32;
+    uint32_t lo = 0, hi = F->n;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (F->sorted[mid] < key)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    if (lo < F->n && (uint32_t)(F->sorted[lo] >> 32) == v)
+        return (int32_t)(uint32_t)F->sorted[lo];
+    return -1;
 }
 
 static int side_of(const geo_poly *p, const facet_ref *F, const double x[3])
 {
     const uint32_t *r = F->s->ref;
     return geo_orient3d(V(p, r[0]), V(p, r[1]), V(p, r[2]), x);
+}
+
+/* F's reference plane prepared for many side_of queries. */
+static void plane_of(const geo_poly *p, const facet_ref *F,
+                     geo_orient3d_plane *ret)
+{
+    const uint32_t *r = F->s->ref;
+    geo_orient3d_plane_init(ret, V(p, r[0]), V(p, r[1]), V(p, r[2]));
 }
 
 /* Positions i, j of F are consecutive (an edge of F, either direction). */
@@ -683,62 +824,54 @@ static bool separated_by_shared_edge(const geo_poly *p, const facet_ref *F,
                                      const facet_ref *G, const int32_t *gpos,
                                      uint32_t iu, uint32_t iw)
 {
-    int axis = F->s->axis;
-    const double *u = V(p, F->v[iu]), *w = V(p, F->v[iw]);
+    geo_orient2d_line uw;
+    geo_orient2d_line_init(&uw, V(p, F->v[iu]), V(p, F->v[iw]), F->s->axis);
     int side_f = 0;
     for (uint32_t i = 0; i < F->n && !side_f; i++)
         if (i != iu && i != iw)
-            side_f = geo_orient2d_proj(u, w, V(p, F->v[i]), axis);
+            side_f = geo_orient2d_line_sign(&uw, V(p, F->v[i]));
     if (!side_f)
         return false;
     for (uint32_t j = 0; j < G->n; j++)
-        if (gpos[j] < 0 &&
-            geo_orient2d_proj(u, w, V(p, G->v[j]), axis) != -side_f)
+        if (gpos[j] < 0 && geo_orient2d_line_sign(&uw, V(p, G->v[j])) != -side_f)
             return false;
     return true;
 }
 
-static bool pair_test(const geo_poly *p, const facet_ref *F,
-                      const facet_ref *G, pair_scratch *sc)
+/* fpos from gpos: for each position of F, the (last) position of G
+ * listing the same vertex, or −1. O(|F| + |G|), so only paid by pairs
+ * that get past the first side test. */
+static void fill_fpos(const facet_ref *F, const facet_ref *G,
+                      const int32_t *gpos, int32_t *fpos)
+{
+    for (uint32_t i = 0; i < F->n; i++)
+        fpos[i] = -1;
+    for (uint32_t j = 0; j < G->n; j++)
+        if (gpos[j] >= 0)
+            fpos[gpos[j]] = (int32_t)j;
+}
+
+/* The rest of pair_test once the sides sg of G's vertices against π_F
+ * (pos, neg: whether any is positive, negative) and the shared positions
+ * are known. */
+static bool sided_test(const geo_poly *p, const facet_ref *F,
+                       const facet_ref *G, pair_scratch *sc,
+                       uint32_t nshared, bool pos, bool neg)
 {
     int8_t *sf = sc->sf, *sg = sc->sg;
     int32_t *fpos = sc->fpos, *gpos = sc->gpos;
-    uint32_t nshared = 0;
-    for (uint32_t i = 0; i < F->n; i++)
-        fpos[i] = -1;
-    for (uint32_t j = 0; j < G->n; j++) {
-        gpos[j] = -1;
-        for (uint32_t i = 0; i < F->n; i++)
-            if (F->v[i] == G->v[j]) {
-                gpos[j] = (int32_t)i;
-                fpos[i] = (int32_t)j;
-                nshared++;
-                break;
-            }
-    }
-    if (nshared == 2 && F->s->convex && G->s->convex) {
-        int32_t iu = -1, iw = -1;
-        for (uint32_t i = 0; i < F->n; i++)
-            if (fpos[i] >= 0)
-                iu < 0 ? (iu = (int32_t)i) : (iw = (int32_t)i);
-        if (is_edge(F, iu, iw) && is_edge(G, fpos[iu], fpos[iw]) &&
-            separated_by_shared_edge(p, F, G, gpos, (uint32_t)iu,
-                                     (uint32_t)iw))
-            return false;
-    }
-    bool pos = false, neg = false;
-    for (uint32_t j = 0; j < G->n; j++) {
-        sg[j] = (int8_t)(gpos[j] >= 0 ? 0 : side_of(p, F, V(p, G->v[j])));
-        pos |= sg[j] > 0;
-        neg |= sg[j] < 0;
-    }
+    geo_orient3d_plane pl;
+    if (!(pos && neg) && (pos || neg))
+        return touching_hits(p, F, G, sg, gpos);
+    fill_fpos(F, G, gpos, fpos);
     if (!pos && !neg)
         return coplanar_overlap(p, F, G, fpos, gpos, F->s->axis);
-    if (!(pos && neg))
-        return touching_hits(p, F, G, sg, gpos);
     pos = neg = false;
+    plane_of(p, G, &pl);
     for (uint32_t i = 0; i < F->n; i++) {
-        sf[i] = (int8_t)(fpos[i] >= 0 ? 0 : side_of(p, G, V(p, F->v[i])));
+        sf[i] = (int8_t)(fpos[i] >= 0
+                             ? 0
+                             : geo_orient3d_plane_sign(&pl, V(p, F->v[i])));
         pos |= sf[i] > 0;
         neg |= sf[i] < 0;
     }
@@ -769,6 +902,78 @@ static bool pair_test(const geo_poly *p, const facet_ref *F,
         }
     }
     return false;
+}
+
+static bool pair_test(const geo_poly *p, const facet_ref *F,
+                      const facet_ref *G, pair_scratch *sc)
+{
+    /* the predicate is symmetric for planar facets: G, whose vertices are
+     * matched and classified first, is the smaller when the larger has
+     * sorted keys, so that a large facet met by many small ones that only
+     * touch its plane (a prism's cap and its sides) costs O(|G| log |F|)
+     * per pair instead of O(|F|·|G|); otherwise the lower facet stays F,
+     * so that the answer on non-planar garbage is the same as before */
+    if (G->sorted && G->n > F->n) {
+        const facet_ref *t = F;
+        F = G;
+        G = t;
+    }
+    int8_t *sg = sc->sg;
+    int32_t *gpos = sc->gpos;
+    uint64_t common = F->mask & G->mask;
+    bool pos = false, neg = false;
+    geo_orient3d_plane pl;
+    plane_of(p, F, &pl);
+    if (!common) {
+        /* no vertex in common (most pairs that are not neighbours): G
+         * strictly on one side of π_F is apart, as touching_hits would
+         * find with no side 0; anything else takes the general path */
+        bool zero = false;
+        for (uint32_t j = 0; j < G->n; j++) {
+            sg[j] = (int8_t)geo_orient3d_plane_sign(&pl, V(p, G->v[j]));
+            pos |= sg[j] > 0;
+            neg |= sg[j] < 0;
+            zero |= sg[j] == 0;
+        }
+        if (!zero && !(pos && neg))
+            return false;
+        for (uint32_t j = 0; j < G->n; j++)
+            gpos[j] = -1;
+        return sided_test(p, F, G, sc, 0, pos, neg);
+    }
+    uint32_t nshared = 0, at[2] = {0, 0};
+    for (uint32_t j = 0; j < G->n; j++) {
+        uint32_t v = G->v[j];
+        gpos[j] = common & vertex_bit(v) ? position_in(F, v) : -1;
+        if (gpos[j] >= 0) {
+            if (nshared < 2)
+                at[nshared] = j;
+            nshared++;
+        }
+    }
+    if (nshared == 2 && F->s->convex && G->s->convex &&
+        gpos[at[0]] != gpos[at[1]]) {
+        /* ju, jw: G's positions of the shared vertices, taken so that
+         * iu comes before iw in F's order */
+        uint32_t ju = at[0], jw = at[1];
+        if (gpos[ju] > gpos[jw]) {
+            ju = at[1];
+            jw = at[0];
+        }
+        uint32_t iu = (uint32_t)gpos[ju], iw = (uint32_t)gpos[jw];
+        if (is_edge(F, (int32_t)iu, (int32_t)iw) &&
+            is_edge(G, (int32_t)ju, (int32_t)jw) &&
+            separated_by_shared_edge(p, F, G, gpos, iu, iw))
+            return false;
+    }
+    for (uint32_t j = 0; j < G->n; j++) {
+        sg[j] = (int8_t)(gpos[j] >= 0
+                             ? 0
+                             : geo_orient3d_plane_sign(&pl, V(p, G->v[j])));
+        pos |= sg[j] > 0;
+        neg |= sg[j] < 0;
+    }
+    return sided_test(p, F, G, sc, nshared, pos, neg);
 }
 
 int geo_facets_intersect(const geo_poly *p, uint32_t f, uint32_t g,
@@ -879,6 +1084,8 @@ typedef struct search {
     const geo_bvh *h;
     const geo_ctx *ctx;
     const geo_facet_shape *shapes;
+    const uint64_t *masks; /* vertex_mask of each facet */
+    const uint64_t *const *sorted; /* per facet: sorted keys or NULL */
     atomic_uchar *flags;
     uint32_t keep;
     uint32_t maxn;        /* largest facet size */
@@ -907,22 +1114,72 @@ static bool visit_pair(void *user, uint32_t a, uint32_t b)
             return false;
         }
     }
+    /* the lower facet first: on facets that are not planar the test is
+     * not symmetric (each facet is its vertices projected along the
+     * query), and the answer must not depend on the tree's visit order */
+    if (a > b) {
+        uint32_t t = a;
+        a = b;
+        b = t;
+    }
     const geo_facet_shape *sa = &s->shapes[a], *sb = &s->shapes[b];
     if (sa->degenerate || sb->degenerate)
         return true;
-    facet_ref F = facet_at(s->p, a, sa), G = facet_at(s->p, b, sb);
+    facet_ref F = {a, geo_poly_facet_size(s->p, a), geo_poly_facet(s->p, a),
+                   sa, s->masks[a], s->sorted[a]};
+    facet_ref G = {b, geo_poly_facet_size(s->p, b), geo_poly_facet(s->p, b),
+                   sb, s->masks[b], s->sorted[b]};
     if (!pair_test(s->p, &F, &G, &vs->sc))
         return true;
     vs->out->count++;
     atomic_fetch_or_explicit(&s->flags[a], GEO_SI_PAIR, memory_order_relaxed);
     atomic_fetch_or_explicit(&s->flags[b], GEO_SI_PAIR, memory_order_relaxed);
-    uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
-    if (list_add(&vs->out->list, lo, hi, s->keep) < 0) {
+    if (list_add(&vs->out->list, a, b, s->keep) < 0) {
         vs->out->err = -ENOMEM;
         atomic_store(&s->stop, 1);
         return false;
     }
     return true;
+}
+
+static int cmp_u64(const void *x, const void *y)
+{
+    uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
+    return (a > b) - (a < b);
+}
+
+/* Facets above this size get sorted vertex keys for the pair tests. */
+enum { SORTED_MIN = 32 };
+
+/* The sorted keys of every facet above SORTED_MIN vertices, in one
+ * buffer (*keys); sorted[f] points into it or is NULL. -ENOMEM. */
+static int sort_large_facets(const geo_poly *p, const uint64_t **sorted,
+                             uint64_t **keys)
+{
+    size_t total = 0;
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        uint32_t n = geo_poly_facet_size(p, f);
+        if (n > SORTED_MIN)
+            total += n;
+    }
+    *keys = malloc((total + 1) * sizeof **keys);
+    if (!*keys)
+        return -ENOMEM;
+    size_t at = 0;
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        uint32_t n = geo_poly_facet_size(p, f);
+        sorted[f] = NULL;
+        if (n <= SORTED_MIN)
+            continue;
+        const uint32_t *fv = geo_poly_facet(p, f);
+        uint64_t *k = *keys + at;
+        for (uint32_t i = 0; i < n; i++)
+            k[i] = (uint64_t)fv[i] << 32 | i;
+        qsort(k, n, sizeof *k, cmp_u64);
+        sorted[f] = k;
+        at += n;
+    }
+    return 0;
 }
 
 static void run_task(void *arg, size_t i)
@@ -932,18 +1189,29 @@ static void run_task(void *arg, size_t i)
     visit_state vs = {s, &s->out[t], {0}, 0};
     if (atomic_load(&s->stop))
         return;
-    if (scratch_reserve(&vs.sc, s->maxn) < 0) {
+    /* ordinary facets: scratch on the stack, no allocation per task */
+    enum { SMALL = 64 };
+    int8_t s1[SMALL], s2[SMALL];
+    int32_t p1[SMALL], p2[SMALL];
+    bool heap = s->maxn > SMALL;
+    if (!heap) {
+        pair_scratch small = {SMALL, s1, s2, p1, p2};
+        vs.sc = small;
+    } else if (scratch_reserve(&vs.sc, s->maxn) < 0) {
+        scratch_free(&vs.sc);
         s->out[t].err = -ENOMEM;
         atomic_store(&s->stop, 1);
         return;
     }
     geo_bvh_pairs(s->h, s->ta[t], s->tb[t], visit_pair, &vs);
-    scratch_free(&vs.sc);
+    if (heap)
+        scratch_free(&vs.sc);
 }
 
 typedef struct shape_job {
     const geo_poly *p;
     geo_facet_shape *shapes;
+    uint64_t *masks;
     atomic_uchar *flags;
     uint32_t block;
 } shape_job;
@@ -957,6 +1225,8 @@ static void run_shapes(void *arg, size_t i)
     for (uint32_t f = lo; f < hi; f++) {
         geo_facet_shape *s = &j->shapes[f];
         geo_facet_shape_of(j->p, f, s);
+        j->masks[f] = vertex_mask(geo_poly_facet(j->p, f),
+                                  geo_poly_facet_size(j->p, f));
         unsigned char fl = 0;
         if (s->degenerate)
             fl = GEO_SI_DEGENERATE;
@@ -991,6 +1261,9 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     search s = {0};
     geo_bvh *own = NULL;
     geo_facet_shape *shapes = malloc(((size_t)nf + 1) * sizeof *shapes);
+    uint64_t *masks = malloc(((size_t)nf + 1) * sizeof *masks);
+    const uint64_t **sorted = malloc(((size_t)nf + 1) * sizeof *sorted);
+    uint64_t *keys = NULL;
     atomic_uchar *flags = malloc(((size_t)nf + 1) * sizeof *flags);
     uint8_t *plain = malloc((size_t)nf + 1);
     uint32_t *ta = malloc((size_t)o.max_tasks * sizeof *ta);
@@ -998,19 +1271,21 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     task_out *out = NULL;
     uint32_t ntasks = 0;
     pair_list all = {0};
-    if (!shapes || !flags || !plain || !ta || !tb)
+    if (!shapes || !masks || !flags || !plain || !ta || !tb || !sorted ||
+        sort_large_facets(p, sorted, &keys) < 0)
         goto oom;
     uint32_t maxn = 3;
     for (uint32_t f = 0; f < nf; f++)
         if (geo_poly_facet_size(p, f) > maxn)
             maxn = geo_poly_facet_size(p, f);
 
-    shape_job sj = {p, shapes, flags, 4096};
+    shape_job sj = {p, shapes, masks, flags, 4096};
     geo_ctx_parallel_for(ctx, (nf + sj.block - 1) / sj.block, run_shapes, &sj);
     if ((rc = geo_ctx_progress(ctx, 0.05)) < 0)
         goto fail;
     if (!bvh) {
-        own = geo_bvh_build_facets(p, err);
+        /* the answer does not depend on the tree: the fastest to build */
+        own = geo_bvh_build_facets_morton(p, err);
         if (!own)
             goto oom;
         bvh = own;
@@ -1022,12 +1297,19 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     out = calloc((size_t)ntasks + 1, sizeof *out);
     if (!out)
         goto oom;
-    s.p = p, s.h = bvh, s.ctx = ctx, s.shapes = shapes, s.flags = flags;
+    s.p = p, s.h = bvh, s.ctx = ctx, s.shapes = shapes, s.masks = masks;
+    s.flags = flags;
+    s.sorted = sorted;
     s.keep = o.max_pairs, s.maxn = maxn, s.ta = ta, s.tb = tb, s.out = out;
     atomic_init(&s.stop, 0);
     /* batches, so that progress and cancellation are seen from the
-     * calling thread between them */
-    uint32_t nbatch = 16, per = (ntasks + nbatch - 1) / nbatch;
+     * calling thread between them: up to 16, one per 16,384 facets (each
+     * batch wakes the caller's pool, which costs more than a small
+     * model's whole search; the tasks check cancellation themselves) */
+    uint32_t nbatch = 1 + nf / 16384;
+    if (nbatch > 16)
+        nbatch = 16;
+    uint32_t per = (ntasks + nbatch - 1) / nbatch;
     if (per == 0)
         per = 1;
     for (uint32_t b0 = 0; b0 < ntasks; b0 += per) {
@@ -1099,6 +1381,9 @@ done:
     free(all.v);
     geo_bvh_free(own);
     free(shapes);
+    free(masks);
+    free(sorted);
+    free(keys);
     free(flags);
     free(plain);
     free(ta);

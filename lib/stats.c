@@ -36,10 +36,24 @@ static int cmp_u32(const void *x, const void *y)
     return (a > b) - (a < b);
 }
 
-static int cmp_u64(const void *x, const void *y)
+/* Distinct values among nb[0..n): a quadratic scan for the short lists
+ * of ordinary vertices (no call, no sort), a sort beyond. */
+static uint32_t distinct(uint32_t *nb, uint32_t n)
 {
-    uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
-    return (a > b) - (a < b);
+    uint32_t d = 0;
+    if (n <= 32) {
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t j = 0;
+            while (j < i && nb[j] != nb[i])
+                j++;
+            d += j == i;
+        }
+        return d;
+    }
+    qsort(nb, n, sizeof *nb, cmp_u32);
+    for (uint32_t i = 0; i < n; i++)
+        d += i == 0 || nb[i] != nb[i - 1];
+    return d;
 }
 
 /* Vertex degrees (distinct neighbours through the corners at each
@@ -58,21 +72,29 @@ static int degrees(const geo_poly *p, const geo_topo *t, geo_stats *s)
     }
     uint32_t maxd = 0;
     for (uint32_t v = 0; v < p->nverts; v++) {
+        uint32_t k0 = t->vstart[v], k1 = t->vstart[v + 1];
+        if (k1 - k0 < 3)
+            s->low_degree_vertices++;
+        /* an interior vertex's single closed fan crosses each of its
+         * edges once, and each edge there has exactly two corners (else
+         * it would be non-manifold, and so the vertex): as many distinct
+         * edges, hence neighbours, as corners */
+        if (t->vertex_kind[v] == GEO_VERTEX_INTERIOR) {
+            deg[v] = k1 - k0;
+            if (deg[v] > maxd)
+                maxd = deg[v];
+            continue;
+        }
         uint32_t n = 0;
-        for (uint32_t k = t->vstart[v]; k < t->vstart[v + 1]; k++) {
+        for (uint32_t k = k0; k < k1; k++) {
             uint32_t c = t->vcorners[k];
             nb[n++] = p->fidx[geo_topo_next(p, t, c)];
             nb[n++] = p->fidx[geo_topo_prev(p, t, c)];
         }
-        qsort(nb, n, sizeof *nb, cmp_u32);
-        uint32_t d = 0;
-        for (uint32_t i = 0; i < n; i++)
-            d += i == 0 || nb[i] != nb[i - 1];
+        uint32_t d = distinct(nb, n);
         deg[v] = d;
         if (d > maxd)
             maxd = d;
-        if (t->vstart[v + 1] - t->vstart[v] < 3)
-            s->low_degree_vertices++;
     }
     s->degree_count = calloc((size_t)maxd + 1, sizeof *s->degree_count);
     if (!s->degree_count) {
@@ -86,57 +108,91 @@ static int degrees(const geo_poly *p, const geo_topo *t, geo_stats *s)
     return 0;
 }
 
+/* Whether the angle atan2(√yy, c) (degrees) of two unit normals is
+ * surely at least tmax, without the arctangent or the root: c < 0 means
+ * at least 90°, and yy > (c·tan(tmax))²·(1 + 1e-8) means a tangent above
+ * tan(tmax) by far more than the rounding of the root, of atan2 and of
+ * the conversion to degrees. Only for 1e-6 ≤ tmax ≤ 89 (tan_max = 0
+ * otherwise: never sure). A NaN is never sure. Pairs not surely wider are
+ * measured by atan2 as before. */
+static bool surely_wider(double yy, double c, double tan_max)
+{
+    if (tan_max == 0)
+        return false;
+    double lim = c * tan_max;
+    return c < 0 || yy > lim * lim * (1 + 1e-8);
+}
+
 /* Adjacent facet pairs (each once) whose normals are within each
- * threshold; zero-length edges; facets winding against their plane. */
+ * threshold; facets winding against their plane; the total area.
+ * Each facet's neighbours above it are gathered through its corners with
+ * a stamp per facet, so a pair sharing several edges counts once (as
+ * agreeing when any of its edges agrees). */
 static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
 {
-    uint32_t nf = p->nfacets, nc = t->ncorners;
+    uint32_t nf = p->nfacets;
     double (*nrm)[3] = malloc(((size_t)nf + 1) * sizeof *nrm);
-    uint64_t *pairs = malloc(((size_t)nc + 1) * sizeof *pairs);
-    if (!nrm || !pairs) {
-        free(nrm), free(pairs);
+    uint32_t *stamp = malloc(((size_t)nf + 1) * sizeof *stamp);
+    uint8_t *agree = malloc((size_t)nf + 1);
+    uint32_t maxn = 1;
+    for (uint32_t f = 0; f < nf; f++)
+        if (geo_poly_facet_size(p, f) > maxn)
+            maxn = geo_poly_facet_size(p, f);
+    uint32_t *list = malloc((size_t)maxn * sizeof *list);
+    if (!nrm || !stamp || !agree || !list) {
+        free(nrm), free(stamp), free(agree), free(list);
         return -ENOMEM;
     }
+    /* the total area from the same Newell vectors, summed in facet order
+     * as geo_poly_area does */
+    s->area = 0;
     for (uint32_t f = 0; f < nf; f++) {
         geo_poly_facet_area_vector(p, f, nrm[f]);
+        s->area += 0.5 * geo_vlen(nrm[f]);
         geo_vnormalize(nrm[f]);
         if (geo_vdot(nrm[f], p->planes[f]) < 0)
             s->inverted_facets++;
+        stamp[f] = GEO_NONE;
     }
-    /* key: lower facet in the high half, the other facet and whether
-     * they disagree on the edge in the low half (facet indices < 2³¹) */
-    size_t np = 0;
-    for (uint32_t c = 0; c < nc; c++) {
-        uint32_t m = t->mate[c];
-        const double *a = p->verts[p->fidx[c]];
-        const double *b = p->verts[p->fidx[geo_topo_next(p, t, c)]];
-        if ((m == GEO_NONE || c < m) && a[0] == b[0] && a[1] == b[1] &&
-            a[2] == b[2])
-            s->degenerate_edges++;
-        if (m == GEO_NONE || m < c)
-            continue;
-        uint32_t f = t->corner_facet[c], g = t->corner_facet[m];
-        if (f == g)
-            continue;
-        uint32_t lo = f < g ? f : g, hi = f < g ? g : f;
-        uint32_t flipped = t->edge_kind[c] == GEO_EDGE_FLIPPED;
-        pairs[np++] = (uint64_t)lo << 32 | (uint64_t)hi << 1 | flipped;
+    double tmax = s->coplanar_deg[0];
+    for (int k = 1; k < GEO_STATS_NCOPLANAR; k++)
+        if (s->coplanar_deg[k] > tmax)
+            tmax = s->coplanar_deg[k];
+    double tan_max = tmax >= 1e-6 && tmax <= 89 ? tan(tmax * M_PI / 180.0)
+                                                : 0;
+    for (uint32_t f = 0; f < nf; f++) {
+        uint32_t nl = 0;
+        for (uint32_t c = p->fstart[f]; c < p->fstart[f + 1]; c++) {
+            uint32_t m = t->mate[c];
+            if (m == GEO_NONE)
+                continue;
+            uint32_t g = t->corner_facet[m];
+            if (g <= f)
+                continue;
+            uint8_t ag = t->edge_kind[c] != GEO_EDGE_FLIPPED;
+            if (stamp[g] != f) {
+                stamp[g] = f;
+                agree[g] = ag;
+                list[nl++] = g;
+            } else {
+                agree[g] |= ag;
+            }
+        }
+        for (uint32_t i = 0; i < nl; i++) {
+            uint32_t g = list[i];
+            double n2[3], x[3];
+            geo_vscale(nrm[g], agree[g] ? 1.0 : -1.0, n2);
+            geo_vcross(nrm[f], n2, x);
+            double yy = geo_vdot(x, x), dot = geo_vdot(nrm[f], n2);
+            if (surely_wider(yy, dot, tan_max))
+                continue;
+            double ang = atan2(sqrt(yy), dot) * 180.0 / M_PI;
+            for (int k = 0; k < GEO_STATS_NCOPLANAR; k++)
+                if (ang < s->coplanar_deg[k])
+                    s->near_coplanar[k]++;
+        }
     }
-    qsort(pairs, np, sizeof *pairs, cmp_u64);
-    for (size_t i = 0; i < np; i++) {
-        if (i > 0 && pairs[i] >> 1 == pairs[i - 1] >> 1)
-            continue;
-        uint32_t f = (uint32_t)(pairs[i] >> 32);
-        uint32_t g = (uint32_t)(pairs[i] & 0xffffffffu) >> 1;
-        double n2[3], x[3];
-        geo_vscale(nrm[g], pairs[i] & 1 ? -1.0 : 1.0, n2);
-        geo_vcross(nrm[f], n2, x);
-        double ang = atan2(geo_vlen(x), geo_vdot(nrm[f], n2)) * 180.0 / M_PI;
-        for (int k = 0; k < GEO_STATS_NCOPLANAR; k++)
-            if (ang < s->coplanar_deg[k])
-                s->near_coplanar[k]++;
-    }
-    free(nrm), free(pairs);
+    free(nrm), free(stamp), free(agree), free(list);
     return 0;
 }
 
@@ -149,8 +205,11 @@ static uint32_t uf_find(uint32_t *parent, uint32_t x)
     return x;
 }
 
-/* Union-find over edges shorter than the radius. */
-static int clusters(const geo_poly *p, geo_stats *s)
+/* Union-find over edges shorter than the radius, each edge once (from
+ * its lower corner; the union of the two lower roots keeps every root the
+ * smallest vertex of its set, so the order of the unions does not
+ * matter); in the same pass, the zero-length edges. */
+static int clusters(const geo_poly *p, const geo_topo *t, geo_stats *s)
 {
     uint32_t nv = p->nverts;
     uint32_t *parent = malloc(((size_t)nv + 1) * sizeof *parent);
@@ -162,11 +221,25 @@ static int clusters(const geo_poly *p, geo_stats *s)
     for (uint32_t v = 0; v < nv; v++)
         parent[v] = v;
     double r = s->short_edge_radius;
+    /* an edge whose squared length is above r²·(1 + 1e-9) is surely not
+     * shorter than r (far beyond the rounding of r², of the sum and of
+     * the square root), so the square root is taken only near r */
+    double r2 = r * r * (1 + 1e-9);
     for (uint32_t f = 0; f < p->nfacets; f++) {
         uint32_t n = geo_poly_facet_size(p, f);
         const uint32_t *fv = geo_poly_facet(p, f);
         for (uint32_t i = 0; i < n; i++) {
-            uint32_t a = fv[i], b = fv[(i + 1) % n];
+            uint32_t m = t->mate[p->fstart[f] + i];
+            if (m != GEO_NONE && m < p->fstart[f] + i)
+                continue;
+            uint32_t a = fv[i], b = i + 1 < n ? fv[i + 1] : fv[0];
+            const double *x = p->verts[a], *y = p->verts[b];
+            if (x[0] == y[0] && x[1] == y[1] && x[2] == y[2])
+                s->degenerate_edges++;
+            double d[3];
+            geo_vsub(x, y, d);
+            if (geo_vdot(d, d) > r2)
+                continue;
             if (geo_vdist(p->verts[a], p->verts[b]) < r) {
                 a = uf_find(parent, a);
                 b = uf_find(parent, b);
@@ -237,15 +310,15 @@ int geo_inspect(const geo_poly *p, const geo_inspect_opts *opts,
     ret->orientable = orep.orientable;
 
     ret->volume = geo_poly_volume(p);
-    ret->area = geo_poly_area(p);
     ret->max_nonplanarity = geo_poly_max_nonplanarity(p);
-    ret->eps = o.eps > 0 ? o.eps : geo_poly_eps(p);
+    /* geo_poly_eps's and the radius' common size, taken once */
+    double size = geo_poly_size(p);
+    ret->eps = o.eps > 0 ? o.eps : 1e-10 * (1.0 + size);
     memcpy(ret->coplanar_deg, o.coplanar_deg, sizeof ret->coplanar_deg);
-    ret->short_edge_radius = o.short_edge_radius > 0
-                                 ? o.short_edge_radius
-                                 : 1e-3 * geo_poly_size(p);
+    ret->short_edge_radius =
+        o.short_edge_radius > 0 ? o.short_edge_radius : 1e-3 * size;
     if (degrees(p, t, ret) < 0 || neighbours(p, t, ret) < 0 ||
-        clusters(p, ret) < 0)
+        clusters(p, t, ret) < 0)
         goto oom;
     geo_topo_free(t);
     t = NULL;

@@ -1,26 +1,12 @@
-/* topo.c — adjacency by a hash of undirected edges; vertex fans by walking
- * across edges without assuming consistent orientation (so a flipped facet
- * still has neighbours, which orientation repair needs). */
+/* topo.c — adjacency by bucketing corners by their edges' lower vertex;
+ * vertex fans by walking across edges without assuming consistent
+ * orientation (so a flipped facet still has neighbours, which orientation
+ * repair needs). */
 #include "topo.h"
 
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
-
-static uint64_t edge_key(uint32_t a, uint32_t b)
-{
-    return a < b ? ((uint64_t)a << 32) | b : ((uint64_t)b << 32) | a;
-}
-
-static uint64_t mix64(uint64_t x)
-{
-    x ^= x >> 33;
-    x *= 0xff51afd7ed558ccdULL;
-    x ^= x >> 33;
-    x *= 0xc4ceb9fe1a85ec53ULL;
-    x ^= x >> 33;
-    return x;
-}
 
 geo_topo *geo_topo_free(geo_topo *t)
 {
@@ -37,67 +23,78 @@ geo_topo *geo_topo_free(geo_topo *t)
 }
 
 /* Pairs corners sharing an undirected edge; fills mate, edge_kind and the
- * edge counters. */
+ * edge counters. The corners are bucketed by their edge's lower vertex
+ * (a counting sort: two sequential passes, no hashing), and each bucket —
+ * a few corners — is grouped by the edge's upper vertex. */
 static int pair_edges(const geo_poly *p, geo_topo *t)
 {
-    uint32_t nc = t->ncorners;
-    size_t cap = 16;
-    while (cap < 2 * (size_t)nc)
-        cap <<= 1;
-    uint64_t *keys = malloc(cap * sizeof *keys);
-    uint32_t *heads = malloc(cap * sizeof *heads);
-    uint32_t *chain = malloc(((size_t)nc + 1) * sizeof *chain);
-    uint32_t *slot_of = malloc(((size_t)nc + 1) * sizeof *slot_of);
-    if (!keys || !heads || !chain || !slot_of) {
-        free(keys), free(heads), free(chain), free(slot_of);
+    uint32_t nc = t->ncorners, nv = t->nverts;
+    uint32_t *start = calloc((size_t)nv + 2, sizeof *start);
+    uint32_t *order = malloc(((size_t)nc + 1) * sizeof *order);
+    uint32_t *upper = malloc(((size_t)nc + 1) * sizeof *upper);
+    if (!start || !order || !upper) {
+        free(start), free(order), free(upper);
         return -ENOMEM;
     }
-    for (size_t i = 0; i < cap; i++)
-        heads[i] = GEO_NONE;
-
-    for (uint32_t c = 0; c < nc; c++) {
-        uint32_t a = p->fidx[c], b = p->fidx[geo_topo_next(p, t, c)];
-        uint64_t key = edge_key(a, b);
-        size_t s = mix64(key) & (cap - 1);
-        while (heads[s] != GEO_NONE && keys[s] != key)
-            s = (s + 1) & (cap - 1);
-        if (heads[s] == GEO_NONE) {
-            keys[s] = key;
-            chain[c] = GEO_NONE;
+    for (uint32_t f = 0; f < p->nfacets; f++)
+        for (uint32_t c = p->fstart[f]; c < p->fstart[f + 1]; c++) {
+            uint32_t a = p->fidx[c];
+            uint32_t b = p->fidx[c + 1 < p->fstart[f + 1] ? c + 1
+                                                          : p->fstart[f]];
+            upper[c] = a < b ? b : a;
+            start[(a < b ? a : b) + 2]++;
+        }
+    for (uint32_t v = 0; v < nv; v++)
+        start[v + 2] += start[v + 1];
+    /* start[v + 1] is now where bucket v begins; filling advances it to
+     * where bucket v ends, which is start[v + 2]'s old value */
+    for (uint32_t f = 0; f < p->nfacets; f++)
+        for (uint32_t c = p->fstart[f]; c < p->fstart[f + 1]; c++) {
+            uint32_t a = p->fidx[c];
+            uint32_t b = p->fidx[c + 1 < p->fstart[f + 1] ? c + 1
+                                                          : p->fstart[f]];
+            order[start[(a < b ? a : b) + 1]++] = c;
+        }
+    for (uint32_t c = 0; c < nc; c++)
+        t->edge_kind[c] = UINT8_MAX; /* not yet grouped */
+    for (uint32_t v = 0; v < nv; v++) {
+        uint32_t lo = start[v], hi = start[v + 1];
+        for (uint32_t i = lo; i < hi; i++) {
+            uint32_t c0 = order[i];
+            if (t->edge_kind[c0] != UINT8_MAX)
+                continue;
+            /* the corners of edge {v, upper[c0]}: c0, and c1, c2 ... */
+            uint32_t n = 1, c1 = GEO_NONE;
+            for (uint32_t j = i + 1; j < hi; j++)
+                if (upper[order[j]] == upper[c0]) {
+                    if (n == 1)
+                        c1 = order[j];
+                    n++;
+                }
             t->nedges++;
-        } else {
-            chain[c] = heads[s];
-        }
-        heads[s] = c;
-        slot_of[c] = (uint32_t)s;
-    }
-
-    for (size_t s = 0; s < cap; s++) {
-        uint32_t c0 = heads[s];
-        if (c0 == GEO_NONE)
-            continue;
-        uint32_t c1 = chain[c0];
-        if (c1 == GEO_NONE) {
-            t->mate[c0] = GEO_NONE;
-            t->edge_kind[c0] = GEO_EDGE_BOUNDARY;
-            t->nboundary_edges++;
-        } else if (chain[c1] == GEO_NONE) {
-            bool same = p->fidx[c0] == p->fidx[c1];
-            uint8_t kind = same ? GEO_EDGE_FLIPPED : GEO_EDGE_INTERIOR;
-            t->mate[c0] = c1;
-            t->mate[c1] = c0;
-            t->edge_kind[c0] = t->edge_kind[c1] = kind;
-            if (same)
-                t->nflipped_edges++;
-        } else {
-            for (uint32_t c = c0; c != GEO_NONE; c = chain[c]) {
-                t->mate[c] = GEO_NONE;
-                t->edge_kind[c] = GEO_EDGE_NONMANIFOLD;
+            if (n == 1) {
+                t->mate[c0] = GEO_NONE;
+                t->edge_kind[c0] = GEO_EDGE_BOUNDARY;
+                t->nboundary_edges++;
+            } else if (n == 2) {
+                bool same = p->fidx[c0] == p->fidx[c1];
+                uint8_t kind = same ? GEO_EDGE_FLIPPED : GEO_EDGE_INTERIOR;
+                t->mate[c0] = c1;
+                t->mate[c1] = c0;
+                t->edge_kind[c0] = t->edge_kind[c1] = kind;
+                if (same)
+                    t->nflipped_edges++;
+            } else {
+                for (uint32_t j = i; j < hi; j++)
+                    if (upper[order[j]] == upper[c0]) {
+                        t->mate[order[j]] = GEO_NONE;
+                        t->edge_kind[order[j]] = GEO_EDGE_NONMANIFOLD;
+                    }
+                t->nnonmanifold_edges++;
             }
-            t->nnonmanifold_edges++;
         }
     }
-    free(keys), free(heads), free(chain), free(slot_of);
+    free(start), free(order), free(upper);
     return 0;
 }
 

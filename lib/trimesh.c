@@ -193,6 +193,7 @@ void geo_tmesh_probe_destroy(geo_tmesh_probe *pr)
 {
     free(pr->vstamp), free(pr->vloc), free(pr->tstamp);
     free(pr->queue), free(pr->tris), free(pr->gv);
+    free(pr->box), free(pr->shape), free(pr->has_shape);
     geo_poly_free(pr->p);
     memset(pr, 0, sizeof *pr);
 }
@@ -284,18 +285,25 @@ static int64_t probe_vertex(const geo_tmesh *m, geo_tmesh_probe *pr,
     return l;
 }
 
-static bool boxes_apart(const geo_poly *p, const uint32_t *a, const uint32_t *b)
+/* Bounding box of triangle tv of p: lo in b[0..3), hi in b[3..6). */
+static void tri_box(const geo_poly *p, const uint32_t *tv, double b[6])
 {
     for (int k = 0; k < 3; k++) {
-        double alo = p->verts[a[0]][k], ahi = alo, blo = p->verts[b[0]][k],
-               bhi = blo;
+        double lo = p->verts[tv[0]][k], hi = lo;
         for (int i = 1; i < 3; i++) {
-            alo = fmin(alo, p->verts[a[i]][k]), ahi = fmax(ahi, p->verts[a[i]][k]);
-            blo = fmin(blo, p->verts[b[i]][k]), bhi = fmax(bhi, p->verts[b[i]][k]);
+            lo = fmin(lo, p->verts[tv[i]][k]);
+            hi = fmax(hi, p->verts[tv[i]][k]);
         }
-        if (ahi < blo || bhi < alo)
-            return true;
+        b[k] = lo;
+        b[k + 3] = hi;
     }
+}
+
+static bool boxes_apart(const double a[6], const double b[6])
+{
+    for (int k = 0; k < 3; k++)
+        if (a[k + 3] < b[k] || b[k + 3] < a[k])
+            return true;
     return false;
 }
 
@@ -368,20 +376,43 @@ int geo_tmesh_clashes(const geo_tmesh *m, geo_tmesh_probe *pr,
         if (geo_poly_add_facet(pr->p, loc, 3) < 0)
             return -ENOMEM;
     }
+    /* boxes of every facet, shapes when first needed (a facet near
+     * several new triangles is looked at once) */
+    uint32_t nf = ntris + nnew;
+    if (nf > pr->cap_f) {
+        uint32_t nc = 2 * nf + 64;
+        double(*nb)[6] = realloc(pr->box, (size_t)nc * sizeof *nb);
+        if (!nb)
+            return -ENOMEM;
+        pr->box = nb;
+        geo_facet_shape *ns = realloc(pr->shape, (size_t)nc * sizeof *ns);
+        if (!ns)
+            return -ENOMEM;
+        pr->shape = ns;
+        uint8_t *nh = realloc(pr->has_shape, nc);
+        if (!nh)
+            return -ENOMEM;
+        pr->has_shape = nh;
+        pr->cap_f = nc;
+    }
+    memset(pr->has_shape, 0, nf);
+    for (uint32_t f = 0; f < nf; f++)
+        tri_box(pr->p, geo_poly_facet(pr->p, f), pr->box[f]);
     for (uint32_t i = 0; i < nnew; i++) {
         uint32_t f = ntris + i;
-        geo_facet_shape sf;
-        geo_facet_shape_of(pr->p, f, &sf);
-        if (sf.degenerate)
+        geo_facet_shape_of(pr->p, f, &pr->shape[f]);
+        pr->has_shape[f] = 1;
+        if (pr->shape[f].degenerate)
             return 1;
-        const uint32_t *fv = geo_poly_facet(pr->p, f);
         for (uint32_t g = 0; g < f; g++) {
-            const uint32_t *gv = geo_poly_facet(pr->p, g);
-            if (boxes_apart(pr->p, fv, gv))
+            if (boxes_apart(pr->box[f], pr->box[g]))
                 continue;
-            geo_facet_shape sg;
-            geo_facet_shape_of(pr->p, g, &sg);
-            int hit = geo_facets_intersect(pr->p, f, g, &sf, &sg);
+            if (!pr->has_shape[g]) {
+                geo_facet_shape_of(pr->p, g, &pr->shape[g]);
+                pr->has_shape[g] = 1;
+            }
+            int hit = geo_facets_intersect(pr->p, f, g, &pr->shape[f],
+                                           &pr->shape[g]);
             if (hit != 0)
                 return hit < 0 ? -ENOMEM : 1;
         }

@@ -91,6 +91,10 @@ typedef struct geo_tmesh_probe {
     uint32_t *queue, *tris, *gv; /* BFS vertices, triangles, local → mesh */
     uint32_t cap_q, cap_tris, cap_gv;
     geo_poly *p;              /* the neighbourhood as a polyhedron */
+    double (*box)[6];         /* per facet of p: bounding box */
+    struct geo_facet_shape *shape; /* per facet of p (lib/selfint.h) */
+    uint8_t *has_shape;       /* whether shape[f] is computed */
+    uint32_t cap_f;
 } geo_tmesh_probe;
 
 void geo_tmesh_probe_destroy(geo_tmesh_probe *pr);

@@ -142,10 +142,8 @@ geo_poly *proto_model_read_mem(const void *data, size_t len, proto_format fmt,
     return proto_model_read_mem_ex(data, len, fmt, lim, NULL, err);
 }
 
-/* Reads the whole of fd into a malloc'd buffer, failing past max bytes
- * (checked on the size before reading when fd is a regular file). */
-static int slurp(int fd, size_t max, char **ret, size_t *ret_len,
-                 geo_err *err)
+int proto_read_fd_all(int fd, size_t max, char **ret, size_t *ret_len,
+                      geo_err *err)
 {
     struct stat st;
     if (fstat(fd, &st) < 0)
@@ -230,7 +228,7 @@ geo_poly *proto_model_read_file_ex(const char *path, proto_format fmt,
     }
     char *data = NULL;
     size_t len = 0;
-    int r = slurp(fd, lim->max_bytes, &data, &len, err);
+    int r = proto_read_fd_all(fd, lim->max_bytes, &data, &len, err);
     close(fd);
     geo_poly *p = NULL;
     if (r == 0)
@@ -333,11 +331,33 @@ static int write_all(int fd, const char *data, size_t len)
     return 0;
 }
 
+/* Writes data straight into an existing path that is not a regular file
+ * (a device, a FIFO, /dev/stdout): renaming a file over it would replace
+ * the device node itself. */
+static int write_special(const char *path, const struct stat *st,
+                         const char *data, size_t len, geo_err *err)
+{
+    if (S_ISDIR(st->st_mode))
+        return geo_err_set(err, -EISDIR, "%s: %s", path, strerror(EISDIR));
+    int fd = open(path, O_WRONLY | O_CLOEXEC);
+    if (fd < 0)
+        return geo_err_set(err, -errno, "%s: %s", path, strerror(errno));
+    int r = write_all(fd, data, len);
+    if (close(fd) < 0 && r == 0)
+        r = -errno;
+    if (r < 0)
+        geo_err_set(err, r, "%s: %s", path, strerror(-r));
+    return r;
+}
+
 /* Writes data to path through a temporary file beside it. A new file
  * gets mode 0644, an existing one keeps its mode. */
 static int write_atomic(const char *path, const char *data, size_t len,
                         geo_err *err)
 {
+    struct stat target;
+    if (stat(path, &target) == 0 && !S_ISREG(target.st_mode))
+        return write_special(path, &target, data, len, err);
     size_t pl = strlen(path);
     char *tmp = malloc(pl + 16);
     if (!tmp)

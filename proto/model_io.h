@@ -99,6 +99,14 @@ geo_poly *proto_model_read_mem_ex(const void *data, size_t len,
 geo_poly *proto_model_read_file(const char *path, proto_format fmt,
                                 const proto_limits *lim, geo_err *err);
 
+/* Reads the whole of fd (a file, pipe or terminal) into a malloc'd
+ * buffer (*ret, *ret_len bytes; the caller frees it), failing past max
+ * bytes — checked on the size before reading when fd is a regular file.
+ * 0, or -ERANGE, -EISDIR, -ENOMEM or the read's negative errno with err
+ * set; fd is left open. */
+int proto_read_fd_all(int fd, size_t max, char **ret, size_t *ret_len,
+                      geo_err *err);
+
 /* As proto_model_read_file, with a report as in proto_model_read_mem_ex. */
 geo_poly *proto_model_read_file_ex(const char *path, proto_format fmt,
                                    const proto_limits *lim,

@@ -8,6 +8,7 @@
 #include "frep_grid.h"
 
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -344,9 +345,14 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
             return r;
         double n = sqrt(pv[0] * pv[0] + pv[1] * pv[1] + pv[2] * pv[2]);
         if (!(n > 0) || !isfinite(n))
-            return FAIL(pl, "plane", "normal (a, b, c) must be non-zero");
-        for (int i = 0; i < 4; i++)
-            pv[i] /= n;
+            return FAIL(pl, "plane", "normal (a, b, c) must be non-zero "
+                        "with a finite length");
+        /* a normal already unit to rounding is kept bit for bit: dividing
+         * it by its rounded length again would change it, so the stored
+         * canonical JSON would not parse back to the plane that ran */
+        if (fabs(n - 1) > 8 * DBL_EPSILON)
+            for (int i = 0; i < 4; i++)
+                pv[i] /= n;
         return 0;
     }
     case PROTO_OP_MOVE_VERTEX: {

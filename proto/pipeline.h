@@ -17,7 +17,9 @@
  *   auto {radius, max_angle_deg, max_deviation, views: as above} — the whole
  *                 post-scan correction of lib/correct.h in one op
  *   cut {plane: [a, b, c, d]} — keeps plane(p) ≤ 0; (a,b,c) non-zero,
- *                 normalised to unit length (d scaled with it)
+ *                 normalised to unit length (d scaled with it) unless
+ *                 already unit to rounding, so that the canonical JSON
+ *                 parses back to the same bits
  *   move_vertex {vertex, to: [x,y,z] | by: [dx,dy,dz], schedule
  *                 "local-exp"|"scaled"|"global-exp" ["local-exp"],
  *                 max_steps ≥ 1 [10000]}

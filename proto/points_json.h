@@ -1,13 +1,13 @@
 /* points_json.h — point lists in JSON for point classification (`facet
- * inside`, the daemon's classification jobs): reading a JSON array of
+ * inside`): reading a JSON array of
  * [x, y, z] numbers (mm), bare or as {"points": [...]}, and writing the
  * answers as a JSON array of "inside" / "outside" / "boundary".
  *
  * Reading validates strictly and names the place of the first error
  * ("points[17][2]: expected a number", "points[3]: expected 3 numbers,
- * got 2"); jansson rejects NaN/Infinity literals and numbers that
- * overflow a double. The count is checked against a limit before the
- * coordinates are allocated.
+ * got 2"); NaN/Infinity literals and numbers that overflow a double are
+ * not JSON. The count is checked against a limit: at most that many
+ * points are ever stored.
  *
  * Ownership: *ret_pts and the returned text are malloc'd for the caller to
  * free. All functions are reentrant and thread-safe. */
@@ -17,26 +17,20 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include <jansson.h>
-
 #include "ctx.h"
 
 /* Default limits: points per list, and bytes of a points file. */
 #define PROTO_POINTS_MAX 50000000u
 #define PROTO_POINTS_MAX_BYTES ((size_t)2 << 30)
 
-/* Points from a parsed JSON value: an array of [x, y, z], or an object
- * whose "points" member is one (other members are ignored). max_points 0
- * means PROTO_POINTS_MAX. On success *ret_pts (n triples; NULL when n is
- * 0) and *ret_n are set and 0 is returned; else -EINVAL (bad value),
- * -ERANGE (more than max_points) or -ENOMEM, with err naming the place,
- * and the outputs untouched. */
-int proto_points_from_json(const json_t *root, size_t max_points,
-                           double (**ret_pts)[3], size_t *ret_n,
-                           geo_err *err);
-
-/* The same from JSON text of len bytes; syntax errors read
- * "line 3, column 7: ...". */
+/* Points from JSON text of len bytes: an array of [x, y, z], or an
+ * object whose "points" member is one (other members are ignored).
+ * max_points 0 means PROTO_POINTS_MAX. On success *ret_pts (n triples;
+ * NULL when n is 0) and *ret_n are set and 0 is returned; else -EINVAL
+ * (bad JSON: "line 3, column 7: ..."; or a bad value, named), -ERANGE
+ * (more than max_points) or -ENOMEM, with err set and the outputs
+ * untouched. The whole text is checked as JSON first: a syntax error
+ * anywhere is the error reported. */
 int proto_points_read_mem(const void *data, size_t len, size_t max_points,
                           double (**ret_pts)[3], size_t *ret_n, geo_err *err);
 

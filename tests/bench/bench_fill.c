@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <time.h>
 
+#include "edgemap.h"
 #include "fill.h"
 #include "gen_sphere.h"
 #include "hole_fill.h"
@@ -70,10 +71,76 @@ static geo_poly *band_part(const geo_poly *s, double lo, double hi)
     return p;
 }
 
+/* Quality of the patch of a filled unit sphere (p had nv0 vertices and
+ * nf0 facets before): mean patch edge over mean mesh edge at the loop,
+ * largest dihedral angle at the loop and inside the patch (degrees),
+ * largest and mean distance of the added vertices from the sphere. */
+static void sphere_patch_quality(const geo_poly *p, uint32_t nv0, uint32_t nf0,
+                                 double ret[5])
+{
+    geo_edgemap he;
+    geo_edgemap_init(&he, 3 * (size_t)p->nfacets);
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        const uint32_t *fv = geo_poly_facet(p, f);
+        for (int i = 0; i < 3; i++)
+            geo_edgemap_put(&he, geo_edge_key(fv[i], fv[(i + 1) % 3]), f);
+    }
+    uint8_t *on_loop = calloc(nv0 + 1, 1);
+    double border = 0, inner = 0, in_sum = 0, out_sum = 0;
+    uint64_t in_n = 0, out_n = 0;
+    for (uint32_t f = nf0; f < p->nfacets; f++) {
+        const uint32_t *fv = geo_poly_facet(p, f);
+        double n1[3];
+        geo_poly_facet_area_vector(p, f, n1);
+        for (int i = 0; i < 3; i++) {
+            uint32_t a = fv[i], b = fv[(i + 1) % 3];
+            uint32_t g = geo_edgemap_get(&he, geo_edge_key(b, a));
+            if (a < nv0)
+                on_loop[a] = 1;
+            if (g == UINT32_MAX)
+                continue;
+            double n2[3], x[3];
+            geo_poly_facet_area_vector(p, g, n2);
+            geo_vcross(n1, n2, x);
+            double ang = atan2(geo_vlen(x), geo_vdot(n1, n2)) * 180 / M_PI;
+            if (g < nf0) {
+                border = fmax(border, ang);
+            } else {
+                inner = fmax(inner, ang);
+                if (a < b) {
+                    in_sum += geo_vdist(p->verts[a], p->verts[b]);
+                    in_n++;
+                }
+            }
+        }
+    }
+    for (uint32_t f = 0; f < nf0; f++) {
+        const uint32_t *fv = geo_poly_facet(p, f);
+        for (int i = 0; i < 3; i++)
+            if (on_loop[fv[i]] || on_loop[fv[(i + 1) % 3]]) {
+                out_sum += geo_vdist(p->verts[fv[i]], p->verts[fv[(i + 1) % 3]]);
+                out_n++;
+            }
+    }
+    double dmax = 0, dsum = 0;
+    for (uint32_t v = nv0; v < p->nverts; v++) {
+        double d = fabs(geo_vlen(p->verts[v]) - 1);
+        dmax = fmax(dmax, d);
+        dsum += d;
+    }
+    ret[0] = (in_sum / (double)in_n) / (out_sum / (double)out_n);
+    ret[1] = border;
+    ret[2] = inner;
+    ret[3] = dmax;
+    ret[4] = p->nverts > nv0 ? dsum / (p->nverts - nv0) : 0;
+    free(on_loop);
+    geo_edgemap_destroy(&he);
+}
+
 /* Best time of geo_fill_holes on copies of p; *nv gets the vertices
- * added. */
+ * added; quality, when not NULL, sphere_patch_quality of the last run. */
 static double time_fill(const geo_poly *p, const geo_fill_opts *o, int runs,
-                        uint32_t *nv, uint32_t *loop)
+                        uint32_t *nv, uint32_t *loop, double *quality)
 {
     double best = INFINITY;
     for (int r = 0; r < runs; r++) {
@@ -89,6 +156,8 @@ static double time_fill(const geo_poly *p, const geo_fill_opts *o, int runs,
         best = t < best ? t : best;
         *nv = st.nverts_added;
         *loop = st.holes[0].nverts;
+        if (quality && r == runs - 1)
+            sphere_patch_quality(q, p->nverts, p->nfacets, quality);
         geo_fill_stats_clear(&st);
         geo_poly_free(q);
     }
@@ -108,7 +177,7 @@ int main(void)
         for (int w = 0; w < 3; w++) {
             static const char *const names[3] = {"area", "edges", "angle"};
             bare.weight = (enum geo_fill_weight)w;
-            double t = time_fill(c, &bare, 5, &nv, &loop);
+            double t = time_fill(c, &bare, 5, &nv, &loop, NULL);
             printf("liepa_%s_200_%s: %.2f ms\n", curved ? "curved" : "planar",
                    names[w], t);
         }
@@ -122,13 +191,19 @@ int main(void)
     geo_fill_opts_default(&full);
     double t_bare = time_fill(s, (geo_fill_opts_default(&bare), bare.refine =
                                   false, bare.fair = GEO_FAIR_NONE, &bare),
-                              3, &nv, &loop);
-    double t_full = time_fill(s, &full, 3, &nv, &loop);
+                              3, &nv, &loop, NULL);
+    double qual[5];
+    double t_full = time_fill(s, &full, 3, &nv, &loop, qual);
     printf("hole_loop_vertices: %u\n", loop);
     printf("hole_liepa_only: %.1f ms\n", t_bare);
     printf("hole_refine_fair_vertices_added: %u\n", nv);
     printf("hole_refine_and_fair: %.1f ms\n", t_full - t_bare);
     printf("hole_total: %.1f ms\n", t_full);
+    printf("hole_edge_ratio: %.2f\n", qual[0]);
+    printf("hole_max_dihedral_at_loop: %.1f deg\n", qual[1]);
+    printf("hole_max_dihedral_inside: %.1f deg\n", qual[2]);
+    printf("hole_sphere_distance_max: %.3f\n", qual[3]);
+    printf("hole_sphere_distance_mean: %.3f\n", qual[4]);
     geo_poly_free(s);
 
     /* the checked fill of a 500-vertex hole (geo_fill_mesh) */

@@ -1,6 +1,8 @@
 /* test_bvh.c — every BVH query returns exactly what a brute-force scan of
  * the boxes returns (random boxes, many duplicates), and the pair tasks
- * partition the self-pairs. */
+ * partition the self-pairs; the same for the Morton-ordered build, whose
+ * tree is also checked for shape (each item once, boxes the unions of
+ * their items, bounded depth) on identical and NaN-centred boxes. */
 #include "testutil.h"
 
 #include <math.h>
@@ -159,6 +161,107 @@ static void test_pair_tasks_report_each_overlap_once(void **state)
     free(b);
 }
 
+/* Depth of the subtree at node; checks that each node's box is the union
+ * of its items' boxes and marks the items seen. */
+static uint32_t check_node(const geo_bvh *h, uint32_t node,
+                           unsigned char *seen, geo_bbox *ret_box)
+{
+    const geo_bvh_node *n = &h->nodes[node];
+    geo_bbox box;
+    geo_bbox_empty(&box);
+    uint32_t depth = 1;
+    if (n->count) {
+        for (uint32_t i = n->child; i < n->child + n->count; i++) {
+            seen[h->items[i]]++;
+            geo_bbox_union(&box, &h->boxes[i]);
+        }
+    } else {
+        geo_bbox l, r;
+        uint32_t dl = check_node(h, n->child, seen, &l);
+        uint32_t dr = check_node(h, n->child + 1, seen, &r);
+        geo_bbox_union(&box, &l);
+        geo_bbox_union(&box, &r);
+        depth += dl > dr ? dl : dr;
+    }
+    assert_memory_equal(&box, &n->box, sizeof box);
+    *ret_box = box;
+    return depth;
+}
+
+static void test_morton_tree_matches_brute_force(void **state)
+{
+    (void)state;
+    geo_bbox *b = random_boxes(N, 1);
+    geo_bvh *h = geo_bvh_build_morton(b, N, NULL);
+    assert_non_null(h);
+    unsigned char seen[N] = {0};
+    geo_bbox all;
+    uint32_t depth = check_node(h, 0, seen, &all);
+    for (uint32_t i = 0; i < N; i++)
+        assert_int_equal(seen[i], 1);
+    assert_true(depth <= 30 + 12 + 1);
+    uint64_t rng = 99;
+    for (int q = 0; q < 200; q++) {
+        geo_bbox qb;
+        for (int k = 0; k < 3; k++) {
+            double c = geo_rand_unit(&rng) * 10, e = geo_rand_unit(&rng);
+            qb.lo[k] = c - e;
+            qb.hi[k] = c + e;
+        }
+        memset(seen, 0, sizeof seen);
+        geo_bvh_query_box(h, &qb, collect, seen);
+        for (uint32_t i = 0; i < N; i++)
+            assert_int_equal(seen[i], geo_bbox_overlap(&b[i], &qb) ? 1 : 0);
+    }
+    geo_bvh_free(h);
+    free(b);
+
+    const uint32_t n = 800;
+    b = random_boxes(n, 4);
+    h = geo_bvh_build_morton(b, n, NULL);
+    uint32_t ta[64], tb[64];
+    uint32_t nt = geo_bvh_pair_tasks(h, ta, tb, 64);
+    pairs p = {n, calloc((size_t)n * n, 1)};
+    for (uint32_t t = 0; t < nt; t++)
+        geo_bvh_pairs(h, ta[t], tb[t], count_pair, &p);
+    for (uint32_t i = 0; i < n; i++)
+        for (uint32_t j = i + 1; j < n; j++)
+            assert_int_equal(p.count[(size_t)i * n + j],
+                             geo_bbox_overlap(&b[i], &b[j]) ? 1 : 0);
+    free(p.count);
+    geo_bvh_free(h);
+    free(b);
+}
+
+static void test_morton_tree_of_equal_and_nan_boxes(void **state)
+{
+    (void)state;
+    /* all centres in one grid cell, a few NaN: median splits, every item
+     * once, depth of a balanced tree */
+    enum { M = 1000 };
+    geo_bbox *b = malloc(M * sizeof *b);
+    for (uint32_t i = 0; i < M; i++)
+        for (int k = 0; k < 3; k++) {
+            b[i].lo[k] = i % 7 == 3 ? NAN : 1.0;
+            b[i].hi[k] = 2.0;
+        }
+    geo_bvh *h = geo_bvh_build_morton(b, M, NULL);
+    assert_non_null(h);
+    unsigned char seen[M] = {0};
+    geo_bbox all;
+    uint32_t depth = check_node(h, 0, seen, &all);
+    for (uint32_t i = 0; i < M; i++)
+        assert_int_equal(seen[i], 1);
+    assert_true(depth <= 10);
+    geo_bvh_free(h);
+    free(b);
+    h = geo_bvh_build_morton(NULL, 0, NULL);
+    assert_non_null(h);
+    uint32_t ta[4], tb[4];
+    assert_int_equal(geo_bvh_pair_tasks(h, ta, tb, 4), 0);
+    geo_bvh_free(h);
+}
+
 static void test_empty_and_single(void **state)
 {
     (void)state;
@@ -184,6 +287,8 @@ int main(void)
         cmocka_unit_test(test_query_ray_finds_every_hit_box),
         cmocka_unit_test(test_pair_tasks_report_each_overlap_once),
         cmocka_unit_test(test_empty_and_single),
+        cmocka_unit_test(test_morton_tree_matches_brute_force),
+        cmocka_unit_test(test_morton_tree_of_equal_and_nan_boxes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "edgemap.h"
 #include "gen_sphere.h"
 #include "hole_fill.h"
 #include "selfint.h"
@@ -143,30 +144,84 @@ static double weight_of(const geo_poly *p, uint32_t a, uint32_t b, uint32_t c,
     return 0.5 * geo_vlen(n);
 }
 
-/* Least weight over every triangulation of ring[i..k] (brute force). */
+/* The rules the patch's triangles obey (hole_fill.h): at strictness 2 a
+ * triangle faces the loop's mean normal up and does not turn back by
+ * more than 120° over the facet across a loop edge it lies on (en[j]:
+ * across ring edge j); at 1 only the latter; at 0 anything goes. */
+typedef struct fold_rules {
+    int strict;
+    const double *up;
+    const double (*en)[3];
+    int n;
+} fold_rules;
+
+static bool admissible(const geo_poly *p, const uint32_t *ring, int i, int m,
+                       int k, const fold_rules *r)
+{
+    double e1[3], e2[3], nt[3];
+    geo_vsub(p->verts[ring[m]], p->verts[ring[i]], e1);
+    geo_vsub(p->verts[ring[k]], p->verts[ring[i]], e2);
+    geo_vcross(e1, e2, nt);
+    geo_vnormalize(nt);
+    if (r->strict >= 2 && !(geo_vdot(nt, r->up) > 0))
+        return false;
+    if (r->strict >= 1) {
+        int sides[3][2] = {{i, m}, {m, k}, {k, i}};
+        for (int q = 0; q < 3; q++) {
+            int a = sides[q][0], b = sides[q][1];
+            int j = b == a + 1 ? a : (a == r->n - 1 && b == 0) ? a : -1;
+            if (j >= 0 && geo_vdot(nt, r->en[j]) < -0.5)
+                return false;
+        }
+    }
+    return true;
+}
+
+/* Least weight over every admissible triangulation of ring[i..k] (brute
+ * force); INFINITY when there is none. */
 static double brute(const geo_poly *p, const uint32_t *ring, int i, int k,
-                    enum geo_fill_weight w)
+                    enum geo_fill_weight w, const fold_rules *r)
 {
     if (k - i < 2)
-        return 0;
+        return 0.0;
     double best = INFINITY;
     for (int m = i + 1; m < k; m++)
-        best = fmin(best, brute(p, ring, i, m, w) + brute(p, ring, m, k, w) +
-                              weight_of(p, ring[i], ring[m], ring[k], w));
+        if (admissible(p, ring, i, m, k, r))
+            best = fmin(best, brute(p, ring, i, m, w, r) +
+                                  brute(p, ring, m, k, w, r) +
+                                  weight_of(p, ring[i], ring[m], ring[k], w));
     return best;
 }
 
-static void test_patch_has_least_weight_of_all_triangulations(void **state)
+static void test_patch_has_least_weight_of_all_fold_free_triangulations(
+    void **state)
 {
     (void)state;
     enum geo_fill_weight ws[2] = {GEO_FILL_AREA, GEO_FILL_EDGES};
     for (uint64_t seed = 1; seed <= 6; seed++)
         for (int wi = 0; wi < 2; wi++) {
             geo_poly *p = open_cone(8, seed);
+            /* the patch runs against the cone's facets: ring edge j is
+             * the reverse of an edge of facet ring[j] − 1 */
             uint32_t ring[8];
+            double en[8][3], up[3] = {0, 0, 0};
             for (int i = 0; i < 8; i++)
-                ring[i] = (uint32_t)(8 - i); /* reversed: the patch's order */
-            double want = brute(p, ring, 0, 7, ws[wi]);
+                ring[i] = (uint32_t)(1 + i);
+            for (int j = 0; j < 8; j++) {
+                geo_poly_facet_area_vector(p, ring[j] - 1, en[j]);
+                geo_vnormalize(en[j]);
+                const double *a = p->verts[ring[j]];
+                const double *b = p->verts[ring[(j + 1) % 8]];
+                up[0] += (a[1] - b[1]) * (a[2] + b[2]);
+                up[1] += (a[2] - b[2]) * (a[0] + b[0]);
+                up[2] += (a[0] - b[0]) * (a[1] + b[1]);
+            }
+            geo_vnormalize(up);
+            double want = INFINITY;
+            for (int strict = 2; strict >= 0 && !isfinite(want); strict--) {
+                fold_rules r = {strict, up, (const double(*)[3])en, 8};
+                want = brute(p, ring, 0, 7, ws[wi], &r);
+            }
             geo_fill_opts o;
             geo_fill_opts_default(&o);
             o.weight = ws[wi];
@@ -187,6 +242,99 @@ static void test_patch_has_least_weight_of_all_triangulations(void **state)
             geo_fill_stats_clear(&st);
             geo_poly_free(p);
         }
+}
+
+/* Largest angle between the normals of a triangle from nf0 on and the
+ * triangle across one of its edges (degrees). */
+static double max_patch_dihedral(const geo_poly *p, uint32_t nf0)
+{
+    geo_edgemap he;
+    assert_int_equal(geo_edgemap_init(&he, 3 * (size_t)p->nfacets), 0);
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        const uint32_t *fv = geo_poly_facet(p, f);
+        for (int i = 0; i < 3; i++)
+            assert_int_equal(geo_edgemap_put(&he,
+                                             geo_edge_key(fv[i], fv[(i + 1) % 3]),
+                                             f),
+                             0);
+    }
+    double worst = 0;
+    for (uint32_t f = nf0; f < p->nfacets; f++) {
+        const uint32_t *fv = geo_poly_facet(p, f);
+        double n1[3];
+        geo_poly_facet_area_vector(p, f, n1);
+        for (int i = 0; i < 3; i++) {
+            uint32_t g = geo_edgemap_get(&he, geo_edge_key(fv[(i + 1) % 3], fv[i]));
+            assert_true(g != UINT32_MAX);
+            double n2[3], x[3];
+            geo_poly_facet_area_vector(p, g, n2);
+            geo_vcross(n1, n2, x);
+            worst = fmax(worst, atan2(geo_vlen(x), geo_vdot(n1, n2)) * 180 /
+                                    M_PI);
+        }
+    }
+    geo_edgemap_destroy(&he);
+    return worst;
+}
+
+static void test_jagged_loop_cut_by_bridges_is_closed_without_folds(
+    void **state)
+{
+    (void)state;
+    /* the rim of a cap cut from a cube-sphere by facet centres is a
+     * staircase with single-triangle teeth; pieces of 24 vertices between
+     * bridges: the least area alone laid slivers across three teeth and
+     * over the rim's facets (19 triangles facing down, folds of 179°) */
+    geo_poly *p = gs_sphere(32, 1.0);
+    cut_cap(p, 0.5);
+    uint32_t nf0 = p->nfacets;
+    geo_fill_opts o;
+    geo_fill_opts_default(&o);
+    o.max_dp_vertices = 24;
+    o.refine = false;
+    o.fair = GEO_FAIR_NONE;
+    geo_fill_stats st;
+    assert_int_equal(geo_fill_holes(p, &o, NULL, &st, NULL), 0);
+    assert_int_equal(st.holes[0].status, GEO_HOLE_FILLED);
+    assert_true(st.holes[0].nbridges >= 4);
+    for (uint32_t f = nf0; f < p->nfacets; f++) {
+        double n[3];
+        geo_poly_facet_area_vector(p, f, n);
+        assert_true(n[2] > 0);
+    }
+    assert_true(max_patch_dihedral(p, nf0) < 150);
+    assert_closed_valid(p);
+    geo_fill_stats_clear(&st);
+    geo_poly_free(p);
+}
+
+static void test_bridged_hole_is_faired_into_a_dome(void **state)
+{
+    (void)state;
+    /* refined and faired, the same kind of hole rises towards the pole
+     * without a fold (before: the patch folded, the solution was thrown
+     * away and the hole stayed flat at z = 0.5, dihedral 179°) */
+    geo_poly *p = gs_sphere(48, 1.0);
+    cut_cap(p, 0.5);
+    uint32_t nf0 = p->nfacets, nv0 = p->nverts;
+    geo_fill_opts o;
+    geo_fill_opts_default(&o);
+    o.max_dp_vertices = 40;
+    geo_fill_stats st;
+    assert_int_equal(geo_fill_holes(p, &o, NULL, &st, NULL), 0);
+    assert_int_equal(st.holes[0].status, GEO_HOLE_FILLED);
+    assert_true(st.holes[0].nbridges >= 4);
+    double top = 0, dev = 0;
+    for (uint32_t v = nv0; v < p->nverts; v++) {
+        top = fmax(top, p->verts[v][2]);
+        dev = fmax(dev, fabs(geo_vlen(p->verts[v]) - 1));
+    }
+    assert_true(top > 0.8);
+    assert_true(dev < 0.25);
+    assert_true(max_patch_dihedral(p, nf0) < 90);
+    assert_closed_valid(p);
+    geo_fill_stats_clear(&st);
+    geo_poly_free(p);
 }
 
 static void test_long_loop_is_cut_by_bridges(void **state)
@@ -331,7 +479,11 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_box_hole_closes_with_two_triangles),
         cmocka_unit_test(test_sphere_cap_refined_and_faired_stays_valid),
-        cmocka_unit_test(test_patch_has_least_weight_of_all_triangulations),
+        cmocka_unit_test(
+            test_patch_has_least_weight_of_all_fold_free_triangulations),
+        cmocka_unit_test(
+            test_jagged_loop_cut_by_bridges_is_closed_without_folds),
+        cmocka_unit_test(test_bridged_hole_is_faired_into_a_dome),
         cmocka_unit_test(test_long_loop_is_cut_by_bridges),
         cmocka_unit_test(test_too_large_hole_is_left_open_with_reason),
         cmocka_unit_test(test_hard_edges_are_split_never_flipped),

@@ -73,7 +73,8 @@ static void test_errors_name_the_place(void **state)
                  "pipeline[0].keep: unknown parameter of cut");
     expect_error("[{\"op\":\"cut\"}]", "pipeline[0].plane: required");
     expect_error("[{\"op\":\"cut\",\"plane\":[0,0,0,1]}]",
-                 "pipeline[0].plane: normal (a, b, c) must be non-zero");
+                 "pipeline[0].plane: normal (a, b, c) must be non-zero "
+                 "with a finite length");
     expect_error("[{\"op\":\"cut\",\"plane\":[0,0,1]}]",
                  "pipeline[0].plane: expected an array of 4 numbers");
     expect_error("[{\"op\":\"move_vertex\",\"vertex\":3,\"to\":[0,0,0],"
@@ -114,6 +115,24 @@ static void test_cut_plane_is_normalised(void **state)
     assert_int_equal(parse("[{\"op\":\"cut\",\"plane\":[0,0,2,-1]}]", &p, NULL), 0);
     assert_true(p.ops[0].u.cut.plane[2] == 1.0);
     assert_true(p.ops[0].u.cut.plane[3] == -0.5);
+    proto_pipeline_free(&p);
+}
+
+/* Normalising [1,0,1,-0.5] rounds, and normalising the result again
+ * rounded once more: the plane a worker read back from the stored
+ * canonical JSON was not the one validated. */
+static void test_cut_plane_survives_the_round_trip(void **state)
+{
+    (void)state;
+    proto_pipeline p, q;
+    assert_int_equal(parse("[{\"op\":\"cut\",\"plane\":[1,0,1,-0.5]}]", &p, NULL), 0);
+    json_t *canon = proto_pipeline_to_json(&p);
+    geo_err err = {{0}};
+    assert_int_equal(proto_pipeline_from_json(canon, "pipeline", &q, &err), 0);
+    assert_memory_equal(q.ops[0].u.cut.plane, p.ops[0].u.cut.plane,
+                        sizeof p.ops[0].u.cut.plane);
+    json_decref(canon);
+    proto_pipeline_free(&q);
     proto_pipeline_free(&p);
 }
 
@@ -190,6 +209,7 @@ int main(void)
         cmocka_unit_test(test_auto_is_the_post_scan_correction),
         cmocka_unit_test(test_errors_name_the_place),
         cmocka_unit_test(test_cut_plane_is_normalised),
+        cmocka_unit_test(test_cut_plane_survives_the_round_trip),
         cmocka_unit_test(test_canonical_json_round_trips),
         cmocka_unit_test(test_views_are_set_on_a_copy_for_scanner_jobs),
     };

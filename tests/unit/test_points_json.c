@@ -4,6 +4,7 @@
 #include "testutil.h"
 
 #include <errno.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -61,6 +62,16 @@ static void test_errors_name_the_place(void **state)
         {"[[1,2,NaN]]", "line 1", -EINVAL},
         {"{\"points\": [], \"points\": []}", "line 1", -EINVAL},
         {"[[1,2,3],", "line 1", -EINVAL},
+        {"[[1,[2],3]]", "points[0][1]: expected a number", -EINVAL},
+        {"[[1,{\"a\":2},3,4]]", "points[0]: expected 3 numbers, got 4",
+         -EINVAL},
+        /* a syntax error after a bad value is the error reported */
+        {"[[1,2],[1,2,3] x", "line 1", -EINVAL},
+        {"{\"points\": 5, \"b\": [}", "line 1", -EINVAL},
+        {"{\"a\": [[1]], \"points\": [[1,2,true]]}",
+         "points[0][2]: expected a number", -EINVAL},
+        {"7", "line 1", -EINVAL},
+        {"", "line 1", -EINVAL},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         double(*pts)[3] = NULL;
@@ -85,6 +96,26 @@ static void test_limit_rejects_long_lists(void **state)
     assert_int_equal(read_str("[[1,2,3],[4,5,6],[7,8,9]]", 2, &pts, &n, &err),
                      -ERANGE);
     assert_non_null(strstr(err.msg, "exceed the limit of 2"));
+    /* the limit is named before a bad element past it or before it */
+    assert_int_equal(read_str("[[1,2,3],[4,5,6],[7,8]]", 2, &pts, &n, &err),
+                     -ERANGE);
+    assert_non_null(strstr(err.msg, "3 points exceed the limit of 2"));
+    assert_int_equal(read_str("[[1,2],[4,5,6],[7,8,9]]", 2, &pts, &n, &err),
+                     -ERANGE);
+    /* lists longer than the first allocation grow */
+    size_t many = 5000, len = 0;
+    char *text = malloc(many * 12 + 4);
+    assert_non_null(text);
+    text[len++] = '[';
+    for (size_t i = 0; i < many; i++)
+        len += (size_t)sprintf(text + len, "%s[%zu,1,2]", i ? "," : "", i);
+    text[len++] = ']';
+    text[len] = '\0';
+    assert_int_equal(read_str(text, 0, &pts, &n, &err), 0);
+    assert_int_equal(n, many);
+    assert_true(pts[many - 1][0] == (double)(many - 1) && pts[17][2] == 2);
+    free(pts);
+    free(text);
     assert_int_equal(read_str("[[1,2,3],[4,5,6]]", 2, &pts, &n, &err), 0);
     free(pts);
 }

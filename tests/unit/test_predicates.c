@@ -69,6 +69,67 @@ static void test_orient3d_matches_exact_near_degenerate(void **state)
     assert_true(zeros > 100);
 }
 
+/* The prepared plane gives geo_orient3d's sign: on the near-degenerate
+ * sets above (exact integer reference), on the ulp-perturbed lifted
+ * example, and on random points over magnitudes 2^-40 .. 2^40 and
+ * far-apart scales within one query. */
+static void test_orient3d_plane_matches_orient3d(void **state)
+{
+    (void)state;
+    uint64_t rng = 777;
+    int zeros = 0;
+    for (int trial = 0; trial < 20000; trial++) {
+        int64_t P[6][3];
+        const int64_t base = (int64_t)1 << 28;
+        for (int i = 0; i < 6; i++) {
+            int64_t x = (int64_t)(geo_rand_next(&rng) % 2001) - 1000;
+            int64_t y = (int64_t)(geo_rand_next(&rng) % 2001) - 1000;
+            P[i][0] = base + x;
+            P[i][1] = base + y;
+            P[i][2] = -(x + y) + (int64_t)(geo_rand_next(&rng) % 3) - 1;
+        }
+        double D[6][3];
+        for (int i = 0; i < 6; i++)
+            for (int k = 0; k < 3; k++)
+                D[i][k] = (double)P[i][k] * 0x1.0p-20;
+        geo_orient3d_plane pl;
+        geo_orient3d_plane_init(&pl, D[0], D[1], D[2]);
+        for (int q = 3; q < 6; q++) {
+            int exact = orient3d_int(P[0], P[1], P[2], P[q]);
+            assert_int_equal(geo_orient3d_plane_sign(&pl, D[q]), exact);
+            zeros += exact == 0;
+        }
+    }
+    assert_true(zeros > 100);
+
+    double b[3] = {12, 12, 0}, c[3] = {24, 24, 0}, e[3] = {24, 24, 1};
+    geo_orient3d_plane pl;
+    geo_orient3d_plane_init(&pl, b, c, e);
+    for (int i = 0; i < 128; i++)
+        for (int j = 0; j < 128; j++) {
+            double a[3] = {0.5 + i * 0x1.0p-53, 0.5 + j * 0x1.0p-53, 0};
+            int exact = (a[0] > a[1]) - (a[0] < a[1]);
+            assert_int_equal(geo_orient3d_plane_sign(&pl, a), exact);
+        }
+
+    for (int trial = 0; trial < 20000; trial++) {
+        double Q[5][3];
+        for (int i = 0; i < 5; i++) {
+            double scale = ldexp(1.0, (int)(geo_rand_next(&rng) % 81) - 40);
+            for (int k = 0; k < 3; k++)
+                Q[i][k] = (2 * geo_rand_unit(&rng) - 1) * scale;
+        }
+        /* a query on the line through two of the points, rounded: nearly
+         * coplanar */
+        for (int k = 0; k < 3; k++)
+            Q[4][k] = Q[0][k] + (Q[1][k] - Q[0][k]) * 0.375;
+        geo_orient3d_plane_init(&pl, Q[0], Q[1], Q[2]);
+        for (int q = 3; q < 5; q++)
+            assert_int_equal(geo_orient3d_plane_sign(&pl, Q[q]),
+                             geo_orient3d(Q[0], Q[1], Q[2], Q[q]));
+    }
+}
+
 /* Shewchuk's classic example: points near the line y = x, where naive
  * orient2d returns wrong and inconsistent signs. */
 static void test_orient2d_beats_naive(void **state)
@@ -193,16 +254,72 @@ static void test_orient2d_proj_and_normal_sign_exact(void **state)
     }
 }
 
+/* The prepared 2D line gives geo_orient2d_proj's sign (integer reference)
+ * for each dropped axis, on points a few units apart far from the
+ * origin, where cancellation is at its worst, and on random points over
+ * magnitudes 2^-40 .. 2^40. */
+static void test_orient2d_line_matches_orient2d_proj(void **state)
+{
+    (void)state;
+    uint64_t rng = 57;
+    int zeros = 0;
+    for (int t = 0; t < 20000; t++) {
+        int64_t P[5][3];
+        for (int i = 0; i < 5; i++)
+            for (int k = 0; k < 3; k++)
+                P[i][k] = ((int64_t)1 << 40) +
+                          (int64_t)(geo_rand_next(&rng) % 5) * (i + 1) +
+                          (int64_t)(geo_rand_next(&rng) % 3);
+        double D[5][3];
+        for (int i = 0; i < 5; i++)
+            for (int k = 0; k < 3; k++)
+                D[i][k] = (double)P[i][k] * 0x1p-30;
+        for (int drop = 0; drop < 3; drop++) {
+            geo_orient2d_line l;
+            geo_orient2d_line_init(&l, D[0], D[1], drop);
+            int u = (drop + 1) % 3, v = (drop + 2) % 3;
+            for (int q = 2; q < 5; q++) {
+                i128 det =
+                    (i128)(P[1][u] - P[0][u]) * (P[q][v] - P[0][v]) -
+                    (i128)(P[1][v] - P[0][v]) * (P[q][u] - P[0][u]);
+                assert_int_equal(geo_orient2d_line_sign(&l, D[q]),
+                                 sign128(det));
+                zeros += det == 0;
+            }
+        }
+    }
+    assert_true(zeros > 100);
+    for (int t = 0; t < 20000; t++) {
+        double Q[4][3];
+        for (int i = 0; i < 3; i++) {
+            double scale = ldexp(1.0, (int)(geo_rand_next(&rng) % 81) - 40);
+            for (int k = 0; k < 3; k++)
+                Q[i][k] = (2 * geo_rand_unit(&rng) - 1) * scale;
+        }
+        for (int k = 0; k < 3; k++) /* on the line, rounded */
+            Q[3][k] = Q[0][k] + (Q[1][k] - Q[0][k]) * 0.625;
+        for (int drop = 0; drop < 3; drop++) {
+            geo_orient2d_line l;
+            geo_orient2d_line_init(&l, Q[0], Q[1], drop);
+            for (int q = 2; q < 4; q++)
+                assert_int_equal(geo_orient2d_line_sign(&l, Q[q]),
+                                 geo_orient2d_proj(Q[0], Q[1], Q[q], drop));
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_orient3d_simple_signs),
         cmocka_unit_test(test_orient3d_matches_exact_near_degenerate),
+        cmocka_unit_test(test_orient3d_plane_matches_orient3d),
         cmocka_unit_test(test_orient2d_beats_naive),
         cmocka_unit_test(test_orient3d_beats_naive),
         cmocka_unit_test(test_plane_sign_exact),
         cmocka_unit_test(test_orient2d_proj_axes),
         cmocka_unit_test(test_orient2d_proj_and_normal_sign_exact),
+        cmocka_unit_test(test_orient2d_line_matches_orient2d_proj),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,0 +1,387 @@
+/* spchol.c — sparse Cholesky with a nested-dissection ordering (see
+ * spchol.h).
+ *
+ * Invariants: perm is a permutation of 0 … n−1 (perm[k] is the unknown
+ * eliminated k-th); column j of L holds its diagonal first, then its
+ * rows below in increasing order, in Li/Lx[Lp[j] .. Lp[j+1]). */
+#include "spchol.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdbool.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define NONE UINT32_MAX
+#define LEAF 64
+
+struct geo_spchol {
+    uint32_t n;
+    uint32_t *perm;
+    uint64_t *Lp;
+    uint32_t *Li;
+    double *Lx;
+};
+
+/* ---- ordering ---- */
+
+typedef struct nd_task {
+    uint32_t start, count;
+    bool emit; /* append as they are (a separator, or a set too small) */
+} nd_task;
+
+typedef struct nd_work {
+    const uint32_t *rp, *ci;
+    uint32_t *set;   /* per unknown: id of the set it is in now */
+    uint32_t *level; /* per unknown: its level in the last search */
+    uint32_t *queue; /* search order */
+    uint32_t *cnt;   /* per level: unknowns */
+    uint32_t *tmp;
+} nd_work;
+
+/* Breadth-first search from root within the unknowns of set id; fills
+ * queue and level; returns the number reached, *ret_h the last level. */
+static uint32_t bfs(nd_work *W, uint32_t id, uint32_t root, uint32_t stamp,
+                    uint32_t *ret_h)
+{
+    /* set[v] == id: in the set, not reached; stamp: reached */
+    uint32_t head = 0, tail = 0;
+    W->queue[tail++] = root;
+    W->set[root] = stamp;
+    W->level[root] = 0;
+    while (head < tail) {
+        uint32_t v = W->queue[head++];
+        for (uint32_t q = W->rp[v]; q < W->rp[v + 1]; q++) {
+            uint32_t u = W->ci[q];
+            if (W->set[u] != id)
+                continue;
+            W->set[u] = stamp;
+            W->level[u] = W->level[v] + 1;
+            W->queue[tail++] = u;
+        }
+    }
+    *ret_h = W->level[W->queue[tail - 1]];
+    return tail;
+}
+
+static uint32_t degree(const nd_work *W, uint32_t v)
+{
+    return W->rp[v + 1] - W->rp[v];
+}
+
+/* Splits the set work[start .. start+count) (all marked id): pushes the
+ * tasks that order it onto the stack. *next_id supplies fresh set ids. */
+static void nd_split(nd_work *W, uint32_t *work, nd_task *stack,
+                     uint32_t *top, nd_task t, uint32_t *next_id)
+{
+    uint32_t *S = work + t.start, m = t.count;
+    uint32_t id = (*next_id)++;
+    for (uint32_t k = 0; k < m; k++)
+        W->set[S[k]] = id;
+    /* a pseudo-peripheral root: restart from a least-degree vertex of
+     * the last level while that makes the search deeper */
+    uint32_t root = S[0], h = 0, reached = 0;
+    for (int round = 0; round < 5; round++) {
+        uint32_t stamp = (*next_id)++, hh;
+        reached = bfs(W, id, root, stamp, &hh);
+        for (uint32_t k = 0; k < reached; k++)
+            W->set[W->queue[k]] = id;
+        if (round > 0 && hh <= h)
+            break;
+        h = hh;
+        uint32_t best = NONE;
+        for (uint32_t k = reached; k-- > 0 && W->level[W->queue[k]] == hh;)
+            if (best == NONE || degree(W, W->queue[k]) < degree(W, best))
+                best = W->queue[k];
+        root = best;
+    }
+    /* the levels of the last search from root */
+    uint32_t stamp = (*next_id)++;
+    reached = bfs(W, id, root, stamp, &h);
+    if (reached < m) {
+        /* not connected: the component reached, then the rest */
+        uint32_t a = 0, b = reached;
+        for (uint32_t k = 0; k < m; k++)
+            W->tmp[W->set[S[k]] == stamp ? a++ : b++] = S[k];
+        memcpy(S, W->tmp, (size_t)m * sizeof *S);
+        stack[(*top)++] = (nd_task){t.start + reached, m - reached, false};
+        stack[(*top)++] = (nd_task){t.start, reached, false};
+        return;
+    }
+    if (h < 2) {
+        stack[(*top)++] = (nd_task){t.start, m, true};
+        return;
+    }
+    memset(W->cnt, 0, ((size_t)h + 1) * sizeof *W->cnt);
+    for (uint32_t k = 0; k < m; k++)
+        W->cnt[W->level[S[k]]]++;
+    /* the separator: the smallest level leaving at most 2/3 on either
+     * side, else the median level */
+    uint32_t sep = NONE, before = 0, median = NONE;
+    for (uint32_t l = 0; l <= h; l++) {
+        uint32_t after = m - before - W->cnt[l];
+        if (l >= 1 && l < h && 3 * (uint64_t)before <= 2 * (uint64_t)m &&
+            3 * (uint64_t)after <= 2 * (uint64_t)m &&
+            (sep == NONE || W->cnt[l] < W->cnt[sep]))
+            sep = l;
+        if (median == NONE && 2 * (uint64_t)(before + W->cnt[l]) >= m)
+            median = l;
+        before += W->cnt[l];
+    }
+    if (sep == NONE)
+        sep = median < 1 ? 1 : median >= h ? h - 1 : median;
+    uint32_t na = 0, nb = 0, nc = 0;
+    for (uint32_t k = 0; k < m; k++) {
+        uint32_t l = W->level[S[k]];
+        na += l < sep;
+        nb += l > sep;
+    }
+    nc = m - na - nb;
+    uint32_t ia = 0, ib = na, ic = na + nb;
+    for (uint32_t k = 0; k < m; k++) {
+        uint32_t l = W->level[S[k]];
+        W->tmp[l < sep ? ia++ : l > sep ? ib++ : ic++] = S[k];
+    }
+    memcpy(S, W->tmp, (size_t)m * sizeof *S);
+    stack[(*top)++] = (nd_task){t.start + na + nb, nc, true};
+    stack[(*top)++] = (nd_task){t.start + na, nb, false};
+    stack[(*top)++] = (nd_task){t.start, na, false};
+}
+
+/* perm: the elimination order. 0 or -ENOMEM. */
+static int nd_order(uint32_t n, const uint32_t *rp, const uint32_t *ci,
+                    uint32_t *perm)
+{
+    nd_work W = {rp, ci, NULL, NULL, NULL, NULL, NULL};
+    uint32_t *work = malloc(((size_t)n + 1) * sizeof *work);
+    /* each split pushes at most three tasks and pops one; the depth of
+     * the recursion is O(log n) for balanced splits and at most n */
+    nd_task *stack = malloc((2 * (size_t)n + 4) * sizeof *stack);
+    W.set = calloc((size_t)n + 1, sizeof *W.set);
+    W.level = malloc(((size_t)n + 1) * sizeof *W.level);
+    W.queue = malloc(((size_t)n + 1) * sizeof *W.queue);
+    W.cnt = malloc(((size_t)n + 1) * sizeof *W.cnt);
+    W.tmp = malloc(((size_t)n + 1) * sizeof *W.tmp);
+    int rc = -ENOMEM;
+    if (!work || !stack || !W.set || !W.level || !W.queue || !W.cnt || !W.tmp)
+        goto out;
+    for (uint32_t v = 0; v < n; v++)
+        work[v] = v;
+    uint32_t top = 0, pos = 0, next_id = 1;
+    if (n > 0)
+        stack[top++] = (nd_task){0, n, false};
+    while (top > 0) {
+        nd_task t = stack[--top];
+        if (t.count == 0)
+            continue;
+        if (t.emit || t.count <= LEAF) {
+            memcpy(perm + pos, work + t.start, (size_t)t.count * sizeof *perm);
+            pos += t.count;
+            continue;
+        }
+        nd_split(&W, work, stack, &top, t, &next_id);
+    }
+    rc = 0;
+out:
+    free(work), free(stack), free(W.set), free(W.level), free(W.queue);
+    free(W.cnt), free(W.tmp);
+    return rc;
+}
+
+/* ---- factorisation ---- */
+
+/* Pattern of row k of L (columns < k) in s[top .. n), topologically
+ * ordered; w marks visited columns with stamp. Returns top. */
+static uint32_t ereach(const uint64_t *Cp, const uint32_t *Ci, uint32_t k,
+                       const uint32_t *parent, uint32_t *s, uint32_t *w,
+                       uint32_t stamp, uint32_t n)
+{
+    uint32_t top = n;
+    w[k] = stamp;
+    for (uint64_t p = Cp[k]; p < Cp[k + 1]; p++) {
+        uint32_t i = Ci[p], len = 0;
+        if (i > k)
+            continue;
+        for (; w[i] != stamp; i = parent[i]) {
+            s[len++] = i;
+            w[i] = stamp;
+        }
+        while (len > 0)
+            s[--top] = s[--len];
+    }
+    return top;
+}
+
+geo_spchol *geo_spchol_free(geo_spchol *f)
+{
+    if (f) {
+        free(f->perm), free(f->Lp), free(f->Li), free(f->Lx);
+        free(f);
+    }
+    return NULL;
+}
+
+uint64_t geo_spchol_nnz(const geo_spchol *f)
+{
+    return f->Lp[f->n];
+}
+
+int geo_spchol_factor(uint32_t n, const uint32_t *rp, const uint32_t *ci,
+                      const double *v, uint64_t max_nnz, const geo_ctx *ctx,
+                      geo_spchol **ret)
+{
+    *ret = NULL;
+    for (uint64_t q = 0; q < (n ? rp[n] : 0); q++)
+        if (ci[q] >= n)
+            return -EINVAL;
+    geo_spchol *f = calloc(1, sizeof *f);
+    uint32_t *pinv = malloc(((size_t)n + 1) * sizeof *pinv);
+    uint64_t *Cp = malloc(((size_t)n + 2) * sizeof *Cp);
+    uint32_t *Ci = NULL, *parent = NULL, *s = NULL, *w = NULL;
+    double *Cx = NULL, *x = NULL;
+    uint64_t *next = NULL;
+    int rc = -ENOMEM;
+    if (!f || !pinv || !Cp)
+        goto out;
+    f->n = n;
+    f->perm = malloc(((size_t)n + 1) * sizeof *f->perm);
+    f->Lp = malloc(((size_t)n + 1) * sizeof *f->Lp);
+    if (!f->perm || !f->Lp || nd_order(n, rp, ci, f->perm) < 0)
+        goto out;
+    for (uint32_t k = 0; k < n; k++)
+        pinv[f->perm[k]] = k;
+    /* C = P·A·P', its upper triangle by columns */
+    Cp[0] = 0;
+    for (uint32_t k = 0; k < n; k++) {
+        uint32_t r = f->perm[k], c = 0;
+        for (uint32_t q = rp[r]; q < rp[r + 1]; q++)
+            c += pinv[ci[q]] <= k;
+        Cp[k + 1] = Cp[k] + c;
+    }
+    Ci = malloc((Cp[n] + 1) * sizeof *Ci);
+    Cx = malloc((Cp[n] + 1) * sizeof *Cx);
+    parent = malloc(((size_t)n + 1) * sizeof *parent);
+    s = malloc(((size_t)n + 1) * sizeof *s);
+    w = calloc((size_t)n + 1, sizeof *w);
+    next = malloc(((size_t)n + 1) * sizeof *next);
+    x = calloc((size_t)n + 1, sizeof *x);
+    if (!Ci || !Cx || !parent || !s || !w || !next || !x)
+        goto out;
+    for (uint32_t k = 0; k < n; k++) {
+        uint32_t r = f->perm[k];
+        uint64_t p = Cp[k];
+        for (uint32_t q = rp[r]; q < rp[r + 1]; q++)
+            if (pinv[ci[q]] <= k) {
+                Ci[p] = pinv[ci[q]];
+                Cx[p++] = v[q];
+            }
+    }
+    /* elimination tree (with path compression through next[]) */
+    for (uint32_t k = 0; k < n; k++) {
+        parent[k] = NONE;
+        next[k] = NONE;
+        for (uint64_t p = Cp[k]; p < Cp[k + 1]; p++)
+            for (uint32_t i = Ci[p]; i != NONE && i < k;) {
+                uint32_t inext = (uint32_t)next[i];
+                next[i] = k;
+                if (inext == NONE)
+                    parent[i] = k;
+                i = inext;
+            }
+    }
+    /* column counts: row k of L has the pattern ereach finds */
+    memset(next, 0, ((size_t)n + 1) * sizeof *next);
+    for (uint32_t k = 0; k < n; k++) {
+        uint32_t top = ereach(Cp, Ci, k, parent, s, w, k + 1, n);
+        for (uint32_t q = top; q < n; q++)
+            next[s[q]]++;
+        next[k]++;
+    }
+    f->Lp[0] = 0;
+    for (uint32_t k = 0; k < n; k++)
+        f->Lp[k + 1] = f->Lp[k] + next[k];
+    if (max_nnz && f->Lp[n] > max_nnz) {
+        rc = -ERANGE;
+        goto out;
+    }
+    f->Li = malloc((f->Lp[n] + 1) * sizeof *f->Li);
+    f->Lx = malloc((f->Lp[n] + 1) * sizeof *f->Lx);
+    if (!f->Li || !f->Lx)
+        goto out;
+    memset(w, 0, ((size_t)n + 1) * sizeof *w);
+    for (uint32_t k = 0; k < n; k++)
+        next[k] = f->Lp[k];
+    for (uint32_t k = 0; k < n; k++) {
+        if ((k & 4095) == 4095 && geo_ctx_canceled(ctx)) {
+            rc = -ECANCELED;
+            goto out;
+        }
+        uint32_t top = ereach(Cp, Ci, k, parent, s, w, k + 1, n);
+        for (uint64_t p = Cp[k]; p < Cp[k + 1]; p++)
+            x[Ci[p]] = Cx[p];
+        double d = x[k];
+        x[k] = 0;
+        for (; top < n; top++) {
+            uint32_t i = s[top];
+            double lki = x[i] / f->Lx[f->Lp[i]];
+            x[i] = 0;
+            for (uint64_t p = f->Lp[i] + 1; p < next[i]; p++)
+                x[f->Li[p]] -= f->Lx[p] * lki;
+            d -= lki * lki;
+            uint64_t p = next[i]++;
+            f->Li[p] = k;
+            f->Lx[p] = lki;
+        }
+        if (!(d > 0)) {
+            rc = -EDOM;
+            goto out;
+        }
+        uint64_t p = next[k]++;
+        f->Li[p] = k;
+        f->Lx[p] = sqrt(d);
+    }
+    *ret = f;
+    f = NULL;
+    rc = 0;
+out:
+    geo_spchol_free(f);
+    free(pinv), free(Cp), free(Ci), free(Cx), free(parent), free(s), free(w);
+    free(next), free(x);
+    return rc;
+}
+
+int geo_spchol_solve3(const geo_spchol *f, double (*b)[3])
+{
+    uint32_t n = f->n;
+    double(*y)[3] = malloc(((size_t)n + 1) * sizeof *y);
+    if (!y)
+        return -ENOMEM;
+    for (uint32_t k = 0; k < n; k++)
+        memcpy(y[k], b[f->perm[k]], sizeof y[k]);
+    for (uint32_t j = 0; j < n; j++) {
+        double dj = f->Lx[f->Lp[j]];
+        for (int c = 0; c < 3; c++)
+            y[j][c] /= dj;
+        for (uint64_t p = f->Lp[j] + 1; p < f->Lp[j + 1]; p++) {
+            double l = f->Lx[p];
+            double *yi = y[f->Li[p]];
+            for (int c = 0; c < 3; c++)
+                yi[c] -= l * y[j][c];
+        }
+    }
+    for (uint32_t j = n; j-- > 0;) {
+        for (uint64_t p = f->Lp[j] + 1; p < f->Lp[j + 1]; p++) {
+            double l = f->Lx[p];
+            const double *yi = y[f->Li[p]];
+            for (int c = 0; c < 3; c++)
+                y[j][c] -= l * yi[c];
+        }
+        double dj = f->Lx[f->Lp[j]];
+        for (int c = 0; c < 3; c++)
+            y[j][c] /= dj;
+    }
+    for (uint32_t k = 0; k < n; k++)
+        memcpy(b[f->perm[k]], y[k], sizeof y[k]);
+    free(y);
+    return 0;
+}
