@@ -182,7 +182,10 @@ oom:
     return geo_bvh_free(h);
 }
 
-geo_bvh *geo_bvh_build_facets(const geo_poly *p, geo_err *err)
+/* A BVH over p's facet boxes built by build (either builder). */
+static geo_bvh *build_over_facets(const geo_poly *p, geo_err *err,
+                                  geo_bvh *(*build)(const geo_bbox *,
+                                                    uint32_t, geo_err *))
 {
     geo_bbox *boxes = malloc(((size_t)p->nfacets + 1) * sizeof *boxes);
     if (!boxes) {
@@ -191,9 +194,14 @@ geo_bvh *geo_bvh_build_facets(const geo_poly *p, geo_err *err)
     }
     for (uint32_t f = 0; f < p->nfacets; f++)
         geo_poly_facet_bbox(p, f, &boxes[f]);
-    geo_bvh *h = geo_bvh_build(boxes, p->nfacets, err);
+    geo_bvh *h = build(boxes, p->nfacets, err);
     free(boxes);
     return h;
+}
+
+geo_bvh *geo_bvh_build_facets(const geo_poly *p, geo_err *err)
+{
+    return build_over_facets(p, err, geo_bvh_build);
 }
 
 /* The 10 low bits of x spread to every third bit (bits 0, 3, ..., 27). */
@@ -320,16 +328,7 @@ oom:
 
 geo_bvh *geo_bvh_build_facets_morton(const geo_poly *p, geo_err *err)
 {
-    geo_bbox *boxes = malloc(((size_t)p->nfacets + 1) * sizeof *boxes);
-    if (!boxes) {
-        geo_err_set(err, -ENOMEM, "out of memory building the BVH");
-        return NULL;
-    }
-    for (uint32_t f = 0; f < p->nfacets; f++)
-        geo_poly_facet_bbox(p, f, &boxes[f]);
-    geo_bvh *h = geo_bvh_build_morton(boxes, p->nfacets, err);
-    free(boxes);
-    return h;
+    return build_over_facets(p, err, geo_bvh_build_morton);
 }
 
 /* An explicit stack: depth is bounded by the tree height (median splits:

@@ -4,19 +4,14 @@
  *  1. the side of every vertex, decided once and exactly (geo_plane_sign);
  *  2. one new vertex per crossed edge, shared by the edge's two facets
  *     through the mate corner;
- *  3. per cut facet, the ordered list of events on its section line
- *     l = facet ∩ plane: crossed edges and on-plane vertices (the paper's
- *     list with its ordering coordinate, kept sorted by binary-search
- *     insertion with an exact comparison), each with its direction: ENTRY
- *     (+1, the facet's inside begins along l), EXIT (−1, it ends), PASS (0,
- *     a reflex on-plane vertex inside a segment of l) — a convex on-plane
- *     vertex touching l from one side is the paper's "hanging" vertex and
- *     is not listed; a reflex one touching from the kept side is an EXIT
- *     and an ENTRY at once (DOUBLE);
- *  4. the facet's kept pieces by the paper's two cycles: along the
- *     boundary while it stays on the kept side (cycle B), then along l from
- *     an EXIT back to the ENTRY that opens its segment (cycle A); each such
- *     segment of l, reversed, is an edge of a new facet;
+ *  3.–4. per cut facet, the events on its section line l = facet ∩ plane
+ *     sorted exactly (ENTRY, EXIT, PASS, DOUBLE; convex on-plane vertices
+ *     hanging), the direction sweep, and its kept pieces by the paper's
+ *     cycles B and A, each segment of l walked by cycle A being, reversed,
+ *     an edge of a new facet: lib/cut_facet.c, the one implementation the
+ *     merge's local §3.4 cut (lib/merge_cut.c) calls too; here it gets
+ *     the exact sides of stage 1 and the crossing vertices of stage 2,
+ *     and its pieces become facets of the output with the facet's plane;
  *  5. the section components: the edges of the new facets chained at their
  *     shared vertices. A crossed edge's vertex is shared by exactly the two
  *     facets of that edge, so following the chain is the paper's transition
@@ -29,6 +24,10 @@
  *  6. dropping the removed side, the hanging on-plane vertices, and
  *     renumbering (geo_poly_compact).
  *
+ * What differs in the §3.4 variant (opts.main_facet) is only checked
+ * here: the main facet on or above the plane, one component, one new
+ * facet.
+ *
  * Invariants: side[] is never recomputed; every crossing point is computed
  * once; the kept pieces of a facet and the new facets use the same vertex
  * ids along every shared edge, so the result is closed by construction. */
@@ -39,30 +38,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cut_facet.h"
 #include "predicates.h"
 #include "region_split.h"
 #include "selfint.h"
 #include "vec.h"
-
-enum ev_type { EV_ENTRY, EV_EXIT, EV_DOUBLE, EV_PASS };
-enum seg_type { SEG_KEPT, SEG_REMOVED };
-
-/* A node of a cut facet's boundary: a vertex, or the crossing point of the
- * edge that follows vertex i. */
-typedef struct node {
-    uint32_t i;      /* position of the vertex in the facet */
-    uint32_t vout;   /* vertex id in the output */
-    uint8_t crossing;
-    uint8_t in, out; /* seg_type of the boundary before / after the node */
-    int32_t ev;      /* index of its event in the sorted list, or -1 */
-} node;
-
-typedef struct event {
-    uint8_t type;
-    uint32_t node;
-    const double *p0, *p1; /* the point: p0, or the crossing of p0p1 */
-    int32_t partner;       /* EXIT/DOUBLE: sorted index of its ENTRY */
-} event;
 
 typedef struct cutter {
     const geo_poly *p;
@@ -78,161 +58,32 @@ typedef struct cutter {
     geo_poly *out;
     geo_err *err;
 
-    /* edges of the new facets (src, dst), output vertex ids */
-    uint32_t (*cap)[2];
-    size_t ncap, capcap;
+    /* the per-facet stages; cf.sec: edges of the new facets (src, dst),
+     * output vertex ids */
+    geo_cutf cf;
+    int8_t *fside;       /* sides of one facet's vertices, in its order */
+    size_t capfside;
     /* corners of kept in-plane edges (candidates for the section) */
     uint32_t *kin;
     size_t nkin, capkin;
     uint8_t *kept_inplane; /* per corner: its edge lies in the plane and
                               its facet is kept along it */
 
-    /* scratch of one facet */
-    node *nodes;
-    size_t capnodes;
-    event *ev;
-    size_t capev;
-    uint32_t *piece;
-    size_t cappiece;
-    uint8_t *used;
-    size_t capused;
-
     uint32_t pieces, split_facets, removed_facets, new_vertices;
 } cutter;
-
-static int grow(void **buf, size_t *cap, size_t need, size_t elem)
-{
-    if (need <= *cap)
-        return 0;
-    size_t c = *cap ? *cap : 16;
-    while (c < need)
-        c *= 2;
-    void *b = realloc(*buf, c * elem);
-    if (!b)
-        return -ENOMEM;
-    *buf = b;
-    *cap = c;
-    return 0;
-}
-
-static int push_cap(cutter *k, uint32_t a, uint32_t b)
-{
-    if (grow((void **)&k->cap, &k->capcap, k->ncap + 1, sizeof *k->cap) < 0)
-        return -ENOMEM;
-    k->cap[k->ncap][0] = a;
-    k->cap[k->ncap][1] = b;
-    k->ncap++;
-    return 0;
-}
 
 static int push_kin(cutter *k, uint32_t corner)
 {
     if (k->kept_inplane[corner])
         return 0;
-    if (grow((void **)&k->kin, &k->capkin, k->nkin + 1, sizeof *k->kin) < 0)
+    if (geo_cutf_grow((void **)&k->kin, &k->capkin, k->nkin + 1, sizeof *k->kin) < 0)
         return -ENOMEM;
     k->kept_inplane[corner] = 1;
     k->kin[k->nkin++] = corner;
     return 0;
 }
 
-static int dominant_axis(const double v[3])
-{
-    int k = 0;
-    for (int j = 1; j < 3; j++)
-        if (fabs(v[j]) > fabs(v[k]))
-            k = j;
-    return k;
-}
-
-#define U_ROUND 0x1.0p-53
-
-/* Σ|plane[k]·x[k]| + |plane[3]|: the scale of plane(x)'s rounding. */
-static double plane_mag(const double plane[4], const double x[3])
-{
-    return fabs(plane[0] * x[0]) + fabs(plane[1] * x[1]) +
-           fabs(plane[2] * x[2]) + fabs(plane[3]);
-}
-
-/* The crossing of edge a–b (sides of opposite sign) computed from the end
- * nearer to the plane, so the parameter is at most 1/2 and the point lies
- * in that half; the same edge gives the same bits whichever facet asks.
- * `plane` is the given plane normalised. Returns a bound on how far, in
- * each coordinate, the exact crossing with the given plane lies from the
- * computed point: the plane values carry the normalisation's rounding
- * and their own (≤ 8u·magnitude each), which moves the parameter by at
- * most twice their sum over |f0 − f1| less that sum, plus the rounding
- * of the interpolation; the whole edge when that sum is not smaller. */
-static double crossing_point(const double plane[4], const double a[3],
-                             const double b[3], double ret[3])
-{
-    double fa = geo_plane_eval(plane, a), fb = geo_plane_eval(plane, b);
-    const double *p0 = a, *p1 = b;
-    double f0 = fa, f1 = fb;
-    if (fabs(fb) < fabs(fa) || (fabs(fb) == fabs(fa) && memcmp(b, a, 24) < 0)) {
-        p0 = b, p1 = a, f0 = fb, f1 = fa;
-    }
-    double t = f0 / (f0 - f1);
-    if (!(t >= 0.0))
-        t = 0.0;
-    if (t > 0.5)
-        t = 0.5;
-    for (int j = 0; j < 3; j++) {
-        double x = p0[j] + t * (p1[j] - p0[j]);
-        double lo = fmin(a[j], b[j]), hi = fmax(a[j], b[j]);
-        ret[j] = fmin(fmax(x, lo), hi);
-    }
-    double e = 8 * U_ROUND * (plane_mag(plane, p0) + plane_mag(plane, p1));
-    double den = fabs(f0 - f1) - e;
-    double dt = den > 0 ? 2 * e / den + 4 * U_ROUND : 1.0;
-    double err = 0;
-    for (int j = 0; j < 3; j++) {
-        double ej = dt * fabs(p1[j] - p0[j]) +
-                    4 * U_ROUND * (fabs(p0[j]) + fabs(p1[j]));
-        err = fmax(err, ej);
-    }
-    return err * (1 + 16 * U_ROUND);
-}
-
 /* ---- one cut facet ---------------------------------------------------- */
-
-typedef struct facet_frame {
-    int k;      /* axis along which l is ordered */
-    int esign;  /* sign of e[k], e = plane normal × facet normal */
-    int drop;   /* axis dropped for the facet's 2D orientation */
-    int osign;  /* sign of the facet normal on that axis */
-} facet_frame;
-
-/* Order of two points of l along e: −1, 0, +1. */
-static int along(const cutter *k, const facet_frame *fr, const double *a0,
-                 const double *a1, const double *b0, const double *b1)
-{
-    return fr->esign *
-           geo_plane_crossing_cmp(k->plane, a0, a1, b0, b1, fr->k);
-}
-
-static int insert_event(cutter *k, const facet_frame *fr, size_t *nev,
-                        const event *e)
-{
-    if (grow((void **)&k->ev, &k->capev, *nev + 1, sizeof *k->ev) < 0)
-        return -ENOMEM;
-    /* binary search for the first event after e along l (ties keep the
-     * boundary order; a tie means the facet touches itself, which the
-     * pattern check below then reports) */
-    size_t lo = 0, hi = *nev;
-    while (lo < hi) {
-        size_t mid = (lo + hi) / 2;
-        const event *m = &k->ev[mid];
-        if (along(k, fr, m->p0, m->p1, e->p0, e->p1) <= 0)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    memmove(k->ev + lo + 1, k->ev + lo, (*nev - lo) * sizeof *k->ev);
-    k->ev[lo] = *e;
-    (*nev)++;
-    return 0;
-}
 
 static int facet_error(cutter *k, uint32_t f, const char *what)
 {
@@ -241,203 +92,43 @@ static int facet_error(cutter *k, uint32_t f, const char *what)
                        "non-planar facet)", f, what);
 }
 
+/* Facet f by the shared stages (lib/cut_facet.h): its kept pieces become
+ * facets of the output with f's plane; the in-plane edges cycle B walked
+ * become section candidates. */
 static int cut_facet(cutter *k, uint32_t f)
 {
     const geo_poly *p = k->p;
     uint32_t n = geo_poly_facet_size(p, f), c0 = p->fstart[f];
     const uint32_t *vs = geo_poly_facet(p, f);
-    const int8_t *side = k->side;
 
-    double nf[3], e[3];
+    double nf[3];
     geo_poly_facet_area_vector(p, f, nf);
-    geo_vcross(k->unit, nf, e);
-    if (!(geo_vlen(e) > 0.0))
-        return facet_error(k, f, "crosses the plane but is parallel to it");
-    facet_frame fr;
-    fr.k = dominant_axis(e);
-    fr.esign = e[fr.k] > 0 ? 1 : -1;
-    fr.drop = dominant_axis(nf);
-    fr.osign = nf[fr.drop] > 0 ? 1 : -1;
-
-    /* boundary nodes with the kept/removed type of the segments between */
-    if (grow((void **)&k->nodes, &k->capnodes, 2 * (size_t)n, sizeof *k->nodes) < 0)
+    if (geo_cutf_frame(&k->cf, nf) < 0)
+        return facet_error(k, f, k->cf.why);
+    if (geo_cutf_grow((void **)&k->fside, &k->capfside, n, 1) < 0)
         return -ENOMEM;
-    uint32_t nn = 0;
-    for (uint32_t i = 0; i < n; i++) {
-        uint32_t j = i + 1 < n ? i + 1 : 0;
-        int si = side[vs[i]], sj = side[vs[j]];
-        node *v = &k->nodes[nn++];
-        v->i = i;
-        v->vout = vs[i];
-        v->crossing = 0;
-        v->ev = -1;
-        if (si * sj < 0) {
-            v->out = si < 0 ? SEG_KEPT : SEG_REMOVED;
-            node *x = &k->nodes[nn++];
-            x->i = i;
-            x->vout = k->xv[c0 + i];
-            x->crossing = 1;
-            x->ev = -1;
-            x->in = v->out;
-            x->out = sj < 0 ? SEG_KEPT : SEG_REMOVED;
-        } else if (si < 0 || sj < 0) {
-            v->out = SEG_KEPT;
-        } else if (si > 0 || sj > 0) {
-            v->out = SEG_REMOVED;
-        } else {
-            /* an edge in the plane borders the kept side when it runs
-             * against e (the facet's inside is then below l) */
-            int d = along(k, &fr, p->verts[vs[j]], NULL, p->verts[vs[i]], NULL);
-            if (d == 0)
-                return facet_error(k, f, "an edge in the plane has zero length");
-            v->out = d < 0 ? SEG_KEPT : SEG_REMOVED;
-        }
-    }
-    for (uint32_t a = 0; a < nn; a++) {
-        node *v = &k->nodes[a];
-        if (!v->crossing)
-            v->in = k->nodes[a ? a - 1 : nn - 1].out;
-    }
-
-    /* events, sorted along l */
-    size_t nev = 0;
-    for (uint32_t a = 0; a < nn; a++) {
-        node *v = &k->nodes[a];
-        event ev = {0, a, NULL, NULL, -1};
-        if (v->crossing) {
-            uint32_t j = v->i + 1 < n ? v->i + 1 : 0;
-            ev.p0 = p->verts[vs[v->i]];
-            ev.p1 = p->verts[vs[j]];
-        } else {
-            if (side[vs[v->i]] != 0)
-                continue;
-            ev.p0 = p->verts[vs[v->i]];
-        }
-        if (v->in == SEG_REMOVED && v->out == SEG_KEPT) {
-            ev.type = EV_ENTRY;
-        } else if (v->in == SEG_KEPT && v->out == SEG_REMOVED) {
-            ev.type = EV_EXIT;
-        } else {
-            /* a single on-plane vertex between two vertices of one side:
-             * convex, it only touches l (hanging); reflex, l runs through
-             * the facet on both of its sides */
-            uint32_t ip = v->i ? v->i - 1 : n - 1, in = v->i + 1 < n ? v->i + 1 : 0;
-            int sp = side[vs[ip]], sn = side[vs[in]];
-            if (sp == 0 || sn == 0 || sp != sn)
-                continue;
-            int turn = fr.osign * geo_orient2d_proj(p->verts[vs[ip]],
-                                                    p->verts[vs[v->i]],
-                                                    p->verts[vs[in]], fr.drop);
-            if (turn >= 0)
-                continue;
-            ev.type = sp < 0 ? EV_DOUBLE : EV_PASS;
-        }
-        int r = insert_event(k, &fr, &nev, &ev);
+    for (uint32_t j = 0; j < n; j++)
+        k->fside[j] = k->side[vs[j]];
+    int np = geo_cutf_facet(&k->cf, (const double(*)[3])p->verts, vs, k->fside,
+                            k->xv + c0, n);
+    if (np == -EINVAL)
+        return facet_error(k, f, k->cf.why);
+    if (np < 0)
+        return np;
+    for (size_t j = 0; j < k->cf.ninplane; j++) {
+        int r = push_kin(k, c0 + k->cf.inplane[j]);
         if (r < 0)
             return r;
     }
-
-    /* the paper's direction sweep: outside, ENTRY opens a segment of l
-     * inside the facet, PASS lies inside one, EXIT closes it, DOUBLE
-     * closes one and opens the next */
-    int32_t open = -1;
-    for (size_t s = 0; s < nev; s++) {
-        event *ev = &k->ev[s];
-        k->nodes[ev->node].ev = (int32_t)s;
-        switch (ev->type) {
-        case EV_ENTRY:
-            if (open >= 0)
-                return facet_error(k, f, "two entries in a row along the section");
-            open = (int32_t)s;
-            break;
-        case EV_PASS:
-            if (open < 0)
-                return facet_error(k, f, "a reflex vertex outside the section");
-            break;
-        case EV_EXIT:
-        case EV_DOUBLE:
-            if (open < 0)
-                return facet_error(k, f, "an exit before any entry along the section");
-            ev->partner = open;
-            open = ev->type == EV_DOUBLE ? (int32_t)s : -1;
-            break;
-        }
-    }
-    if (open >= 0 || nev == 0)
-        return facet_error(k, f, "the section does not close");
-
-    /* cycles B (boundary, kept side) and A (along l back to the entry) */
-    if (grow((void **)&k->used, &k->capused, nev, 1) < 0)
-        return -ENOMEM;
-    memset(k->used, 0, nev);
-    uint32_t pieces = 0;
-    size_t guard = 0, limit = 4 * ((size_t)nn + nev) + 16;
-    for (size_t s0 = 0; s0 < nev; s0++) {
-        const event *start = &k->ev[s0];
-        if ((start->type != EV_ENTRY && start->type != EV_DOUBLE) || k->used[s0])
-            continue;
-        size_t np = 0;
-        uint32_t cur = start->node;
-        for (;;) {
-            k->used[k->nodes[cur].ev] = 1;
-            /* cycle B */
-            uint32_t a = cur;
-            for (;;) {
-                if (++guard > limit)
-                    return facet_error(k, f, "the pieces do not close");
-                if (grow((void **)&k->piece, &k->cappiece, np + 1, sizeof *k->piece) < 0)
-                    return -ENOMEM;
-                k->piece[np++] = k->nodes[a].vout;
-                if (a != cur && k->nodes[a].ev >= 0) {
-                    uint8_t ty = k->ev[k->nodes[a].ev].type;
-                    if (ty == EV_EXIT || ty == EV_DOUBLE)
-                        break;
-                }
-                const node *na = &k->nodes[a];
-                if (!na->crossing && na->out == SEG_KEPT &&
-                    side[vs[na->i]] == 0 &&
-                    side[vs[na->i + 1 < n ? na->i + 1 : 0]] == 0) {
-                    int r = push_kin(k, c0 + na->i);
-                    if (r < 0)
-                        return r;
-                }
-                a = a + 1 < nn ? a + 1 : 0;
-                if (k->nodes[a].in != SEG_KEPT)
-                    return facet_error(k, f, "the kept boundary is interrupted");
-            }
-            /* cycle A: from the exit against e to its entry; the new
-             * facet gets the same segment along e */
-            int32_t x = k->nodes[a].ev, en = k->ev[x].partner;
-            for (int32_t s = x; s > en; s--) {
-                uint32_t hi = k->nodes[k->ev[s].node].vout;
-                uint32_t lo = k->nodes[k->ev[s - 1].node].vout;
-                int r = push_cap(k, lo, hi);
-                if (r < 0)
-                    return r;
-                if (s - 1 > en) {
-                    if (grow((void **)&k->piece, &k->cappiece, np + 1, sizeof *k->piece) < 0)
-                        return -ENOMEM;
-                    k->piece[np++] = lo;
-                }
-            }
-            cur = k->ev[en].node;
-            if (cur == start->node)
-                break;
-            if (k->used[en])
-                return facet_error(k, f, "an entry is reached twice");
-        }
-        if (np < 3)
-            return facet_error(k, f, "a piece with fewer than 3 vertices");
-        int64_t nf_out = geo_poly_add_facet(k->out, k->piece, (uint32_t)np);
+    for (int q = 0; q < np; q++) {
+        uint32_t b = k->cf.pstart[q];
+        int64_t nf_out = geo_poly_add_facet(k->out, k->cf.piece + b,
+                                            k->cf.pstart[q + 1] - b);
         if (nf_out < 0)
             return (int)nf_out;
         memcpy(k->out->planes[nf_out], p->planes[f], sizeof p->planes[f]);
-        pieces++;
     }
-    for (size_t s = 0; s < nev; s++)
-        if (!k->used[s] && (k->ev[s].type == EV_ENTRY || k->ev[s].type == EV_DOUBLE))
-            return facet_error(k, f, "an entry is not on any piece");
-    k->pieces += pieces;
+    k->pieces += (uint32_t)np;
     k->split_facets++;
     return 0;
 }
@@ -456,7 +147,7 @@ static uint32_t pick_out(const cutter *k, const uint32_t *head,
     uint32_t best = GEO_NONE;
     int best_half = 0;
     for (uint32_t e = head[v]; e != GEO_NONE; e = nextedge[e]) {
-        uint32_t w = k->cap[e][1];
+        uint32_t w = k->cf.sec[e][1];
         /* half 1: clockwise of v→u within (0, π]; half 2: (π, 2π] */
         int o = osign * geo_orient2d_proj(P[v], P[u], P[w], drop);
         int half;
@@ -476,7 +167,7 @@ static uint32_t pick_out(const cutter *k, const uint32_t *head,
             continue;
         }
         if (half == best_half && half < 3) {
-            uint32_t bw = k->cap[best][1];
+            uint32_t bw = k->cf.sec[best][1];
             /* w before bw when w is counter-clockwise of bw, i.e. less
              * far clockwise from v→u */
             if (osign * geo_orient2d_proj(P[v], P[bw], P[w], drop) > 0)
@@ -549,7 +240,7 @@ static int place_section(cutter *k, const uint32_t *lv, uint32_t *lstart,
                          uint32_t nloops, uint32_t *loc, uint32_t *ret_parts)
 {
     uint32_t nlv = lstart[nloops], nl = 0;
-    int drop = dominant_axis(k->unit);
+    int drop = geo_cutf_dominant_axis(k->unit);
     int osign = k->unit[drop] > 0 ? 1 : -1;
     uint32_t *ids = malloc(((size_t)nlv + 1) * sizeof *ids);
     uint32_t *lidx = malloc(((size_t)nlv + 1) * sizeof *lidx);
@@ -641,7 +332,7 @@ done:
 static int build_section(cutter *k, uint32_t *ret_components)
 {
     uint32_t nv = k->out->nverts;
-    size_t m = k->ncap;
+    size_t m = k->cf.nsec;
     uint32_t *head = malloc(((size_t)nv + 1) * sizeof *head);
     uint32_t *nextedge = malloc((m + 1) * sizeof *nextedge);
     uint32_t *outdeg = calloc((size_t)nv + 1, sizeof *outdeg);
@@ -660,12 +351,12 @@ static int build_section(cutter *k, uint32_t *ret_components)
     for (uint32_t v = 0; v < nv; v++)
         head[v] = GEO_NONE;
     for (size_t e = m; e-- > 0;) {
-        uint32_t a = k->cap[e][0];
+        uint32_t a = k->cf.sec[e][0];
         nextedge[e] = head[a];
         head[a] = (uint32_t)e;
         outdeg[a]++;
     }
-    int drop = dominant_axis(k->unit);
+    int drop = geo_cutf_dominant_axis(k->unit);
     int osign = k->unit[drop] > 0 ? 1 : -1;
     uint32_t nloops = 0, nlv = 0;
     lstart[0] = 0;
@@ -676,8 +367,8 @@ static int build_section(cutter *k, uint32_t *ret_components)
         size_t e = e0;
         for (;;) {
             used[e] = 1;
-            lv[nlv + len++] = k->cap[e][0];
-            uint32_t u = k->cap[e][0], v = k->cap[e][1];
+            lv[nlv + len++] = k->cf.sec[e][0];
+            uint32_t u = k->cf.sec[e][0], v = k->cf.sec[e][1];
             uint32_t nx = outdeg[v] == 1 ? head[v]
                         : outdeg[v] == 0 ? GEO_NONE
                         : pick_out(k, head, nextedge, u, v, drop, osign);
@@ -723,7 +414,7 @@ static int inplane_edges(cutter *k)
         uint32_t c = k->kin[i], m = k->t->mate[c];
         uint32_t a = p->fidx[c], b = p->fidx[geo_topo_next(p, k->t, c)];
         if (!k->kept_inplane[m]) {
-            int r = push_cap(k, b, a);
+            int r = geo_cutf_push_section(&k->cf, b, a);
             if (r < 0)
                 return r;
             continue;
@@ -771,7 +462,7 @@ static int check_cavity_apexes(cutter *k, uint32_t first_new)
     const geo_poly *p = k->p;
     const geo_topo *t = k->t;
     const geo_poly *o = k->out;
-    int drop = dominant_axis(k->unit);
+    int drop = geo_cutf_dominant_axis(k->unit);
     int u = (drop + 1) % 3, w = (drop + 2) % 3;
     for (uint32_t v = 0; v < p->nverts; v++) {
         if (k->side[v] != 0 || t->vstart[v] == t->vstart[v + 1])
@@ -899,7 +590,7 @@ static int check_plane_fans(cutter *k)
             uint32_t v = o->fidx[c];
             if (v >= nold || k->side[v] != 0)
                 continue;
-            if (grow((void **)&w, &cap, n + 1, sizeof *w) < 0) {
+            if (geo_cutf_grow((void **)&w, &cap, n + 1, sizeof *w) < 0) {
                 free(w);
                 return geo_err_set(k->err, -ENOMEM, "out of memory");
             }
@@ -993,6 +684,8 @@ int geo_cut(const geo_poly *p, const double plane[4],
     double len = geo_vlen(plane);
     for (int j = 0; j < 4; j++)
         k.unit[j] = plane[j] / len;
+    k.cf.plane = plane;
+    k.cf.frame = k.unit;
 
     geo_topo *own = NULL;
     k.t = o.topo;
@@ -1075,9 +768,9 @@ int geo_cut(const geo_poly *p, const double plane[4],
         if (k.side[a] * k.side[b] >= 0 || k.xv[c] != GEO_NONE)
             continue;
         double x[3];
-        double xe = crossing_point(k.unit, p->verts[a], p->verts[b], x);
+        double xe = geo_cutf_crossing_point(k.unit, p->verts[a], p->verts[b], x);
         int64_t id = geo_poly_add_vertex(out, x);
-        if (id < 0 || grow((void **)&k.xerr, &k.capxerr, k.new_vertices + 1,
+        if (id < 0 || geo_cutf_grow((void **)&k.xerr, &k.capxerr, k.new_vertices + 1,
                            sizeof *k.xerr) < 0)
             goto oom;
         k.xerr[k.new_vertices] = xe;
@@ -1182,9 +875,9 @@ done:
     } else if (rep) {
         *rep = rp;
     }
-    free(k.side), free(k.xv), free(k.xerr), free(k.kept_inplane), free(k.cap);
-    free(k.kin);
-    free(k.nodes), free(k.ev), free(k.piece), free(k.used);
+    free(k.side), free(k.xv), free(k.xerr), free(k.kept_inplane);
+    free(k.kin), free(k.fside);
+    geo_cutf_free(&k.cf);
     geo_topo_free(own);
     return r;
 }

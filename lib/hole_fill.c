@@ -1542,25 +1542,7 @@ static int fair_cg(geo_poly *p, const adjacency *A, uint32_t first_free,
         diag[u] = sum;
         memcpy(x[u], p->verts[v], sizeof x[u]);
     }
-    /* b = −K·x̃, x̃ the fixed positions with the unknowns at zero */
-    for (uint32_t s2 = 0; s2 < m; s2++) {
-        uint32_t v = S[s2];
-        double acc[3] = {0, 0, 0};
-        if (s2 >= nu)
-            geo_vscale(p->verts[v], DEG(v), acc);
-        for (uint32_t q = A->start[v]; q < A->start[v + 1]; q++)
-            if (loc[A->nb[q]] >= nu)
-                geo_vsub(acc, p->verts[A->nb[q]], acc);
-        geo_vscale(acc, 1.0 / DEG(v), z[s2]);
-    }
-    for (uint32_t u = 0; u < nu; u++) {
-        uint32_t v = S[u];
-        double acc[3];
-        geo_vscale(z[u], DEG(v), acc);
-        for (uint32_t q = A->start[v]; q < A->start[v + 1]; q++)
-            geo_vsub(acc, z[loc[A->nb[q]]], acc);
-        geo_vscale(acc, -1.0, b[u]);
-    }
+    fair_rhs(p, A, S, loc, nu, m, z, b);
     /* Kd = K·d over the unknowns (d zero on everything fixed) */
 #define APPLY_K(in, out)                                                      \
     do {                                                                      \

@@ -13,41 +13,27 @@
  * refused too. The result is the same model; the cost is proportional to
  * the cut-off cap, not to the model.
  *
- * Each facet crossing π is cut by the paper's stages as in cut.c: nodes
- * (vertices and crossing points; one new vertex per crossed edge, shared
- * by its two facets), the events on l = facet ∩ π sorted exactly along l
- * (geo_plane_crossing_cmp), the direction sweep, and the pieces by
- * cycles B and A; every segment of l walked by cycle A is, reversed, an
- * edge of the section. Edges lying in π join the section where the facet
- * on one side of them is kept and the other is not (§3.4 item 2: the main
- * facet's own edges in π enter the section this way, in its
- * counter-clockwise order). Sides are decided once: 0 within geo_poly_eps
- * of π (the lifted points lie on π to rounding), else the sign. */
+ * Each facet crossing π is cut by the same code as in geo_cut,
+ * lib/cut_facet.c (nodes, events on l = facet ∩ π sorted exactly, the
+ * direction sweep, the pieces by cycles B and A; every segment of l
+ * walked by cycle A is, reversed, an edge of the section); what this file
+ * keeps is what differs: which facets are visited (the cap), the sides
+ * (below), the crossing vertices (one per crossed edge, created on first
+ * use in an edge map, shared by its two facets), the proof of one
+ * component and the assembly of the new main facet. Edges lying in π join
+ * the section where the facet on one side of them is kept and the other
+ * is not (§3.4 item 2: the main facet's own edges in π enter the section
+ * this way, in its counter-clockwise order). Sides are decided once: 0
+ * within geo_poly_eps of π (the lifted points lie on π to rounding), else
+ * the sign; they are read into a per-facet array for the shared code. */
 #include "merge_impl.h"
 
 #include <errno.h>
-#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "predicates.h"
+#include "cut_facet.h"
 #include "vec.h"
-
-enum ev_type { EV_ENTRY, EV_EXIT, EV_DOUBLE, EV_PASS };
-enum seg_type { SEG_KEPT, SEG_REMOVED };
-
-typedef struct node {
-    uint32_t i, vout;
-    uint8_t crossing, in, out;
-    int32_t ev;
-} node;
-
-typedef struct event {
-    uint8_t type;
-    uint32_t node;
-    const double *p0, *p1;
-    int32_t partner;
-} event;
 
 /* Edge-keyed map (undirected) for crossing vertices and visited edges. */
 typedef struct emap {
@@ -96,75 +82,12 @@ typedef struct cutter {
     geo_edit *e;
     const double *plane;
     emap xmap;             /* crossed edge → new vertex */
-    uint32_t (*cap)[2];    /* section edges (src, dst) */
-    size_t ncap, capcap;
-    node *nodes;
-    size_t capnodes;
-    event *ev;
-    size_t capev;
-    uint32_t *piece, *pstart;
-    size_t cappiece, cappstart;
-    uint8_t *used;
-    size_t capused;
+    geo_cutf cf;           /* the per-facet stages; cf.sec: section edges */
+    int8_t *fside;         /* one facet's sides, in its order */
+    uint32_t *fxv;         /* one facet's crossing vertices, by position */
+    size_t capfside, capfxv;
     geo_err *err;
 } cutter;
-
-static int grow(void **buf, size_t *cap, size_t need, size_t elem)
-{
-    if (need <= *cap)
-        return 0;
-    size_t c = *cap ? *cap : 16;
-    while (c < need)
-        c *= 2;
-    void *b = realloc(*buf, c * elem);
-    if (!b)
-        return -ENOMEM;
-    *buf = b;
-    *cap = c;
-    return 0;
-}
-
-static int push_cap(cutter *k, uint32_t a, uint32_t b)
-{
-    if (grow((void **)&k->cap, &k->capcap, k->ncap + 1, sizeof *k->cap) < 0)
-        return -ENOMEM;
-    k->cap[k->ncap][0] = a;
-    k->cap[k->ncap][1] = b;
-    k->ncap++;
-    return 0;
-}
-
-static int dominant_axis(const double v[3])
-{
-    int k = 0;
-    for (int j = 1; j < 3; j++)
-        if (fabs(v[j]) > fabs(v[k]))
-            k = j;
-    return k;
-}
-
-/* As in cut.c: the crossing of edge a–b from the end nearer to the
- * plane, so the same edge gives the same bits whichever facet asks. */
-static void crossing_point(const double plane[4], const double a[3],
-                           const double b[3], double ret[3])
-{
-    double fa = geo_plane_eval(plane, a), fb = geo_plane_eval(plane, b);
-    const double *p0 = a, *p1 = b;
-    double f0 = fa, f1 = fb;
-    if (fabs(fb) < fabs(fa) || (fabs(fb) == fabs(fa) && memcmp(b, a, 24) < 0)) {
-        p0 = b, p1 = a, f0 = fb, f1 = fa;
-    }
-    double t = f0 / (f0 - f1);
-    if (!(t >= 0.0))
-        t = 0.0;
-    if (t > 0.5)
-        t = 0.5;
-    for (int j = 0; j < 3; j++) {
-        double x = p0[j] + t * (p1[j] - p0[j]);
-        double lo = fmin(a[j], b[j]), hi = fmax(a[j], b[j]);
-        ret[j] = fmin(fmax(x, lo), hi);
-    }
-}
 
 /* The new vertex on crossed edge a–b (created once). */
 static int64_t crossing_vertex(cutter *k, uint32_t a, uint32_t b)
@@ -173,7 +96,7 @@ static int64_t crossing_vertex(cutter *k, uint32_t a, uint32_t b)
     if (k->xmap.val[s] != GEO_NONE)
         return k->xmap.val[s];
     double x[3];
-    crossing_point(k->plane, k->e->verts[a], k->e->verts[b], x);
+    geo_cutf_crossing_point(k->plane, k->e->verts[a], k->e->verts[b], x);
     int64_t id = geo_edit_add_vertex(k->e, x);
     if (id < 0)
         return id;
@@ -182,223 +105,41 @@ static int64_t crossing_vertex(cutter *k, uint32_t a, uint32_t b)
     return id;
 }
 
-typedef struct facet_frame {
-    int k, esign, drop, osign;
-} facet_frame;
-
-static int along(const cutter *k, const facet_frame *fr, const double *a0,
-                 const double *a1, const double *b0, const double *b1)
-{
-    return fr->esign * geo_plane_crossing_cmp(k->plane, a0, a1, b0, b1, fr->k);
-}
-
-static int insert_event(cutter *k, const facet_frame *fr, size_t *nev,
-                        const event *e)
-{
-    if (grow((void **)&k->ev, &k->capev, *nev + 1, sizeof *k->ev) < 0)
-        return -ENOMEM;
-    size_t lo = 0, hi = *nev;
-    while (lo < hi) {
-        size_t mid = (lo + hi) / 2;
-        const event *m = &k->ev[mid];
-        if (along(k, fr, m->p0, m->p1, e->p0, e->p1) <= 0)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    memmove(k->ev + lo + 1, k->ev + lo, (*nev - lo) * sizeof *k->ev);
-    k->ev[lo] = *e;
-    (*nev)++;
-    return 0;
-}
-
 static int facet_error(cutter *k, uint32_t f, const char *what)
 {
     return geo_err_set(k->err, -EINVAL, "facets[%u]: %s while cutting by the "
                        "merged plane", f, what);
 }
 
-static int piece_push(cutter *k, size_t *np, uint32_t v)
-{
-    if (grow((void **)&k->piece, &k->cappiece, *np + 1, sizeof *k->piece) < 0)
-        return -ENOMEM;
-    k->piece[(*np)++] = v;
-    return 0;
-}
-
-/* Cuts facet f (vertex cycle vs[0..n), copied by the caller) into its
- * kept pieces: piece p is k->piece[pstart[p] .. pstart[p+1]). Section
- * segments go to k->cap. Returns the number of pieces or an error. */
+/* Cuts facet f (vertex cycle vs[0..n), copied by the caller) by the
+ * shared stages (lib/cut_facet.h) into its kept pieces: piece p is
+ * k->cf.piece[pstart[p] .. pstart[p+1]). Section segments go to
+ * k->cf.sec. The sides are the merge's cached ones; the crossing
+ * vertices are created here, in the facet's order. Returns the number of
+ * pieces or an error. */
 static int cut_facet(cutter *k, uint32_t f, const uint32_t *vs, uint32_t n)
 {
-    geo_mw *w = k->w;
-    geo_edit *e = k->e;
-    double nf[3], ev3[3];
-    geo_edit_area_vector(e, f, nf);
-    geo_vcross(k->plane, nf, ev3);
-    if (!(geo_vlen(ev3) > 0.0))
-        return facet_error(k, f, "crosses the plane but is parallel to it");
-    facet_frame fr;
-    fr.k = dominant_axis(ev3);
-    fr.esign = ev3[fr.k] > 0 ? 1 : -1;
-    fr.drop = dominant_axis(nf);
-    fr.osign = nf[fr.drop] > 0 ? 1 : -1;
-
-    if (grow((void **)&k->nodes, &k->capnodes, 2 * (size_t)n, sizeof *k->nodes) < 0)
+    double nf[3];
+    geo_edit_area_vector(k->e, f, nf);
+    if (geo_cutf_frame(&k->cf, nf) < 0)
+        return facet_error(k, f, k->cf.why);
+    if (geo_cutf_grow((void **)&k->fside, &k->capfside, n, 1) < 0 ||
+        geo_cutf_grow((void **)&k->fxv, &k->capfxv, n, sizeof *k->fxv) < 0)
         return -ENOMEM;
-    uint32_t nn = 0;
+    for (uint32_t i = 0; i < n; i++)
+        k->fside[i] = (int8_t)geo_mw_side(k->w, vs[i], k->plane);
     for (uint32_t i = 0; i < n; i++) {
         uint32_t j = i + 1 < n ? i + 1 : 0;
-        int si = geo_mw_side(w, vs[i], k->plane), sj = geo_mw_side(w, vs[j], k->plane);
-        node *v = &k->nodes[nn++];
-        v->i = i;
-        v->vout = vs[i];
-        v->crossing = 0;
-        v->ev = -1;
-        if (si * sj < 0) {
-            v->out = si < 0 ? SEG_KEPT : SEG_REMOVED;
-            int64_t x = crossing_vertex(k, vs[i], vs[j]);
-            if (x < 0)
-                return (int)x;
-            node *c = &k->nodes[nn++];
-            c->i = i;
-            c->vout = (uint32_t)x;
-            c->crossing = 1;
-            c->ev = -1;
-            c->in = v->out;
-            c->out = sj < 0 ? SEG_KEPT : SEG_REMOVED;
-        } else if (si < 0 || sj < 0) {
-            v->out = SEG_KEPT;
-        } else if (si > 0 || sj > 0) {
-            v->out = SEG_REMOVED;
-        } else {
-            int d = along(k, &fr, e->verts[vs[j]], NULL, e->verts[vs[i]], NULL);
-            if (d == 0)
-                return facet_error(k, f, "an edge in the plane has zero length");
-            v->out = d < 0 ? SEG_KEPT : SEG_REMOVED;
-        }
-    }
-    for (uint32_t a = 0; a < nn; a++)
-        if (!k->nodes[a].crossing)
-            k->nodes[a].in = k->nodes[a ? a - 1 : nn - 1].out;
-
-    size_t nev = 0;
-    for (uint32_t a = 0; a < nn; a++) {
-        node *v = &k->nodes[a];
-        event evt = {0, a, NULL, NULL, -1};
-        if (v->crossing) {
-            uint32_t j = v->i + 1 < n ? v->i + 1 : 0;
-            evt.p0 = e->verts[vs[v->i]];
-            evt.p1 = e->verts[vs[j]];
-        } else {
-            if (geo_mw_side(w, vs[v->i], k->plane) != 0)
-                continue;
-            evt.p0 = e->verts[vs[v->i]];
-        }
-        if (v->in == SEG_REMOVED && v->out == SEG_KEPT) {
-            evt.type = EV_ENTRY;
-        } else if (v->in == SEG_KEPT && v->out == SEG_REMOVED) {
-            evt.type = EV_EXIT;
-        } else {
-            uint32_t ip = v->i ? v->i - 1 : n - 1, in = v->i + 1 < n ? v->i + 1 : 0;
-            int sp = geo_mw_side(w, vs[ip], k->plane), sn = geo_mw_side(w, vs[in], k->plane);
-            if (sp == 0 || sn == 0 || sp != sn)
-                continue;
-            int turn = fr.osign * geo_orient2d_proj(e->verts[vs[ip]], e->verts[vs[v->i]],
-                                                    e->verts[vs[in]], fr.drop);
-            if (turn >= 0)
-                continue;
-            evt.type = sp < 0 ? EV_DOUBLE : EV_PASS;
-        }
-        int r = insert_event(k, &fr, &nev, &evt);
-        if (r < 0)
-            return r;
-    }
-
-    int32_t open = -1;
-    for (size_t s = 0; s < nev; s++) {
-        event *x = &k->ev[s];
-        k->nodes[x->node].ev = (int32_t)s;
-        switch (x->type) {
-        case EV_ENTRY:
-            if (open >= 0)
-                return facet_error(k, f, "two entries in a row along the section");
-            open = (int32_t)s;
-            break;
-        case EV_PASS:
-            if (open < 0)
-                return facet_error(k, f, "a reflex vertex outside the section");
-            break;
-        case EV_EXIT:
-        case EV_DOUBLE:
-            if (open < 0)
-                return facet_error(k, f, "an exit before any entry along the section");
-            x->partner = open;
-            open = x->type == EV_DOUBLE ? (int32_t)s : -1;
-            break;
-        }
-    }
-    if (open >= 0 || nev == 0)
-        return facet_error(k, f, "the section does not close");
-
-    if (grow((void **)&k->used, &k->capused, nev, 1) < 0)
-        return -ENOMEM;
-    memset(k->used, 0, nev);
-    size_t np = 0;
-    uint32_t pieces = 0;
-    size_t guard = 0, limit = 4 * ((size_t)nn + nev) + 16;
-    if (grow((void **)&k->pstart, &k->cappstart, 1, sizeof *k->pstart) < 0)
-        return -ENOMEM;
-    k->pstart[0] = 0;
-    for (size_t s0 = 0; s0 < nev; s0++) {
-        const event *start = &k->ev[s0];
-        if ((start->type != EV_ENTRY && start->type != EV_DOUBLE) || k->used[s0])
+        if (k->fside[i] * k->fside[j] >= 0)
             continue;
-        size_t p0 = np;
-        uint32_t cur = start->node;
-        for (;;) {
-            k->used[k->nodes[cur].ev] = 1;
-            uint32_t a = cur;
-            for (;;) {
-                if (++guard > limit)
-                    return facet_error(k, f, "the pieces do not close");
-                if (piece_push(k, &np, k->nodes[a].vout) < 0)
-                    return -ENOMEM;
-                if (a != cur && k->nodes[a].ev >= 0) {
-                    uint8_t ty = k->ev[k->nodes[a].ev].type;
-                    if (ty == EV_EXIT || ty == EV_DOUBLE)
-                        break;
-                }
-                a = a + 1 < nn ? a + 1 : 0;
-                if (k->nodes[a].in != SEG_KEPT)
-                    return facet_error(k, f, "the kept boundary is interrupted");
-            }
-            int32_t x = k->nodes[a].ev, en = k->ev[x].partner;
-            for (int32_t s = x; s > en; s--) {
-                uint32_t hi = k->nodes[k->ev[s].node].vout;
-                uint32_t lo = k->nodes[k->ev[s - 1].node].vout;
-                if (push_cap(k, lo, hi) < 0)
-                    return -ENOMEM;
-                if (s - 1 > en && piece_push(k, &np, lo) < 0)
-                    return -ENOMEM;
-            }
-            cur = k->ev[en].node;
-            if (cur == start->node)
-                break;
-            if (k->used[en])
-                return facet_error(k, f, "an entry is reached twice");
-        }
-        if (np - p0 < 3)
-            return facet_error(k, f, "a piece with fewer than 3 vertices");
-        pieces++;
-        if (grow((void **)&k->pstart, &k->cappstart, pieces + 1, sizeof *k->pstart) < 0)
-            return -ENOMEM;
-        k->pstart[pieces] = (uint32_t)np;
+        int64_t x = crossing_vertex(k, vs[i], vs[j]);
+        if (x < 0)
+            return (int)x;
+        k->fxv[i] = (uint32_t)x;
     }
-    for (size_t s = 0; s < nev; s++)
-        if (!k->used[s] && (k->ev[s].type == EV_ENTRY || k->ev[s].type == EV_DOUBLE))
-            return facet_error(k, f, "an entry is not on any piece");
-    return (int)pieces;
+    int np = geo_cutf_facet(&k->cf, (const double(*)[3])k->e->verts, vs,
+                            k->fside, k->fxv, n);
+    return np == -EINVAL ? facet_error(k, f, k->cf.why) : np;
 }
 
 /* Does a live facet other than skip have the directed edge a→b? */
@@ -518,6 +259,8 @@ int geo_mw_cut(geo_mw *w, uint32_t main, const double plane[4],
     k.w = w;
     k.e = e;
     k.plane = plane;
+    k.cf.plane = plane;
+    k.cf.frame = plane;
     k.err = err;
     size_t corners = 0;
     for (uint32_t i = 0; i < nr; i++)
@@ -544,7 +287,7 @@ int geo_mw_cut(geo_mw *w, uint32_t main, const double plane[4],
                 continue;
             seen.key[s] = ekey(a, b);
             seen.val[s] = 1;
-            if (grow((void **)&inpl, &capinpl, ninpl + 1, sizeof *inpl) < 0) {
+            if (geo_cutf_grow((void **)&inpl, &capinpl, ninpl + 1, sizeof *inpl) < 0) {
                 r = geo_err_set(err, -ENOMEM, "out of memory");
                 goto done;
             }
@@ -567,7 +310,7 @@ int geo_mw_cut(geo_mw *w, uint32_t main, const double plane[4],
             }
             continue;
         }
-        if (grow((void **)&cyc, &capcyc, n, sizeof *cyc) < 0) {
+        if (geo_cutf_grow((void **)&cyc, &capcyc, n, sizeof *cyc) < 0) {
             r = geo_err_set(err, -ENOMEM, "out of memory");
             goto done;
         }
@@ -580,8 +323,8 @@ int geo_mw_cut(geo_mw *w, uint32_t main, const double plane[4],
         double pl[4];
         memcpy(pl, e->planes[f], sizeof pl);
         for (int p = 0; p < np; p++) {
-            const uint32_t *pc = k.piece + k.pstart[p];
-            uint32_t len = k.pstart[p + 1] - k.pstart[p];
+            const uint32_t *pc = k.cf.piece + k.cf.pstart[p];
+            uint32_t len = k.cf.pstart[p + 1] - k.cf.pstart[p];
             int64_t g = p == 0 ? geo_edit_set_facet(e, f, pc, len)
                                : geo_edit_add_facet(e, pc, len, pl);
             if (g < 0) {
@@ -597,9 +340,9 @@ int geo_mw_cut(geo_mw *w, uint32_t main, const double plane[4],
         uint32_t a = inpl[i][0], b = inpl[i][1];
         bool ab = has_edge(e, a, b, main), ba = has_edge(e, b, a, main);
         if (ab && !ba)
-            r = push_cap(&k, b, a);
+            r = geo_cutf_push_section(&k.cf, b, a);
         else if (ba && !ab)
-            r = push_cap(&k, a, b);
+            r = geo_cutf_push_section(&k.cf, a, b);
         if (r < 0) {
             r = geo_err_set(err, -ENOMEM, "out of memory");
             goto done;
@@ -607,49 +350,49 @@ int geo_mw_cut(geo_mw *w, uint32_t main, const double plane[4],
     }
 
     /* the section: one closed chain (§3.4 item 1) */
-    if (k.ncap < 3) {
-        r = geo_err_set(err, -EINVAL, "the section has %zu edges", k.ncap);
+    if (k.cf.nsec < 3) {
+        r = geo_err_set(err, -EINVAL, "the section has %zu edges", k.cf.nsec);
         goto done;
     }
     {
         emap next;
-        if (emap_init(&next, k.ncap) < 0) {
+        if (emap_init(&next, k.cf.nsec) < 0) {
             r = geo_err_set(err, -ENOMEM, "out of memory");
             goto done;
         }
-        for (size_t i = 0; i < k.ncap && r == 0; i++) {
-            uint64_t key = k.cap[i][0];
+        for (size_t i = 0; i < k.cf.nsec && r == 0; i++) {
+            uint64_t key = k.cf.sec[i][0];
             size_t s = emap_slot(&next, key);
             if (next.val[s] != GEO_NONE)
                 r = geo_err_set(err, -EINVAL, "vertices[%u]: the section "
-                                "touches itself here", k.cap[i][0]);
+                                "touches itself here", k.cf.sec[i][0]);
             next.key[s] = key;
             next.val[s] = (uint32_t)i;
         }
         size_t len = 0;
-        if (r == 0 && grow((void **)&cyc, &capcyc, k.ncap, sizeof *cyc) < 0)
+        if (r == 0 && geo_cutf_grow((void **)&cyc, &capcyc, k.cf.nsec, sizeof *cyc) < 0)
             r = geo_err_set(err, -ENOMEM, "out of memory");
         for (size_t i = 0; r == 0;) {
-            cyc[len++] = k.cap[i][0];
-            size_t s = emap_slot(&next, k.cap[i][1]);
+            cyc[len++] = k.cf.sec[i][0];
+            size_t s = emap_slot(&next, k.cf.sec[i][1]);
             if (next.val[s] == GEO_NONE) {
                 r = geo_err_set(err, -EINVAL, "vertices[%u]: the section "
-                                "does not close here", k.cap[i][1]);
+                                "does not close here", k.cf.sec[i][1]);
                 break;
             }
             i = next.val[s];
             if (i == 0)
                 break;
-            if (len >= k.ncap) {
+            if (len >= k.cf.nsec) {
                 r = geo_err_set(err, -EINVAL, "the section does not close");
                 break;
             }
         }
         emap_free(&next);
-        if (r == 0 && len != k.ncap)
+        if (r == 0 && len != k.cf.nsec)
             r = geo_err_set(err, -EINVAL, "the section has more than one "
                             "component (%zu of its %zu edges in the first)",
-                            len, k.ncap);
+                            len, k.cf.nsec);
         if (r < 0)
             goto done;
         if (geo_edit_set_facet(e, main, cyc, (uint32_t)len) < 0 ||
@@ -691,7 +434,7 @@ int geo_mw_cut(geo_mw *w, uint32_t main, const double plane[4],
 done:
     emap_free(&k.xmap);
     emap_free(&seen);
-    free(k.cap), free(k.nodes), free(k.ev), free(k.piece), free(k.pstart);
-    free(k.used), free(cyc), free(inpl);
+    geo_cutf_free(&k.cf);
+    free(k.fside), free(k.fxv), free(cyc), free(inpl);
     return r;
 }

@@ -32,77 +32,69 @@ struct geo_replanar_prep {
     geo_bvh *fbvh;     /* facet boxes of the start */
 };
 
+/* The names of each option enum, indexed by its values (0, 1, ...). */
+static const char *const SCHEDULE_NAMES[] = {"local-exp", "scaled",
+                                             "global-exp"};
+static const char *const FIT_NAMES[] = {"through-fixed", "all"};
+static const char *const SCALED_K_NAMES[] = {"s2sum", "s2"};
+#define NNAMES(a) (sizeof a / sizeof a[0])
+
+static const char *name_of(unsigned v, const char *const *names, size_t n)
+{
+    return v < n ? names[v] : "unknown";
+}
+
+/* The index of name in names, or -1. */
+static int index_of(const char *name, const char *const *names, size_t n)
+{
+    for (size_t i = 0; name && i < n; i++)
+        if (strcmp(name, names[i]) == 0)
+            return (int)i;
+    return -1;
+}
+
 const char *geo_replanar_schedule_name(enum geo_replanar_schedule s)
 {
-    switch (s) {
-    case GEO_REPLANAR_LOCAL_EXP:
-        return "local-exp";
-    case GEO_REPLANAR_SCALED:
-        return "scaled";
-    case GEO_REPLANAR_GLOBAL_EXP:
-        return "global-exp";
-    }
-    return "unknown";
+    return name_of((unsigned)s, SCHEDULE_NAMES, NNAMES(SCHEDULE_NAMES));
 }
 
 int geo_replanar_schedule_parse(const char *name,
                                 enum geo_replanar_schedule *ret)
 {
-    static const enum geo_replanar_schedule all[] = {
-        GEO_REPLANAR_LOCAL_EXP, GEO_REPLANAR_SCALED, GEO_REPLANAR_GLOBAL_EXP};
-    for (size_t i = 0; name && i < sizeof all / sizeof all[0]; i++)
-        if (strcmp(name, geo_replanar_schedule_name(all[i])) == 0) {
-            *ret = all[i];
-            return 0;
-        }
-    return -EINVAL;
+    int i = index_of(name, SCHEDULE_NAMES, NNAMES(SCHEDULE_NAMES));
+    if (i < 0)
+        return -EINVAL;
+    *ret = (enum geo_replanar_schedule)i;
+    return 0;
 }
 
 const char *geo_replanar_fit_name(enum geo_replanar_fit f)
 {
-    switch (f) {
-    case GEO_REPLANAR_FIT_THROUGH_FIXED:
-        return "through-fixed";
-    case GEO_REPLANAR_FIT_ALL:
-        return "all";
-    }
-    return "unknown";
+    return name_of((unsigned)f, FIT_NAMES, NNAMES(FIT_NAMES));
 }
 
 int geo_replanar_fit_parse(const char *name, enum geo_replanar_fit *ret)
 {
-    static const enum geo_replanar_fit all[] = {
-        GEO_REPLANAR_FIT_THROUGH_FIXED, GEO_REPLANAR_FIT_ALL};
-    for (size_t i = 0; name && i < sizeof all / sizeof all[0]; i++)
-        if (strcmp(name, geo_replanar_fit_name(all[i])) == 0) {
-            *ret = all[i];
-            return 0;
-        }
-    return -EINVAL;
+    int i = index_of(name, FIT_NAMES, NNAMES(FIT_NAMES));
+    if (i < 0)
+        return -EINVAL;
+    *ret = (enum geo_replanar_fit)i;
+    return 0;
 }
 
 const char *geo_replanar_scaled_k_name(enum geo_replanar_scaled_k k)
 {
-    switch (k) {
-    case GEO_REPLANAR_SCALED_K_S2SUM:
-        return "s2sum";
-    case GEO_REPLANAR_SCALED_K_S2:
-        return "s2";
-    }
-    return "unknown";
+    return name_of((unsigned)k, SCALED_K_NAMES, NNAMES(SCALED_K_NAMES));
 }
 
 int geo_replanar_scaled_k_parse(const char *name,
                                 enum geo_replanar_scaled_k *ret)
 {
-    static const enum geo_replanar_scaled_k all[] = {
-        GEO_REPLANAR_SCALED_K_S2SUM, GEO_REPLANAR_SCALED_K_S2};
-    for (size_t i = 0; name && i < sizeof all / sizeof all[0]; i++)
-        if (strcmp(name, geo_replanar_scaled_k_name(all[i])) == 0) {
-            *ret = all[i];
-            return 0;
-        }
-    return -EINVAL;
+    int i = index_of(name, SCALED_K_NAMES, NNAMES(SCALED_K_NAMES));
+    if (i < 0)
+        return -EINVAL;
+    *ret = (enum geo_replanar_scaled_k)i;
+    return 0;
 }
 
 void geo_replanar_opts_default(geo_replanar_opts *o,
