@@ -67,6 +67,8 @@ static int append_pass(geo_merge_report *all, const geo_merge_report *pass)
     all->statement_violations += pass->statement_violations;
     all->views = pass->views;
     all->noise = pass->noise;
+    all->max_dev = pass->max_dev;
+    all->bevels += pass->bevels;
     return 0;
 }
 

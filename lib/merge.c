@@ -25,6 +25,7 @@ void geo_merge_opts_default(geo_merge_opts *o)
     o->rel_deviation = 5e-4;
     o->views = 0;
     o->noise = 0;
+    o->bevels = true;
     o->max_rounds = 16;
 }
 
@@ -606,12 +607,21 @@ int geo_merge_auto(geo_poly *p, const geo_merge_opts *opts,
         r = geo_err_set(err, r, "out of memory");
     rep->views = views;
     rep->noise = c.noise;
+    rep->max_dev = c.max_dev;
     uint32_t rounds = o.max_rounds ? o.max_rounds : 1;
+    bool bevel_done = !o.bevels;
     for (uint32_t k = 0; k < rounds && r == 0; k++) {
         uint32_t merged = 0;
         r = geo_mw_auto_round(s.w, &c, ctx, (double)k / rounds,
                               (double)(k + 1) / rounds, rep, &merged, err);
         rep->rounds++;
+        if (r == 0 && merged == 0 && !bevel_done) {
+            /* the rounds have converged: the bevel strips, once; the
+             * rounds resume when any was merged */
+            r = geo_mw_bevel_pass(s.w, &c, ctx, rep, &merged, err);
+            rep->bevels += merged;
+            bevel_done = true;
+        }
         if (merged == 0)
             break;
         if (r == 0 && geo_edit_gc(s.e) < 0)

@@ -35,9 +35,14 @@
  * plane, and — the scan's own error — each facet that joins within
  * a few times the scan's surface noise plus a view step's roof of the
  * plane the group had before it; grown greedily from the largest facet
- * not yet in a group; only
- * simply connected groups (one enclosing contour, §2.1) are merged. Rounds
- * repeat until a round merges nothing (merged facets can merge again).
+ * not yet in a group. The deviation bound widens, on wide inclined
+ * groups, by the roof the scanner's view step leaves. Only simply
+ * connected groups (one enclosing contour, §2.1) are merged. Rounds
+ * repeat until a round merges nothing (merged facets can merge again);
+ * then the bevel strips the scanner leaves along sharp edges (narrow
+ * facets within three times the deviation bound of both neighbours'
+ * planes, lib/merge_bevel.c) are merged into a neighbour in its plane,
+ * once, and the rounds resume if any was.
  *
  * Complexity: one group costs O(k log n) for a neighbourhood of k facets
  * (the facet BVH is built once per round and its boxes enlarged in place);
@@ -97,6 +102,8 @@ typedef struct geo_merge_opts {
      * leave the noise test out [0]. */
     uint32_t views;
     double noise;
+    /* Automatic groups: remove bevel strips after the rounds [true]. */
+    bool bevels;
     /* Automatic groups: rounds at most [16]. */
     uint32_t max_rounds;
 } geo_merge_opts;
@@ -152,6 +159,9 @@ typedef struct geo_merge_report {
     uint32_t views;       /* automatic groups: the views used (0: none) */
     double noise;         /* automatic groups: the surface noise used, mm
                              (0: no noise test) */
+    double max_dev;       /* automatic groups: the deviation bound used
+                             (before the roof term), mm */
+    uint32_t bevels;      /* of the groups merged, bevel strips */
     uint32_t vertices_before, facets_before, vertices_after, facets_after;
     double volume_before, volume_after;
 } geo_merge_report;

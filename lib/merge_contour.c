@@ -244,6 +244,10 @@ static int area_plane(const geo_mw *w, double ret[4])
 int geo_mw_plane(geo_mw *w, uint32_t main, double ret_plane[4], geo_err *err)
 {
     geo_edit *e = w->e;
+    if (w->fixed_plane) {
+        memcpy(ret_plane, w->fixed_plane, 4 * sizeof *ret_plane);
+        return 0;
+    }
     if (w->plane_mode == GEO_MERGE_PLANE_AREA) {
         if (area_plane(w, ret_plane) < 0)
             return geo_err_set(err, -EINVAL, "the group has no area: no plane");

@@ -5,13 +5,14 @@
  * by adding, one at a time, the neighbour (across an edge) whose normal is
  * closest to the group's plane, as long as (a) every member's normal stays
  * within max_angle of the plane, (b) every vertex of the members stays
- * within max_dev of it and (c) on a scan, the joining facet lies within
- * the scan's own error of the plane the group had before it (area RMS
- * distance). The plane is the least-squares plane of the members'
- * distinct vertices, kept as running moments (about the seed's first
- * vertex, so the sums do not cancel) and solved with the 3×3 eigen solver
- * for every candidate. A candidate that fails is not tried again for that
- * group.
+ * within max_dev of it — on a scan, or within the roof the view step
+ * leaves over a group that wide and that inclined, if that is more — and
+ * (c) on a scan, the joining facet lies within the scan's own error of
+ * the plane the group had before it (area RMS distance). The plane is
+ * the least-squares plane of the members' distinct vertices, kept as
+ * running moments (about the seed's first vertex, so the sums do not
+ * cancel) and solved with the 3×3 eigen solver for every candidate. A
+ * candidate that fails is not tried again for that group.
  *
  * Why (b) and (c): the vertices of one true facet's slivers stay within
  * the scan's error, a few µm, of one plane, and along every true edge the
@@ -24,7 +25,13 @@
  * distance from the plane before it joined does not split anything: such
  * a neighbour lies 4.5 µm RMS off, a sliver of the same facet within its
  * noise plus the roof its view step leaves (step × extent). (c) uses the
- * surface noise measured on the scan itself (merge_scale.c).
+ * surface noise measured on the scan itself (merge_scale.c). The roof in
+ * (b): a sliver is a silhouette plane through one of the facet's true
+ * edges, its normal up to half a view step in azimuth, so up to
+ * step × sin(inclination) / 2 in tilt, off the facet's; two such planes
+ * from opposite edges of a facet of width w meet in a ridge up to
+ * w × step × sin(inclination) / 4 high (GEO_GROUP_ROOF_FACTOR), tens of
+ * µm on a princess's pavilion at K = 100.
  * Cost per group O(c · (m + v)) for c candidates, m members, v vertices;
  * groups are small. */
 #include "merge_impl.h"
@@ -65,10 +72,10 @@ typedef struct grower {
     uint32_t *cand, ncand, capcand;
 } grower;
 
-/* Plane of the moments plus the extra points xs[0..nx); false when the
- * points are collinear. */
+/* Plane of the moments plus the extra points xs[0..nx), and (axis, may be
+ * NULL) its middle axis of inertia; false when the points are collinear. */
 static bool moments_plane(const grower *g, const double (*xs)[3], uint32_t nx,
-                          double ret[4])
+                          double ret[4], double axis[3])
 {
     double s[3], ss[3][3];
     memcpy(s, g->s, sizeof s);
@@ -102,6 +109,8 @@ static bool moments_plane(const grower *g, const double (*xs)[3], uint32_t nx,
     geo_vadd(mu, g->o, p);
     memcpy(ret, n, 3 * sizeof *n);
     ret[3] = -geo_vdot(n, p);
+    if (axis)
+        memcpy(axis, vec[1], 3 * sizeof *axis);
     return true;
 }
 
@@ -163,6 +172,34 @@ static double rms_from_plane(const geo_edit *e, uint32_t f, const double pl[4])
     return sqrt(fmax(m, 0));
 }
 
+/* The deviation bound (b) for a group of plane pl whose extent along the
+ * plane's middle axis of inertia is width: the roof the view step leaves
+ * over a facet that wide rises by up to width × step × sin(inclination)
+ * / 4, the inclination being the angle between pl and the horizontal
+ * (the scanner turns the stone about z; README). */
+static double dev_bound(const geo_group_crit *c, const double pl[4], double width)
+{
+    double sin_incl = sqrt(pl[0] * pl[0] + pl[1] * pl[1]);
+    return fmax(c->max_dev, GEO_GROUP_ROOF_FACTOR * sin_incl * width * c->step);
+}
+
+/* Extent of the points vs[0..n) (vertex ids) and xs[0..nx) along axis. */
+static double extent_along(const geo_edit *e, const uint32_t *vs, uint32_t n,
+                           const double (*xs)[3], uint32_t nx,
+                           const double axis[3])
+{
+    double lo = INFINITY, hi = -INFINITY;
+    for (uint32_t i = 0; i < n; i++) {
+        double t = geo_vdot(axis, e->verts[vs[i]]);
+        lo = fmin(lo, t), hi = fmax(hi, t);
+    }
+    for (uint32_t i = 0; i < nx; i++) {
+        double t = geo_vdot(axis, xs[i]);
+        lo = fmin(lo, t), hi = fmax(hi, t);
+    }
+    return hi > lo ? hi - lo : 0;
+}
+
 /* Would facet f fit the group? On success the plane is returned in
  * ret_plane. */
 static bool fits(grower *g, uint32_t f, double ret_plane[4])
@@ -192,19 +229,21 @@ static bool fits(grower *g, uint32_t f, double ret_plane[4])
         }
     geo_vsub(hi, lo, d);
     double ext = geo_vlen(d);
-    double pl[4];
-    if (!moments_plane(g, (const double(*)[3])extra, nx, pl))
+    double pl[4], ax[3];
+    if (!moments_plane(g, (const double(*)[3])extra, nx, pl, ax))
         return false;
     if (geo_vdot(e->planes[f], pl) < c->cosmax)
         return false;
     for (uint32_t i = 0; i < g->nmem; i++)
         if (geo_vdot(e->planes[g->mem[i]], pl) < c->cosmax)
             return false;
+    double mdev = dev_bound(c, pl, extent_along(e, g->vs, g->nvs,
+                                                (const double(*)[3])extra, nx, ax));
     for (uint32_t i = 0; i < nx; i++)
-        if (fabs(geo_plane_eval(pl, extra[i])) > c->max_dev)
+        if (fabs(geo_plane_eval(pl, extra[i])) > mdev)
             return false;
     for (uint32_t i = 0; i < g->nvs; i++)
-        if (fabs(geo_plane_eval(pl, e->verts[g->vs[i]])) > c->max_dev)
+        if (fabs(geo_plane_eval(pl, e->verts[g->vs[i]])) > mdev)
             return false;
     if (c->noise > 0) {
         double tol = GEO_GROUP_RMS_FACTOR * c->noise +
@@ -386,12 +425,13 @@ static int still_fits(geo_mw *w, const uint32_t *mem, uint32_t n,
             moments_add(&g, e->verts[v]);
         }
     }
-    double pl[4];
-    bool ok = r == 0 && moments_plane(&g, NULL, 0, pl);
+    double pl[4], ax[3];
+    bool ok = r == 0 && moments_plane(&g, NULL, 0, pl, ax);
     for (uint32_t i = 0; ok && i < n; i++)
         ok = geo_vdot(e->planes[mem[i]], pl) >= c->cosmax;
+    double mdev = ok ? dev_bound(c, pl, extent_along(e, g.vs, g.nvs, NULL, 0, ax)) : 0;
     for (uint32_t i = 0; ok && i < g.nvs; i++)
-        ok = fabs(geo_plane_eval(pl, e->verts[g.vs[i]])) <= c->max_dev;
+        ok = fabs(geo_plane_eval(pl, e->verts[g.vs[i]])) <= mdev;
     free(g.vs);
     *ret = ok;
     return r;

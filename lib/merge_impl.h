@@ -63,6 +63,11 @@ typedef struct geo_mw {
     uint32_t nmoved, capmoved;
 
     uint32_t statement_violations;
+
+    /* when set, the merged facet gets this plane instead of a fitted one
+     * (the bevel pass: a strip joins its neighbour in the neighbour's
+     * plane) */
+    const double *fixed_plane;
 } geo_mw;
 
 /* A new workspace over e (borrowed; the caller frees it after the
@@ -105,8 +110,8 @@ int geo_mw_contour(geo_mw *w, const uint32_t *group, uint32_t n,
                    uint32_t *ret_main, uint32_t *ret_nverts,
                    geo_merge_group *rep, geo_err *err);
 
-/* §2.5: the least-squares plane of the main facet's vertices (weighted
- * by w->weight), normal along the facet's Newell vector. */
+/* §2.5: the plane of the merged facet as w->plane_mode says (normal
+ * along the facet's Newell vector), or w->fixed_plane when set. */
 int geo_mw_plane(geo_mw *w, uint32_t main, double ret_plane[4],
                  geo_err *err);
 
@@ -143,15 +148,18 @@ int geo_merge_report_finish(geo_merge_report *rep, const geo_edit *e,
 
 /* The criterion of automatic groups (merge_groups.c, README "Automatic
  * correction"): every member's normal within acos(cosmax) of the group's
- * least-squares plane and every vertex within max_dev of it; when noise
- * > 0, also each facet that joins within rms_factor·noise +
+ * least-squares plane and every vertex within max(max_dev,
+ * roof_factor·sin(inclination)·width·step) of it, width being the
+ * group's extent along its plane's middle axis of inertia, the
+ * inclination the plane's angle with the horizontal and step the
+ * scanner's view step (radians, 0 when unknown); when noise > 0, also
+ * each facet that joins within rms_factor·noise +
  * step_factor·extent·step (area RMS distance, mm) of the plane the group
- * had before it, extent being the diagonal of the grown group's box and
- * step the scanner's view step (radians, 0 when unknown). */
-/* The factors of the noise test (README "Automatic correction" says how
- * they were chosen). */
+ * had before it, extent being the diagonal of the grown group's box. */
+/* The factors (README "Automatic correction" says how they were chosen). */
 #define GEO_GROUP_RMS_FACTOR 3.0
 #define GEO_GROUP_STEP_FACTOR 0.1
+#define GEO_GROUP_ROOF_FACTOR 0.25
 
 typedef struct geo_group_crit {
     double cosmax;
@@ -189,6 +197,15 @@ void geo_mw_facet_moments(const geo_edit *e, uint32_t f, const double o[3],
  * area least-squares plane; 0 when there is no such group. 0 or
  * -ENOMEM. */
 int geo_mw_surface_noise(geo_mw *w, const geo_group_crit *c, double *ret);
+
+/* One pass removing bevel strips (merge_bevel.c): each facet that is a
+ * strip along the edge of two larger neighbours, within a few times
+ * c->max_dev of both their planes, is merged into one of them with that neighbour's plane
+ * kept. Groups go into rep; *ret_merged counts them. 0, -ENOMEM or
+ * -ECANCELED. */
+int geo_mw_bevel_pass(geo_mw *w, const geo_group_crit *c, const geo_ctx *ctx,
+                      geo_merge_report *rep, uint32_t *ret_merged,
+                      geo_err *err);
 
 /* Side of v against plane with the tolerance: 0 when |plane(v)| ≤ eps,
  * else the sign; decided once and cached until geo_mw_side_reset (which

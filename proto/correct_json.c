@@ -110,6 +110,8 @@ json_t *proto_merge_report_to_json(const geo_merge_report *r)
     put(o, "statement_violations", json_integer(r->statement_violations), &ok);
     put(o, "views", json_integer(r->views), &ok);
     put(o, "noise", num(r->noise), &ok);
+    put(o, "max_deviation", num(r->max_dev), &ok);
+    put(o, "bevels", json_integer(r->bevels), &ok);
     put(o, "vertices_before", json_integer(r->vertices_before), &ok);
     put(o, "facets_before", json_integer(r->facets_before), &ok);
     put(o, "vertices_after", json_integer(r->vertices_after), &ok);

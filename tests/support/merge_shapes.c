@@ -50,6 +50,28 @@ geo_poly *ms_dipped_l_prism(double dip)
     return p;
 }
 
+geo_poly *ms_chamfered_box(double size, double depth_top, double depth_side)
+{
+    const double s = size, a = size - depth_top, b = size - depth_side;
+    const double xyz[10 * 3] = {
+        0, 0, 0, s, 0, 0, 0, s, 0, s, s, 0, /* 0..3 bottom */
+        0, 0, s, a, 0, s, 0, s, s, a, s, s, /* 4..7 top */
+        s, 0, b, s, s, b,                   /* 8, 9 side */
+    };
+    /* counter-clockwise seen from outside */
+    static const uint32_t idx[] = {
+        0, 2, 3, 1,    /* z = 0 */
+        4, 5, 7, 6,    /* z = size */
+        0, 1, 8, 5, 4, /* y = 0 */
+        2, 6, 7, 9, 3, /* y = size */
+        0, 4, 6, 2,    /* x = 0 */
+        1, 3, 9, 8,    /* x = size */
+        7, 5, 8, 9,    /* the chamfer */
+    };
+    static const uint32_t start[] = {0, 4, 8, 13, 18, 22, 26, 30};
+    return geo_poly_from_arrays(10, xyz, 7, start, idx, NULL, NULL);
+}
+
 uint32_t ms_coplanar_group(const geo_poly *p, uint32_t seed, double max_deg,
                            uint32_t n, uint32_t *ret)
 {

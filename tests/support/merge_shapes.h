@@ -17,6 +17,14 @@
  * The two bottom facets are facets 0 and 1. NULL on out-of-memory. */
 geo_poly *ms_dipped_l_prism(double dip);
 
+/* The box [0, size]³ whose edge along y at x = z = size is chamfered:
+ * the chamfer meets the top (z = size) depth_top and the side (x = size)
+ * depth_side from the edge, so its vertices lie depth_side from the side's
+ * plane and depth_top from the top's. Facets: 0 bottom, 1 top, 2 front
+ * (y = 0), 3 back, 4 left (x = 0), 5 side (x = size), 6 the chamfer.
+ * NULL on out-of-memory. */
+geo_poly *ms_chamfered_box(double size, double depth_top, double depth_side);
+
 /* A connected set of n facets of p around seed (the seed first), each
  * sharing an edge with an earlier one and with a normal within max_deg of
  * the seed's; written to ret (room for n). Returns how many were found

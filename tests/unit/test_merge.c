@@ -407,6 +407,30 @@ static void test_auto_groups_keep_neighbouring_girdle_facets_apart(void **state)
     geo_poly_free(stone);
 }
 
+/* At a 1.8° view step the slivers of a princess's wide, steep facets
+ * form roofs tens of µm high, beyond the 5 µm bound (the scan came out
+ * with 45 facets for 29); the bound widened by the roof of the view step
+ * over the group's width and inclination merges them. */
+static void test_wide_facets_merge_within_the_roof_of_the_view_step(void **state)
+{
+    (void)state;
+    geo_poly *stone = sim_stone(SIM_PRINCESS, 1);
+    geo_poly *scan = sim_scan(stone, 100, 0.001, 1);
+    assert_non_null(scan);
+    geo_poly *p = geo_poly_copy(scan);
+    geo_correct_report rep;
+    geo_err err = {{0}};
+    assert_int_equal(geo_correct_auto(p, NULL, NULL, &rep, &err), 0);
+    assert_true(rep.after.valid);
+    assert_int_equal(rep.views, 100);
+    assert_true(fabs((double)p->nfacets / stone->nfacets - 1) <= 0.1);
+    assert_true(sim_hausdorff(p, stone, 500) <= sim_hausdorff(scan, stone, 500));
+    geo_correct_report_clear(&rep);
+    geo_poly_free(p);
+    geo_poly_free(scan);
+    geo_poly_free(stone);
+}
+
 /* A group found at the start of a round whose facets an earlier group of
  * the round lifted or cut is checked again before it is merged (emerald
  * seed 2 at K = 400 came out 9 µm from the stone, its scan 4.4 µm). */
@@ -426,6 +450,68 @@ static void test_group_changed_by_an_earlier_group_is_checked_again(void **state
     geo_poly_free(p);
     geo_poly_free(scan);
     geo_poly_free(stone);
+}
+
+/* Automatic merging of p with a 5 µm deviation bound and no noise test
+ * (a designed model has no scan noise). */
+static void merge_auto_5um(geo_poly *p, bool bevels, geo_merge_report *rep)
+{
+    geo_merge_opts o;
+    geo_merge_opts_default(&o);
+    o.max_deviation = 0.005;
+    o.noise = -1;
+    o.bevels = bevels;
+    geo_err err = {{0}};
+    if (geo_merge_auto(p, &o, NULL, rep, &err) != 0)
+        fail_msg("%s", err.msg);
+}
+
+/* A chamfer 12 µm deep on both faces of a 10 mm box's edge lies beyond
+ * the 5 µm bound of a group with either face (the group's plane passes
+ * 6 µm from the edge and from the chamfer's far side), but within the
+ * bevel depth (3 × the bound) of both planes: it is a bevel strip, merged into a face
+ * in that face's plane, which restores the sharp edge exactly. */
+static void test_bevel_strip_along_an_edge_is_removed(void **state)
+{
+    (void)state;
+    geo_poly *p = ms_chamfered_box(10, 0.012, 0.012);
+    assert_non_null(p);
+    assert_valid(p);
+    geo_merge_report rep = {0}; /* geo_merge_auto clears it first */
+    merge_auto_5um(p, false, &rep);
+    assert_int_equal(p->nfacets, 7); /* no group takes it */
+    geo_merge_report_clear(&rep);
+    merge_auto_5um(p, true, &rep);
+    assert_int_equal(rep.bevels, 1);
+    assert_int_equal(rep.merged, 1);
+    assert_int_equal(p->nfacets, 6);
+    assert_valid(p);
+    assert_true(fabs(geo_poly_volume(p) - 1000) < 1e-9);
+    for (uint32_t v = 0; v < p->nverts; v++)
+        for (int k = 0; k < 3; k++)
+            assert_true(fabs(p->verts[v][k]) < 1e-12 || fabs(p->verts[v][k] - 10) < 1e-12);
+    geo_merge_report_clear(&rep);
+    geo_poly_free(p);
+}
+
+/* True small facets along an edge stay: a chamfer 20 µm deep on both
+ * faces (beyond the bevel depth of both planes), and one 12 µm from the
+ * side's plane but 30 µm from the top's (within the depth of one only). */
+static void test_small_facet_beyond_the_bevel_depth_stays(void **state)
+{
+    (void)state;
+    const double depth[2][2] = {{0.020, 0.020}, {0.012, 0.030}};
+    for (int i = 0; i < 2; i++) {
+        geo_poly *p = ms_chamfered_box(10, depth[i][0], depth[i][1]);
+        assert_non_null(p);
+        geo_merge_report rep = {0};
+        merge_auto_5um(p, true, &rep);
+        assert_int_equal(rep.bevels, 0);
+        assert_int_equal(p->nfacets, 7);
+        assert_valid(p);
+        geo_merge_report_clear(&rep);
+        geo_poly_free(p);
+    }
 }
 
 static void test_collapse_joins_vertices_of_short_edges(void **state)
@@ -511,7 +597,10 @@ int main(void)
         cmocka_unit_test(test_view_grid_reads_the_scanners_step_off_a_scan),
         cmocka_unit_test(test_surface_noise_follows_the_scanners_noise),
         cmocka_unit_test(test_auto_groups_keep_neighbouring_girdle_facets_apart),
+        cmocka_unit_test(test_wide_facets_merge_within_the_roof_of_the_view_step),
         cmocka_unit_test(test_group_changed_by_an_earlier_group_is_checked_again),
+        cmocka_unit_test(test_bevel_strip_along_an_edge_is_removed),
+        cmocka_unit_test(test_small_facet_beyond_the_bevel_depth_stays),
         cmocka_unit_test(test_collapse_joins_vertices_of_short_edges),
         cmocka_unit_test(test_hausdorff_of_two_boxes),
         cmocka_unit_test(test_report_json_has_the_documented_keys),
