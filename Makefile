@@ -99,10 +99,10 @@ $(B)/tests/%: $(B)/obj/tests/unit/%.o $(call obj,$(TESTLIB_SRCS)) $(ALL_LIBS)
 	$(CC) $(LDFLAGS) -o $@ $^ $(call pkg_libs,$(PKG_TEST)) $(ALL_LDLIBS)
 $(B)/bench/%: $(B)/obj/tests/bench/%.o $(call obj,$(TESTLIB_SRCS)) $(ALL_LIBS)
 	@mkdir -p $(dir $@)
-	$(CC) $(LDFLAGS) -o $@ $^ $(call pkg_libs,$(PKG_TEST)) $(ALL_LDLIBS)
+	$(CC) $(LDFLAGS) -o $@ $^ $(ALL_LDLIBS)
 $(B)/tools/%: $(B)/obj/tests/tools/%.o $(call obj,$(TESTLIB_SRCS)) $(ALL_LIBS)
 	@mkdir -p $(dir $@)
-	$(CC) $(LDFLAGS) -o $@ $^ $(call pkg_libs,$(PKG_TEST)) $(ALL_LDLIBS)
+	$(CC) $(LDFLAGS) -o $@ $^ $(ALL_LDLIBS)
 
 # Debian 12 packages the project builds, tests and runs with.
 DEB_PKGS := build-essential pkg-config libjansson-dev libmicrohttpd-dev \
