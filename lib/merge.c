@@ -480,7 +480,8 @@ int geo_merge_groups(geo_poly *p, uint32_t ngroups, const uint32_t *gstart,
     else
         geo_merge_opts_default(&o);
     geo_merge_report local = {0}, *rep = report ? report : &local;
-    geo_merge_report_clear(rep);
+    /* an output: callers may hand in an uninitialised report */
+    memset(rep, 0, sizeof *rep);
     for (uint32_t k = 0; k < gstart[ngroups]; k++)
         if (gfacets[k] >= p->nfacets) {
             geo_merge_report_clear(&local);
@@ -588,7 +589,8 @@ int geo_merge_auto(geo_poly *p, const geo_merge_opts *opts,
     if (r < 0)
         return r;
     geo_merge_report local = {0}, *rep = report ? report : &local;
-    geo_merge_report_clear(rep);
+    /* an output: callers may hand in an uninitialised report */
+    memset(rep, 0, sizeof *rep);
     session s;
     r = session_open(&s, p, &o, rep, err);
     if (r < 0) {

@@ -166,7 +166,10 @@ typedef struct geo_merge_report {
     double volume_before, volume_after;
 } geo_merge_report;
 
-/* Releases the report's arrays and zeroes it; accepts NULL. */
+/* Releases the report's arrays and zeroes it; accepts NULL. The merge
+ * functions below take their report as an output (it may be
+ * uninitialised; what it held is not freed): clear a report before
+ * handing it in again. */
 void geo_merge_report_clear(geo_merge_report *r);
 
 /* The deviation bound opts gives for p: max_deviation, or rel_deviation ×
