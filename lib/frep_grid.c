@@ -7,6 +7,7 @@
 #include <errno.h>
 #include <math.h>
 #include <stdatomic.h>
+#include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -351,6 +352,126 @@ static void root_task(void *arg, size_t blk)
     free(ops), free(scratch);
 }
 
+/* The alive runs of column (i + di, j + dj) as [first, end) into
+ * g->runs; empty outside the grid (all outside there). */
+static void neighbour_runs(const geo_frep_grid *g, uint32_t col, int di,
+                           int dj, uint32_t *q0, uint32_t *q1)
+{
+    uint32_t n = g->n;
+    int64_t i = (int64_t)(col % n) + di, j = (int64_t)(col / n) + dj;
+    *q0 = *q1 = 0;
+    if (i < 0 || j < 0 || i >= (int64_t)n || j >= (int64_t)n)
+        return;
+    uint32_t c = (uint32_t)j * n + (uint32_t)i;
+    *q0 = g->col_start[c];
+    *q1 = g->col_start[c + 1];
+}
+
+/* Whether a neighbouring column has an inside sample in [a, b]. */
+static bool inside_near(const geo_frep_grid *g, const uint8_t *dead,
+                        uint32_t col, int di, int dj, int32_t a, int32_t b)
+{
+    uint32_t q0, q1;
+    neighbour_runs(g, col, di, dj, &q0, &q1);
+    for (uint32_t q = q0; q < q1 && g->runs[q][0] <= b; q++)
+        if (!dead[q] && g->runs[q][1] >= a)
+            return true;
+    return false;
+}
+
+/* Whether a neighbouring column has an outside sample in [a, b]: its
+ * alive runs are disjoint and apart, so [a, b] is all inside only when
+ * one of them covers it. */
+static bool outside_near(const geo_frep_grid *g, const uint8_t *dead,
+                         uint32_t col, int di, int dj, int32_t a, int32_t b)
+{
+    uint32_t q0, q1;
+    neighbour_runs(g, col, di, dj, &q0, &q1);
+    for (uint32_t q = q0; q < q1 && g->runs[q][0] <= a; q++)
+        if (!dead[q] && g->runs[q][1] >= b)
+            return false;
+    return true;
+}
+
+/* Makes the digital object representable by section contours: every
+ * block of inside samples and every gap of outside samples between two
+ * runs of a column must meet its own kind in a neighbouring column on at
+ * least one side along x and on at least one side along y. A part one
+ * column thick fails that: its section across that axis is a single
+ * column, a contour of two points enclosing no area, and the quads on its
+ * two sides are the same triangles facing both ways — a sheet of zero
+ * volume (a sphere smaller than a column gave two coplanar quads facing
+ * opposite ways, thin walls folded through each other, and a crack one
+ * column wide between two nearly touching spheres left a double sheet
+ * inside the union). Such a run is removed, such a gap filled (its two
+ * runs merged); either way whole crossings disappear and every remaining
+ * run still ends at true crossings of F. Parts that thin cannot be
+ * resolved at these levels. Sweeps repeat until nothing changes (a change
+ * can make a neighbour thin); each change removes a run, so they end.
+ * Returns 0 or -ENOMEM. */
+static int regularise_runs(geo_frep_grid *g)
+{
+    uint32_t nr = g->nruns, n = g->n;
+    uint8_t *dead = calloc((size_t)nr + 1, 1);
+    if (!dead)
+        return -ENOMEM;
+    uint32_t nchanged = 0;
+    for (bool changed = true; changed;) {
+        changed = false;
+        for (uint32_t r = 0; r < nr; r++) {
+            if (dead[r])
+                continue;
+            uint32_t col = g->run_col[r];
+            int32_t a = g->runs[r][0], b = g->runs[r][1];
+            if ((!inside_near(g, dead, col, -1, 0, a, b) &&
+                 !inside_near(g, dead, col, 1, 0, a, b)) ||
+                (!inside_near(g, dead, col, 0, -1, a, b) &&
+                 !inside_near(g, dead, col, 0, 1, a, b))) {
+                dead[r] = 1;
+                changed = true;
+                nchanged++;
+                continue;
+            }
+            uint32_t next = r + 1, end = g->col_start[col + 1];
+            while (next < end && dead[next])
+                next++;
+            if (next == end)
+                continue;
+            a = g->runs[r][1] + 1;
+            b = g->runs[next][0] - 1;
+            if ((!outside_near(g, dead, col, -1, 0, a, b) &&
+                 !outside_near(g, dead, col, 1, 0, a, b)) ||
+                (!outside_near(g, dead, col, 0, -1, a, b) &&
+                 !outside_near(g, dead, col, 0, 1, a, b))) {
+                g->runs[r][1] = g->runs[next][1];
+                dead[next] = 1;
+                changed = true;
+                nchanged++;
+                r--; /* the merged run is checked again */
+            }
+        }
+    }
+    if (nchanged > 0) {
+        uint32_t w = 0, c = 0;
+        for (uint32_t r = 0; r < nr; r++) {
+            while (c < g->run_col[r])
+                g->col_start[++c] = w;
+            if (dead[r])
+                continue;
+            g->runs[w][0] = g->runs[r][0];
+            g->runs[w][1] = g->runs[r][1];
+            g->run_col[w] = g->run_col[r];
+            w++;
+        }
+        while (c < (size_t)n * n)
+            g->col_start[++c] = w;
+        g->nruns = w;
+        g->nregularised = nchanged;
+    }
+    free(dead);
+    return 0;
+}
+
 geo_frep_grid *geo_frep_grid_free(geo_frep_grid *g)
 {
     if (g) {
@@ -391,6 +512,31 @@ int geo_frep_grid_build(const geo_frep *f, uint32_t qlev, uint32_t blev,
         g->origin[k] = 0.5 * (lo[k] + hi[k]) - 0.5 * g->side;
     g->hx = g->side / g->n;
     g->hz = g->side / g->m;
+    /* Every later stage (crossings, centroids, Newton steps, contact
+     * checks) needs points a sample apart to be many units in the last
+     * place apart: a box far from the origin and small against its
+     * distance (a 2 mm box at 1e15 mm) has samples closer together than
+     * the doubles there, and refinement then split triangles whose
+     * corners round onto each other without end. */
+    double mag = 0;
+    for (int k = 0; k < 3; k++)
+        mag = fmax(mag, fmax(fabs(g->origin[k]),
+                             fabs(g->origin[k] + g->side)));
+    if (!isfinite(g->side) || !isfinite(mag)) {
+        geo_frep_grid_free(g);
+        return geo_err_set(err, -EINVAL,
+                           "bounds: the box's extent is not a finite number");
+    }
+    double spacing = fmin(g->hx, g->hz);
+    if (spacing < GEO_FREP_MIN_RESOLUTION * mag) {
+        geo_frep_grid_free(g);
+        return geo_err_set(err, -EINVAL,
+                           "bounds: a sample spacing of %g is below the "
+                           "resolution of coordinates as large as %g; "
+                           "move the object nearer the origin or lower "
+                           "the levels",
+                           spacing, mag);
+    }
 
     int rc = 0;
     sampler s = {.f = f, .g = g, .prog = prog, .nprog = nprog, .ctx = ctx};
@@ -485,6 +631,10 @@ int geo_frep_grid_build(const geo_frep *f, uint32_t qlev, uint32_t blev,
             g->run_col[r] = col;
         }
     free(fill);
+    if (regularise_runs(g) < 0) {
+        rc = geo_err_set(err, -ENOMEM, "out of memory");
+        goto done;
+    }
 
     size_t nblk = (g->nruns + (size_t)ROOT_BLOCK - 1) / ROOT_BLOCK;
     rooter rt = {.f = f, .g = g, .prog = prog, .nprog = nprog, .ctx = ctx};

@@ -46,6 +46,10 @@
 
 #define GEO_FREP_MAX_QLEV 11u
 #define GEO_FREP_MAX_BLEV 20u
+/* The smallest sample spacing relative to the largest coordinate of the
+ * sampling cube (2^-32: about a million units in the last place per
+ * sample); a finer sampling is refused with -EINVAL. */
+#define GEO_FREP_MIN_RESOLUTION 0x1p-32
 
 typedef struct geo_frep_grid {
     uint32_t qlev, blev;
@@ -61,11 +65,13 @@ typedef struct geo_frep_grid {
     double (*pts)[3];    /* 2·nruns surface points */
     uint64_t nevals;     /* point evaluations of F spent (statistics) */
     uint64_t nboxes;     /* interval bounds evaluated (statistics) */
+    uint32_t nregularised; /* runs removed or merged as one column thick */
 } geo_frep_grid;
 
 /* Samples f (finished) at levels qlev ∈ [1, GEO_FREP_MAX_QLEV],
  * blev ∈ [1, GEO_FREP_MAX_BLEV] and solves the surface points. Returns 0,
- * -EINVAL (levels out of range, or the object reaches the cube's
+ * -EINVAL (levels out of range, bounds too far from the origin for their
+ * size — see GEO_FREP_MIN_RESOLUTION —, or the object reaches the cube's
  * boundary; err says where), -ENOMEM, or -ECANCELED. *ret is set only on
  * success. progress fractions run from p0 to p1. */
 int geo_frep_grid_build(const geo_frep *f, uint32_t qlev, uint32_t blev,

@@ -1,0 +1,125 @@
+/* test_triangulate_stress.c — objects of the kinds a random stress test
+ * of the F-rep triangulation broke on, each reduced to its smallest
+ * form: a box far from the origin for its size (the samples closer than
+ * the doubles there), sheets thinner than a column, empty objects. Every
+ * output must be a valid closed surface, every refusal a clear error. */
+#include "testutil.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "frep_json.h"
+#include "selfint.h"
+#include "topo.h"
+#include "triangulate.h"
+
+static geo_frep *parse(const char *text)
+{
+    geo_err err = {{0}};
+    geo_frep *f = proto_frep_read_mem(text, strlen(text), NULL, &err);
+    if (!f)
+        fail_msg("%s", err.msg);
+    return f;
+}
+
+static int run(const geo_frep *f, uint32_t q, geo_poly **m,
+               geo_tri_report *rep, geo_err *err)
+{
+    geo_tri_opts o;
+    geo_tri_opts_default(&o);
+    o.quad_levels = q;
+    o.binary_levels = q + 1;
+    return geo_frep_triangulate(f, &o, NULL, m, rep, err);
+}
+
+/* Closed, manifold, outward, no self-intersections. */
+static void assert_valid(const geo_poly *m)
+{
+    geo_topo *t = geo_topo_build(m, NULL);
+    assert_non_null(t);
+    assert_true(geo_topo_is_closed_manifold(t));
+    geo_topo_free(t);
+    assert_true(geo_poly_volume(m) > 0);
+    geo_selfint si;
+    assert_int_equal(geo_selfint_find(m, NULL, NULL, NULL, &si, NULL), 0);
+    assert_int_equal(si.count, 0);
+    geo_selfint_clear(&si);
+}
+
+static void test_box_too_small_for_its_position_is_refused(void **state)
+{
+    (void)state;
+    geo_frep *f = parse(
+        "{\"format\":\"frep-object/1\","
+        "\"bounds\":[[999999999999999,-1,-1],[1000000000000001,1,1]],"
+        "\"shape\":{\"sphere\":{\"center\":[1e15,0,0],\"radius\":0.5}}}");
+    geo_poly *m = NULL;
+    geo_tri_report rep = {0};
+    geo_err err = {{0}};
+    assert_int_equal(run(f, 6, &m, &rep, &err), -EINVAL);
+    assert_null(m);
+    assert_non_null(strstr(err.msg, "resolution"));
+    geo_tri_report_clear(&rep);
+    geo_frep_free(f);
+}
+
+/* A sphere smaller than a column: its samples fill one column (or one
+ * row of columns), whose section across the row is a single column; it
+ * used to come out as two coplanar quads facing opposite ways. Now such
+ * a part is removed, and nothing being left it is reported as empty. */
+static void test_part_one_column_thick_is_not_a_double_sheet(void **state)
+{
+    (void)state;
+    geo_frep *f = parse(
+        "{\"format\":\"frep-object/1\",\"bounds\":[[-1,-1,-1],[1,1,1]],"
+        "\"shape\":{\"sphere\":{\"center\":[0.1234,-0.2345,0.3456],"
+        "\"radius\":0.02}}}");
+    geo_poly *m = NULL;
+    geo_tri_report rep = {0};
+    geo_err err = {{0}};
+    int rc = run(f, 6, &m, &rep, &err);
+    if (rc == 0)
+        assert_valid(m);
+    else
+        assert_non_null(strstr(err.msg, "no surface"));
+    geo_poly_free(m);
+    geo_tri_report_clear(&rep);
+    geo_frep_free(f);
+}
+
+/* Two spheres whose union leaves a crack one column wide between them
+ * (seen from the rays): the crack's two walls were the same quads facing
+ * both ways, a double sheet inside the object. */
+static void test_crack_one_column_wide_is_closed(void **state)
+{
+    (void)state;
+    geo_frep *f = parse(
+        "{\"format\":\"frep-object/1\",\"bounds\":[[-1,-1,-1],[1,1,1]],"
+        "\"shape\":{\"union\":["
+        "{\"sphere\":{\"center\":[0.309218779760972,0.346133627960337,"
+        "-0.265214378168173],\"radius\":0.326932420295218}},"
+        "{\"sphere\":{\"center\":[-0.269263872952546,0.149932280002051,"
+        "-0.0396599360261204],\"radius\":0.353659375121952}},"
+        "{\"sphere\":{\"center\":[0.151534361714253,0.192886824193725,"
+        "0.121150751171721],\"radius\":0.140032302616095}}]}}");
+    geo_poly *m = NULL;
+    geo_tri_report rep = {0};
+    geo_err err = {{0}};
+    assert_int_equal(run(f, 5, &m, &rep, &err), 0);
+    assert_valid(m);
+    geo_poly_free(m);
+    geo_tri_report_clear(&rep);
+    geo_frep_free(f);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_box_too_small_for_its_position_is_refused),
+        cmocka_unit_test(test_part_one_column_thick_is_not_a_double_sheet),
+        cmocka_unit_test(test_crack_one_column_wide_is_closed),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
