@@ -179,7 +179,12 @@ int cmd_triangulate(int argc, char **argv)
         status = cli_input_error("triangulate", "%s", err.msg);
     if (status == CLI_OK && metrics)
         status = write_metrics(metrics, &rep);
-    if (status == CLI_OK && !(metrics && strcmp(metrics, "-") == 0))
+    if (status == CLI_OK && rep.empty &&
+        !(metrics && strcmp(metrics, "-") == 0))
+        printf("empty: no part of the object is thicker than a voxel at "
+               "these levels (%g × %g × %g); wrote an empty model\n",
+               rep.voxel[0], rep.voxel[1], rep.voxel[2]);
+    else if (status == CLI_OK && !(metrics && strcmp(metrics, "-") == 0))
         printf("%u triangles, %u vertices; holes %u filled, %u open; max "
                "deviation %.3g; %lld self-intersections; %.3f s\n",
                rep.quality.nfacets, rep.quality.nverts, rep.fill.nfilled,

@@ -99,6 +99,7 @@ static int run_triangulate(const proto_op *op, const geo_frep *f,
                                           q->nonmanifold_edges == 0));
     e |= json_object_set_new(summary, "self_intersections",
                              json_integer((json_int_t)rep.self_intersections));
+    e |= json_object_set_new(summary, "empty", json_boolean(rep.empty));
     geo_tri_report_clear(&rep);
     if (e) {
         json_decref(j);

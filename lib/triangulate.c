@@ -248,12 +248,6 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
     if ((rc = geo_frep_grid_build(f, o.quad_levels, o.binary_levels, &sc, 0,
                                   1, &g, err)) < 0)
         goto fail;
-    if (g->nruns == 0) {
-        rc = geo_err_set(err, -EINVAL,
-                         "no surface found: the object is empty or thinner "
-                         "than a voxel at these levels");
-        goto fail;
-    }
     rep.npoints = 2 * g->nruns;
     rep.nevals = g->nevals;
     rep.nboxes = g->nboxes;
@@ -261,6 +255,22 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
     rep.voxel[2] = g->hz;
     t = now();
     rep.t_sample = t - t0;
+    if (g->nruns == 0) {
+        /* an empty object (or one thinner than a column everywhere) is a
+         * result, the empty surface, not a failure */
+        if (!(mesh = geo_poly_new())) {
+            rc = geo_err_set(err, -ENOMEM, "out of memory");
+            goto fail;
+        }
+        rep.empty = true;
+        rep.self_intersections = 0;
+        rep.t_total = now() - t0;
+        if ((rc = geo_ctx_progress(ctx, 1.0)) < 0) {
+            geo_err_set(err, rc, "canceled");
+            goto fail;
+        }
+        goto done;
+    }
 
     if ((rc = geo_frep_connect(g, ctx, &mesh, &flat, &rep.connect, err)) < 0)
         goto fail;
@@ -366,6 +376,7 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
         geo_err_set(err, rc, "canceled");
         goto fail;
     }
+done:
     geo_frep_grid_free(g);
     free(flat);
     *ret_mesh = mesh;

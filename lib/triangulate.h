@@ -39,9 +39,12 @@
  * on the number of threads behind ctx->parallel_for.
  *
  * Ownership: *ret_mesh is allocated here (geo_poly_free); report->fill
- * owns a malloc'd array (geo_tri_report_clear). Errors: -EINVAL (bad
- * levels, an object reaching the sampling cube's boundary, no surface
- * found), -ENOMEM, -ECANCELED, with err set; outputs untouched then. */
+ * owns a malloc'd array (geo_tri_report_clear). An object with no
+ * inside sample left (empty, or thinner than a column everywhere) gives
+ * 0 with an empty mesh and report->empty set. Errors: -EINVAL (bad
+ * levels, bounds too far from the origin for their size, an object
+ * reaching the sampling cube's boundary), -ENOMEM, -ECANCELED, with err
+ * set; outputs untouched then. */
 #ifndef GEO_TRIANGULATE_H
 #define GEO_TRIANGULATE_H
 
@@ -75,6 +78,10 @@ typedef struct geo_tri_report {
     geo_frep_connect_stats connect;
     geo_fill_stats fill;        /* owns fill.holes */
     geo_sharpen_stats sharpen;
+    bool empty;                 /* no inside sample survived: the mesh has
+                                   no vertices and no facets (an empty
+                                   object, or one thinner than a column
+                                   everywhere at these levels) */
     uint32_t npoints;           /* surface points found by sampling */
     uint32_t npinched;          /* pinched points removed before filling */
     uint64_t nevals, nboxes;    /* point and interval evaluations */

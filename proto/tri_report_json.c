@@ -70,7 +70,9 @@ json_t *proto_tri_report_to_json(const geo_tri_report *r)
                              r->t_sample, "connect", r->t_connect, "fill",
                              r->t_fill, "sharpen", r->t_sharpen, "metrics",
                              r->t_metrics, "total", r->t_total);
-    if (!stages || !time || json_object_set_new(j, "stages", stages) < 0 ||
+    if (!stages || !time ||
+        json_object_set_new(j, "empty", json_boolean(r->empty)) < 0 ||
+        json_object_set_new(j, "stages", stages) < 0 ||
         json_object_set_new(j, "time", time) < 0) {
         json_decref(j);
         return NULL;

@@ -79,11 +79,9 @@ static void test_part_one_column_thick_is_not_a_double_sheet(void **state)
     geo_poly *m = NULL;
     geo_tri_report rep = {0};
     geo_err err = {{0}};
-    int rc = run(f, 6, &m, &rep, &err);
-    if (rc == 0)
-        assert_valid(m);
-    else
-        assert_non_null(strstr(err.msg, "no surface"));
+    assert_int_equal(run(f, 6, &m, &rep, &err), 0);
+    assert_true(rep.empty);
+    assert_int_equal(m->nfacets, 0);
     geo_poly_free(m);
     geo_tri_report_clear(&rep);
     geo_frep_free(f);
@@ -114,12 +112,49 @@ static void test_crack_one_column_wide_is_closed(void **state)
     geo_frep_free(f);
 }
 
+/* Empty objects (disjoint spheres intersected, a sphere minus a larger
+ * one, two half-spaces facing away) are a result, not an error: the
+ * empty surface with report->empty set. */
+static void test_empty_objects_give_the_empty_surface(void **state)
+{
+    (void)state;
+    static const char *const shapes[] = {
+        "{\"intersection\":[{\"sphere\":{\"center\":[-0.5,0,0],"
+        "\"radius\":0.3}},{\"sphere\":{\"center\":[0.5,0,0],"
+        "\"radius\":0.3}}]}",
+        "{\"difference\":[{\"sphere\":{\"center\":[0,0,0],\"radius\":0.3}},"
+        "{\"sphere\":{\"center\":[0,0,0],\"radius\":0.5}}]}",
+        "{\"intersection\":[{\"halfspace\":{\"plane\":[1,0,0,0.1]}},"
+        "{\"halfspace\":{\"plane\":[-1,0,0,0.1]}}]}",
+    };
+    for (size_t i = 0; i < sizeof shapes / sizeof shapes[0]; i++) {
+        char text[512];
+        snprintf(text, sizeof text,
+                 "{\"format\":\"frep-object/1\","
+                 "\"bounds\":[[-1,-1,-1],[1,1,1]],\"shape\":%s}",
+                 shapes[i]);
+        geo_frep *f = parse(text);
+        geo_poly *m = NULL;
+        geo_tri_report rep = {0};
+        geo_err err = {{0}};
+        assert_int_equal(run(f, 5, &m, &rep, &err), 0);
+        assert_true(rep.empty);
+        assert_int_equal(m->nverts, 0);
+        assert_int_equal(m->nfacets, 0);
+        assert_int_equal(rep.self_intersections, 0);
+        geo_poly_free(m);
+        geo_tri_report_clear(&rep);
+        geo_frep_free(f);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_box_too_small_for_its_position_is_refused),
         cmocka_unit_test(test_part_one_column_thick_is_not_a_double_sheet),
         cmocka_unit_test(test_crack_one_column_wide_is_closed),
+        cmocka_unit_test(test_empty_objects_give_the_empty_surface),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
