@@ -15,6 +15,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "vec.h"
+
 enum node_kind {
     NODE_PRIM,
     NODE_PERTURBED,
@@ -692,26 +694,30 @@ void geo_frep_bound(const geo_frep *f, const double lo[3], const double hi[3],
 double geo_frep_project(const geo_frep *f, double p[3], double tol,
                         double max_step)
 {
+    /* |∇F| scaled (geo_vlen_scaled): its square overflowed for a
+     * perturbation of amplitude 1e308, so a point half a voxel off the
+     * surface measured 0 and was kept */
     double g[3], v = geo_frep_eval_grad(f, p, g);
-    double gg = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
-    if (!(gg > 0))
+    double gl = geo_vlen_scaled(g);
+    if (!(gl > 0) || !isfinite(gl))
         return INFINITY;
-    double dev = fabs(v) / sqrt(gg);
+    double dev = fabs(v) / gl;
     for (int it = 0; it < 8 && dev > tol; it++) {
-        double q[3], s = v / gg;
-        if (fabs(s) * sqrt(gg) > max_step)
+        double q[3], s = dev;
+        if (!(s <= max_step))
             break;
+        s = v / gl;
         for (int k = 0; k < 3; k++)
-            q[k] = p[k] - s * g[k];
+            q[k] = p[k] - s * (g[k] / gl);
         double g2[3], v2 = geo_frep_eval_grad(f, q, g2);
-        double gg2 = g2[0] * g2[0] + g2[1] * g2[1] + g2[2] * g2[2];
-        if (!(gg2 > 0) || !(fabs(v2) < fabs(v)))
+        double gl2 = geo_vlen_scaled(g2);
+        if (!(gl2 > 0) || !isfinite(gl2) || !(fabs(v2) < fabs(v)))
             break;
         memcpy(p, q, sizeof q);
         memcpy(g, g2, sizeof g);
         v = v2;
-        gg = gg2;
-        dev = fabs(v) / sqrt(gg);
+        gl = gl2;
+        dev = fabs(v) / gl;
     }
     return dev;
 }
@@ -723,7 +729,7 @@ uint32_t geo_frep_pieces_at(const geo_frep *f, const double p[3], double tol,
     for (uint32_t k = 0; k < f->npieces; k++) {
         uint32_t r = f->pieces[k], s = f->ops[r].start;
         double g[3], v = geo_frep_run_grad(f, f->ops + s, r - s + 1, p, g);
-        double gl = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+        double gl = geo_vlen_scaled(g);
         if (fabs(v) <= tol * gl) {
             if (n < cap)
                 ret[n] = r;
@@ -750,11 +756,15 @@ bool geo_frep_project_pieces(const geo_frep *f, const uint32_t *pieces,
         for (uint32_t i = 0; i < n; i++) {
             uint32_t r = pieces[i], s = f->ops[r].start;
             v[i] = geo_frep_run_grad(f, f->ops + s, r - s + 1, x, g[i]);
-            double gl = sqrt(g[i][0] * g[i][0] + g[i][1] * g[i][1] +
-                             g[i][2] * g[i][2]);
-            if (!(gl > 0))
+            double gl = geo_vlen_scaled(g[i]);
+            if (!(gl > 0) || !isfinite(gl) || !isfinite(v[i]))
                 return false;
             done &= fabs(v[i]) <= tol * gl;
+            /* each piece's equation divided by its |∇|: the same
+             * linearisation, with a Gram matrix that cannot overflow */
+            v[i] /= gl;
+            for (int k = 0; k < 3; k++)
+                g[i][k] /= gl;
         }
         if (done)
             break;
@@ -800,7 +810,7 @@ bool geo_frep_project_pieces(const geo_frep *f, const uint32_t *pieces,
     if (!(dx * dx + dy * dy + dz * dz <= max_step * max_step))
         return false;
     double g[3], v = geo_frep_eval_grad(f, x, g);
-    double gl = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    double gl = geo_vlen_scaled(g);
     if (!(gl > 0) || !(fabs(v) <= 1e3 * tol * gl))
         return false;
     memcpy(p, x, sizeof x);

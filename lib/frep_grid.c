@@ -255,20 +255,25 @@ typedef struct rooter {
 } rooter;
 
 /* The crossing of the column's ray between z0 (F = f0) and z1 (F = f1),
- * f0 and f1 of opposite sides (f < 0 outside, ≥ 0 inside). */
+ * f0 and f1 of opposite sides (f < 0 outside, ≥ 0 inside). Illinois
+ * regula falsi, with a bisection whenever two steps have not halved the
+ * bracket, so the bracket shrinks to tol whatever F looks like; the
+ * answer is the end of the final bracket with the smaller |F|. (Taking
+ * the smallest |F| seen anywhere, and no bisection, failed where F jumps:
+ * a perturbation of amplitude −1e308 makes F drop from 0.06 to −1e300
+ * across a crease, regula falsi crept by 1e-3 of the bracket per step,
+ * and the sample itself, a voxel from the surface, was returned.) */
 static double solve(const geo_frep *f, const geo_frep_op *ops, uint32_t n,
                     double x, double y, double z0, double f0, double z1,
                     double f1, double tol, uint64_t *nevals)
 {
     int side0 = f0 >= 0, last = -1;
-    double best = z0, bestf = fabs(f0);
-    if (fabs(f1) < bestf) {
-        best = z1;
-        bestf = fabs(f1);
-    }
-    for (int it = 0; it < 80 && fabs(z1 - z0) > tol; it++) {
-        double z = (f1 != f0) ? z0 + (z1 - z0) * (f0 / (f0 - f1))
-                              : 0.5 * (z0 + z1);
+    double w0 = f0, w1 = f1; /* Illinois weights of the ends */
+    double mark = fabs(z1 - z0);
+    bool bisect = false;
+    for (int it = 0; it < 200 && fabs(z1 - z0) > tol; it++) {
+        double z = (!bisect && w1 != w0) ? z0 + (z1 - z0) * (w0 / (w0 - w1))
+                                          : 0.5 * (z0 + z1);
         /* keep the step strictly inside the bracket */
         double lo = fmin(z0, z1), hi = fmax(z0, z1), w = hi - lo;
         if (!(z > lo + 1e-3 * w && z < hi - 1e-3 * w))
@@ -276,27 +281,27 @@ static double solve(const geo_frep *f, const geo_frep_op *ops, uint32_t n,
         double p[3] = {x, y, z};
         double fz = geo_frep_run(f, ops, n, p);
         (*nevals)++;
-        if (fabs(fz) < bestf) {
-            best = z;
-            bestf = fabs(fz);
-        }
         if (fz == 0)
-            break;
+            return z;
         if ((fz >= 0) == side0) {
             z0 = z;
-            f0 = fz;
+            f0 = w0 = fz;
             if (last == 0)
-                f1 *= 0.5; /* Illinois: the stale end loses weight */
+                w1 *= 0.5; /* Illinois: the stale end loses weight */
             last = 0;
         } else {
             z1 = z;
-            f1 = fz;
+            f1 = w1 = fz;
             if (last == 1)
-                f0 *= 0.5;
+                w0 *= 0.5;
             last = 1;
         }
+        if (it % 2 == 1) {
+            bisect = fabs(z1 - z0) > 0.5 * mark;
+            mark = fabs(z1 - z0);
+        }
     }
-    return best;
+    return fabs(f1) < fabs(f0) ? z1 : z0;
 }
 
 static void root_task(void *arg, size_t blk)

@@ -109,7 +109,7 @@ int geo_frep_mesh_metrics(const geo_frep *f, const geo_poly *m,
         if (!used[v])
             continue;
         double g[3], val = geo_frep_eval_grad(f, m->verts[v], g);
-        double gl = geo_vlen(g);
+        double gl = geo_vlen_scaled(g);
         double dev = gl > 0 ? fabs(val) / gl : INFINITY;
         r.dev_max = fmax(r.dev_max, dev);
         dsum += dev;

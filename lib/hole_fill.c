@@ -644,7 +644,7 @@ typedef struct refiner {
 } refiner;
 
 /* Moves point p, made from the nfrom vertices from[], onto the surface
- * (opts.place, or opts.project). 0, or -EDOM when place refuses it. */
+ * (opts.place, or opts.project). 0, or -EDOM when either refuses it. */
 static int place_point(const refiner *R, double p[3], const uint32_t *from,
                        uint32_t nfrom)
 {
@@ -654,8 +654,8 @@ static int place_point(const refiner *R, double p[3], const uint32_t *from,
             fp[k] = R->m.v[from[k]];
         return R->o.place(R->o.project_user, p, fp, nfrom) ? 0 : -EDOM;
     }
-    if (R->o.project)
-        R->o.project(R->o.project_user, p);
+    if (R->o.project && !R->o.project(R->o.project_user, p))
+        return -EDOM;
     return 0;
 }
 
@@ -1826,8 +1826,9 @@ static int fair(geo_poly *p, uint32_t first_free, const geo_fill_opts *o,
                 const double *fp[1] = {p->verts[v]};
                 if (!o->place(o->project_user, nxt[k], fp, 1))
                     memcpy(nxt[k], p->verts[v], sizeof nxt[k]);
-            } else if (o->project) {
-                o->project(o->project_user, nxt[k]);
+            } else if (o->project &&
+                       !o->project(o->project_user, nxt[k])) {
+                memcpy(nxt[k], p->verts[v], sizeof nxt[k]);
             }
         }
         /* apply, then undo the moves of every triangle that would turn

@@ -162,10 +162,11 @@ typedef struct geo_fill_opts {
     /* Facets (indices of the input) to refine with the patches; NULL for
      * none. Non-triangles are ignored. Not kept. */
     const uint8_t *also_refine;
-    /* Moves a point onto the surface being approximated; NULL leaves
-     * points where the construction puts them. Called from the calling
-     * thread only. */
-    void (*project)(void *user, double p[3]);
+    /* Moves a point onto the surface being approximated; false refuses
+     * it (it could not be brought onto the surface: the triangle is not
+     * split, the vertex does not move). NULL leaves points where the
+     * construction puts them. Called from the calling thread only. */
+    bool (*project)(void *user, double p[3]);
     /* Places point p on the surface knowing which vertices it is made
      * from (from[0..n): the three corners of a triangle split at its
      * centroid, the two ends of a hard edge split at S, or, for a vertex

@@ -77,10 +77,19 @@ typedef struct surface {
     double tol, max_step, crease_tol;
 } surface;
 
-static void project_cb(void *user, double p[3])
+/* Newton onto F = 0; a point it leaves farther than 1000·tol (the
+ * bound geo_frep_project_pieces puts on a point of the surface) is
+ * refused: where F is very flat or very steep on one side (a perturbation
+ * of huge amplitude, F growing like q³ from q = 0) Newton creeps and a
+ * centroid kept where it stopped lay half a voxel off the surface. */
+static bool project_cb(void *user, double p[3])
 {
     const surface *s = user;
-    geo_frep_project(s->f, p, s->tol, s->max_step);
+    double q[3] = {p[0], p[1], p[2]};
+    if (!(geo_frep_project(s->f, q, s->tol, s->max_step) <= 1000 * s->tol))
+        return false;
+    memcpy(p, q, sizeof q);
+    return true;
 }
 
 /* Keeps a point made from vertices on the surface on what they share: the

@@ -54,6 +54,18 @@ static inline double geo_vlen(const double a[3])
     return sqrt(geo_vdot(a, a));
 }
 
+/* |a| without overflow or underflow of the squares (gradients of F-rep
+ * functions range from 1e-300 to 1e300): scaled by the largest
+ * component first. 0 for a zero vector, NaN/inf propagate. */
+static inline double geo_vlen_scaled(const double a[3])
+{
+    double m = fmax(fabs(a[0]), fmax(fabs(a[1]), fabs(a[2])));
+    if (!(m > 0) || !isfinite(m))
+        return m;
+    double x = a[0] / m, y = a[1] / m, z = a[2] / m;
+    return m * sqrt(x * x + y * y + z * z);
+}
+
 static inline double geo_vdist(const double a[3], const double b[3])
 {
     double d[3];

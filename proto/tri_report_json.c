@@ -1,6 +1,16 @@
 /* tri_report_json.c — geo_tri_report → JSON (see tri_report_json.h). */
 #include "tri_report_json.h"
 
+#include <math.h>
+
+/* A number, or null where it is not finite (JSON has no infinity: the
+ * deviation |F|/|∇F| is infinite at a vertex where ∇F vanishes, and
+ * json_pack's "f" refused it, which the callers took for out-of-memory). */
+static json_t *num(double x)
+{
+    return isfinite(x) ? json_real(x) : json_null();
+}
+
 json_t *proto_tri_report_to_json(const geo_tri_report *r)
 {
     const geo_frep_metrics *q = &r->quality;
@@ -17,22 +27,25 @@ json_t *proto_tri_report_to_json(const geo_tri_report *r)
                             "reason", geo_hole_status_name(h->status)));
     }
     json_t *j = json_pack(
-        "{s:I, s:I, s:I, s:[f,f,f],"
-        " s:{s:f, s:f, s:f},"
-        " s:{s:f, s:f, s:f, s:{s:I, s:f, s:f, s:f}},"
-        " s:{s:f, s:f, s:f, s:f},"
+        "{s:I, s:I, s:I, s:[o,o,o],"
+        " s:{s:o, s:o, s:o},"
+        " s:{s:o, s:o, s:o, s:{s:I, s:o, s:o, s:o}},"
+        " s:{s:o, s:o, s:o, s:o},"
         " s:{s:I, s:I, s:I, s:o},"
         " s:{s:I, s:I, s:I, s:I, s:I, s:I, s:I},"
-        " s:f, s:f}",
+        " s:o, s:o}",
         "triangles", (json_int_t)q->nfacets, "vertices", (json_int_t)q->nverts,
-        "surface_points", (json_int_t)r->npoints, "voxel", r->voxel[0],
-        r->voxel[1], r->voxel[2],
-        "deviation", "max", q->dev_max, "mean", q->dev_mean, "rms", q->dev_rms,
-        "normal_deviation", "max", q->ndev_max, "mean", q->ndev_mean, "p95",
-        q->ndev_p95, "away_from_creases", "vertices", (json_int_t)q->nsmooth,
-        "max", q->sdev_max, "mean", q->sdev_mean, "p95", q->sdev_p95,
-        "uniformity", "edge_mean", q->edge_mean, "edge_cv", q->edge_cv,
-        "area_mean", q->area_mean, "area_cv", q->area_cv,
+        "surface_points", (json_int_t)r->npoints, "voxel", num(r->voxel[0]),
+        num(r->voxel[1]), num(r->voxel[2]),
+        "deviation", "max", num(q->dev_max), "mean", num(q->dev_mean),
+        "rms", num(q->dev_rms),
+        "normal_deviation", "max", num(q->ndev_max), "mean",
+        num(q->ndev_mean), "p95", num(q->ndev_p95), "away_from_creases",
+        "vertices", (json_int_t)q->nsmooth, "max", num(q->sdev_max), "mean",
+        num(q->sdev_mean), "p95", num(q->sdev_p95),
+        "uniformity", "edge_mean", num(q->edge_mean), "edge_cv",
+        num(q->edge_cv),
+        "area_mean", num(q->area_mean), "area_cv", num(q->area_cv),
         "holes", "found", (json_int_t)r->fill.nholes, "filled",
         (json_int_t)r->fill.nfilled, "left_open", (json_int_t)r->fill.nopen,
         "open", open,
@@ -42,7 +55,7 @@ json_t *proto_tri_report_to_json(const geo_tri_report *r)
         (json_int_t)q->nonmanifold_vertices, "euler", (json_int_t)q->euler,
         "self_intersections", (json_int_t)r->self_intersections,
         "degenerate_facets", (json_int_t)r->ndegenerate,
-        "volume", q->volume, "area", q->area);
+        "volume", num(q->volume), "area", num(q->area));
     if (!j)
         return NULL;
     json_t *stages = json_pack(

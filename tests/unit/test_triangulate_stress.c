@@ -12,6 +12,7 @@
 
 #include "frep_json.h"
 #include "selfint.h"
+#include "tri_report_json.h"
 #include "topo.h"
 #include "triangulate.h"
 
@@ -148,6 +149,64 @@ static void test_empty_objects_give_the_empty_surface(void **state)
     }
 }
 
+/* A dent of amplitude -1e308: F drops from about 0.06 to -1e300 across
+ * the dent's sphere, like a step. The crossing solver crept (regula falsi
+ * barely moves against such an end) and returned the sample a voxel
+ * away; Newton for new points squared a gradient of 1e303, measured 0
+ * and kept points half a voxel off. Every vertex must lie on the true
+ * surface: the ball of radius 0.5 outside the dent's ball. */
+static void test_huge_amplitude_keeps_vertices_on_the_surface(void **state)
+{
+    (void)state;
+    geo_frep *f = parse(
+        "{\"format\":\"frep-object/1\",\"bounds\":[[-1,-1,-1],[1,1,1]],"
+        "\"shape\":{\"perturbed\":{\"base\":{\"sphere\":{\"center\":[0,0,0],"
+        "\"radius\":0.5}},\"perturbations\":[{\"sphere\":{\"center\":"
+        "[0.3,0,0],\"radius\":0.3},\"amplitude\":-1e308}]}}}");
+    geo_poly *m = NULL;
+    geo_tri_report rep = {0};
+    geo_err err = {{0}};
+    assert_int_equal(run(f, 5, &m, &rep, &err), 0);
+    assert_valid(m);
+    double worst = 0;
+    for (uint32_t v = 0; v < m->nverts; v++) {
+        const double *p = m->verts[v];
+        double rb = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+        double rq = sqrt((p[0] - 0.3) * (p[0] - 0.3) + p[1] * p[1] +
+                         p[2] * p[2]);
+        /* on the ball's sphere outside the dent, or on the dent's sphere
+         * inside the ball */
+        double d = INFINITY;
+        if (rq >= 0.3 - 1e-9)
+            d = fabs(rb - 0.5);
+        if (rb <= 0.5 + 1e-9)
+            d = fmin(d, fabs(rq - 0.3));
+        worst = fmax(worst, d);
+    }
+    assert_true(worst < 1e-9);
+    geo_poly_free(m);
+    geo_tri_report_clear(&rep);
+    geo_frep_free(f);
+}
+
+/* A vertex where ∇F vanishes has an infinite deviation |F|/|∇F|; the
+ * report must still become JSON (null there), not fail as if out of
+ * memory. */
+static void test_report_with_infinite_deviation_becomes_json(void **state)
+{
+    (void)state;
+    geo_tri_report rep = {0};
+    rep.quality.dev_max = INFINITY;
+    rep.quality.ndev_max = NAN;
+    json_t *j = proto_tri_report_to_json(&rep);
+    assert_non_null(j);
+    assert_true(json_is_null(json_object_get(
+        json_object_get(j, "deviation"), "max")));
+    assert_true(json_is_real(json_object_get(
+        json_object_get(j, "deviation"), "mean")));
+    json_decref(j);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -155,6 +214,8 @@ int main(void)
         cmocka_unit_test(test_part_one_column_thick_is_not_a_double_sheet),
         cmocka_unit_test(test_crack_one_column_wide_is_closed),
         cmocka_unit_test(test_empty_objects_give_the_empty_surface),
+        cmocka_unit_test(test_huge_amplitude_keeps_vertices_on_the_surface),
+        cmocka_unit_test(test_report_with_infinite_deviation_becomes_json),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
