@@ -211,6 +211,79 @@ static int unpinch(geo_poly *m, uint8_t **flat, const geo_ctx *ctx,
     return 0;
 }
 
+/* Removes the connected pieces (facets linked through shared vertices)
+ * that enclose next to nothing: signed volume at most min_volume. Where
+ * a sheet is about as thin as a voxel the sections can still close tiny
+ * pieces of it on themselves — four triangles of one plane facing both
+ * ways, a triangle and its reverse — which enclose no volume and overlap
+ * themselves; like the parts the sampling drops (frep_grid.h) they are
+ * below the resolution. A piece of the closed surface is itself closed,
+ * so the rest stays closed. flat is kept aligned with the facets. */
+static int drop_empty_pieces(geo_poly *m, uint8_t *flat, double min_volume,
+                             uint32_t *ret_n, geo_err *err)
+{
+    uint32_t nv = m->nverts, nf = m->nfacets;
+    uint32_t *par = malloc(((size_t)nv + 1) * sizeof *par);
+    double *vol = calloc((size_t)nv + 1, sizeof *vol);
+    bool *keep = malloc(((size_t)nf + 1) * sizeof *keep);
+    uint32_t *fmap = malloc(((size_t)nf + 1) * sizeof *fmap);
+    if (!par || !vol || !keep || !fmap) {
+        free(par), free(vol), free(keep), free(fmap);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    for (uint32_t v = 0; v < nv; v++)
+        par[v] = v;
+    for (uint32_t f = 0; f < nf; f++) {
+        const uint32_t *fv = geo_poly_facet(m, f);
+        for (uint32_t k = 1; k < geo_poly_facet_size(m, f); k++) {
+            uint32_t a = fv[0], b = fv[k];
+            while (par[a] != a)
+                a = par[a] = par[par[a]];
+            while (par[b] != b)
+                b = par[b] = par[par[b]];
+            if (a != b)
+                par[a < b ? b : a] = a < b ? a : b;
+        }
+    }
+    for (uint32_t v = 0; v < nv; v++)
+        while (par[v] != par[par[v]])
+            par[v] = par[par[v]];
+    /* signed volume: Σ over the fan triangles of det(a, b, c) / 6, taken
+     * about the piece's first vertex so that it does not depend on where
+     * the origin lies */
+    for (uint32_t f = 0; f < nf; f++) {
+        const uint32_t *fv = geo_poly_facet(m, f);
+        uint32_t root = par[fv[0]];
+        const double *o = m->verts[root];
+        for (uint32_t k = 1; k + 1 < geo_poly_facet_size(m, f); k++) {
+            double a[3], b[3], c[3], x[3];
+            geo_vsub(m->verts[fv[0]], o, a);
+            geo_vsub(m->verts[fv[k]], o, b);
+            geo_vsub(m->verts[fv[k + 1]], o, c);
+            geo_vcross(b, c, x);
+            vol[root] += geo_vdot(a, x) / 6.0;
+        }
+    }
+    uint32_t ndrop = 0;
+    for (uint32_t f = 0; f < nf; f++) {
+        keep[f] = vol[par[geo_poly_facet(m, f)[0]]] > min_volume;
+        ndrop += !keep[f];
+    }
+    int rc = 0;
+    if (ndrop > 0) {
+        rc = geo_poly_compact(m, keep, NULL, fmap);
+        if (rc == 0)
+            for (uint32_t f = 0; f < nf; f++)
+                if (fmap[f] != UINT32_MAX)
+                    flat[fmap[f]] = flat[f];
+    }
+    free(par), free(vol), free(keep), free(fmap);
+    if (rc < 0)
+        return geo_err_set(err, rc, "out of memory");
+    *ret_n = ndrop;
+    return 0;
+}
+
 /* Adds to the refinement region every triangle sharing a vertex with it:
  * a wall (a triangle parallel to the rays) at a silhouette is a long
  * sliver between the last points of its columns, and only flips across
@@ -334,6 +407,20 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
     flat = region;
     for (uint32_t fc = nf0; fc < mesh->nfacets; fc++)
         flat[fc] = 1;
+    if ((rc = drop_empty_pieces(mesh, flat, 1e-3 * g->hx * g->hx * g->hz,
+                                &rep.ndropped, err)) < 0)
+        goto fail;
+    if (mesh->nfacets == 0) {
+        rep.empty = true;
+        rep.self_intersections = 0;
+        rep.t_fill = now() - t;
+        rep.t_total = now() - t0;
+        if ((rc = geo_ctx_progress(ctx, 1.0)) < 0) {
+            geo_err_set(err, rc, "canceled");
+            goto fail;
+        }
+        goto done;
+    }
     rep.t_fill = now() - t;
     t = now();
     sc = sub_ctx(ctx, &sr, 0.6, 0.7);

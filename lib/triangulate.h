@@ -84,6 +84,9 @@ typedef struct geo_tri_report {
                                    everywhere at these levels) */
     uint32_t npoints;           /* surface points found by sampling */
     uint32_t npinched;          /* pinched points removed before filling */
+    uint32_t ndropped;          /* facets of closed pieces enclosing less
+                                   than 1/1000 of a voxel, removed after
+                                   filling */
     uint64_t nevals, nboxes;    /* point and interval evaluations */
     double voxel[3];            /* voxel size (x, y, z) */
     int64_t self_intersections; /* pairs of facets meeting other than along

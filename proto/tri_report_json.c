@@ -75,7 +75,9 @@ json_t *proto_tri_report_to_json(const geo_tri_report *r)
          json_object_set_new(stages, "crease_corner_flips",
                              json_integer(r->sharpen.ncorner_flips)) < 0 ||
          json_object_set_new(stages, "crease_refused",
-                             json_integer(r->sharpen.nrejected)) < 0)) {
+                             json_integer(r->sharpen.nrejected)) < 0 ||
+         json_object_set_new(stages, "empty_pieces_dropped",
+                             json_integer(r->ndropped)) < 0)) {
         json_decref(stages);
         stages = NULL;
     }

@@ -207,6 +207,34 @@ static void test_report_with_infinite_deviation_becomes_json(void **state)
     json_decref(j);
 }
 
+/* A slab 0.03 thick across a voxel of 0.031 × 0.031 × 0.016, tilted:
+ * its sections closed hundreds of tiny pieces on themselves (four
+ * triangles of one plane facing both ways), 840 self-intersections.
+ * Pieces enclosing next to nothing are dropped; what is left is valid. */
+static void test_slab_thinner_than_a_voxel_leaves_no_flat_pieces(void **state)
+{
+    (void)state;
+    geo_frep *f = parse(
+        "{\"format\":\"frep-object/1\",\"bounds\":[[-1,-1,-1],[1,1,1]],"
+        "\"shape\":{\"intersection\":["
+        "{\"halfspace\":{\"plane\":[0.29695949077897915,0.8234829748823665,"
+        "0.48341581574786835,-0.015]}},"
+        "{\"halfspace\":{\"plane\":[-0.29695949077897915,-0.8234829748823665,"
+        "-0.48341581574786835,-0.015]}},"
+        "{\"sphere\":{\"center\":[0,0,0],\"radius\":0.7}}]}}");
+    geo_poly *m = NULL;
+    geo_tri_report rep = {0};
+    geo_err err = {{0}};
+    assert_int_equal(run(f, 6, &m, &rep, &err), 0);
+    assert_false(rep.empty);
+    assert_true(rep.ndropped > 0);
+    assert_valid(m);
+    assert_int_equal(rep.self_intersections, 0);
+    geo_poly_free(m);
+    geo_tri_report_clear(&rep);
+    geo_frep_free(f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -216,6 +244,7 @@ int main(void)
         cmocka_unit_test(test_empty_objects_give_the_empty_surface),
         cmocka_unit_test(test_huge_amplitude_keeps_vertices_on_the_surface),
         cmocka_unit_test(test_report_with_infinite_deviation_becomes_json),
+        cmocka_unit_test(test_slab_thinner_than_a_voxel_leaves_no_flat_pieces),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
