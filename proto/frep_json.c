@@ -11,6 +11,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "model_codec.h"
+
 void proto_frep_limits_default(proto_frep_limits *lim)
 {
     lim->max_shapes = 100000;
@@ -363,6 +365,22 @@ geo_frep *proto_frep_from_json(const json_t *root,
                      "axis");
             return NULL;
         }
+    /* the mesh made inside must be a model the readers take back (their
+     * coordinate range, model_codec.h); beyond it the sampling's
+     * arithmetic overflowed (a box of ±1e308 has an infinite side) */
+    double side = 0;
+    for (int i = 0; i < 3; i++) {
+        if (!(fabs(box[0][i]) <= PROTO_MAX_COORD &&
+              fabs(box[1][i]) <= PROTO_MAX_COORD)) {
+            fail(&r, "corners must lie within ±%g mm", PROTO_MAX_COORD);
+            return NULL;
+        }
+        side = fmax(side, box[1][i] - box[0][i]);
+    }
+    if (!(side >= PROTO_MIN_EXTENT)) {
+        fail(&r, "the box must be at least %g mm across", PROTO_MIN_EXTENT);
+        return NULL;
+    }
     path_pop(&r, l);
     r.f = geo_frep_new();
     if (!r.f) {

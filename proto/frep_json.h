@@ -17,7 +17,9 @@
  * "shape.perturbed.perturbations[3].amplitude: expected a number".
  * Unknown keys are ignored; duplicate keys, a shape object with no or two
  * shape keys, non-finite numbers, radii ≤ 0, zero plane normals, empty
- * lists, bounds with lo ≥ hi are errors. Limits (proto_frep_limits) bound
+ * lists, bounds with lo ≥ hi, corners beyond ±PROTO_MAX_COORD or a box
+ * less than PROTO_MIN_EXTENT across (proto/model_codec.h: the range of a
+ * model the readers take back) are errors. Limits (proto_frep_limits) bound
  * the number of shapes and their nesting before anything is allocated for
  * them, so no input can exhaust memory or the stack.
  *

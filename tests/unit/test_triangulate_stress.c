@@ -52,13 +52,25 @@ static void assert_valid(const geo_poly *m)
 static void test_box_too_small_for_its_position_is_refused(void **state)
 {
     (void)state;
-    geo_frep *f = parse(
+    /* beyond the coordinate range of a model: refused when read (a 2 mm
+     * box at 1e15 hung in refinement: its samples were closer than the
+     * doubles there) */
+    static const char far[] =
         "{\"format\":\"frep-object/1\","
         "\"bounds\":[[999999999999999,-1,-1],[1000000000000001,1,1]],"
-        "\"shape\":{\"sphere\":{\"center\":[1e15,0,0],\"radius\":0.5}}}");
+        "\"shape\":{\"sphere\":{\"center\":[1e15,0,0],\"radius\":0.5}}}";
+    geo_err err = {{0}};
+    assert_null(proto_frep_read_mem(far, strlen(far), NULL, &err));
+    assert_non_null(strstr(err.msg, "bounds: corners must lie within"));
+    /* within the range, but samples closer than 2^-32 of the coordinates */
+    geo_frep *f = parse(
+        "{\"format\":\"frep-object/1\","
+        "\"bounds\":[[499999999.999,-0.001,-0.001],"
+        "[500000000.001,0.001,0.001]],"
+        "\"shape\":{\"sphere\":{\"center\":[5e8,0,0],\"radius\":0.0005}}}");
     geo_poly *m = NULL;
     geo_tri_report rep = {0};
-    geo_err err = {{0}};
+    memset(&err, 0, sizeof err);
     assert_int_equal(run(f, 6, &m, &rep, &err), -EINVAL);
     assert_null(m);
     assert_non_null(strstr(err.msg, "resolution"));
@@ -219,7 +231,8 @@ static void test_slab_thinner_than_a_voxel_leaves_no_flat_pieces(void **state)
         "\"shape\":{\"intersection\":["
         "{\"halfspace\":{\"plane\":[0.29695949077897915,0.8234829748823665,"
         "0.48341581574786835,-0.015]}},"
-        "{\"halfspace\":{\"plane\":[-0.29695949077897915,-0.8234829748823665,"
+        "{\"halfspace\":{\"plane\":[-0.29695949077897915,"
+        "-0.8234829748823665,"
         "-0.48341581574786835,-0.015]}},"
         "{\"sphere\":{\"center\":[0,0,0],\"radius\":0.7}}]}}");
     geo_poly *m = NULL;
