@@ -248,6 +248,43 @@ static void test_slab_thinner_than_a_voxel_leaves_no_flat_pieces(void **state)
     geo_frep_free(f);
 }
 
+/* The same rotated ellipsoid, given as a quadric with cross terms,
+ * about the origin and moved to (47, −39, −24): far from the origin the
+ * interval bounds of the cross terms cancelled badly and nothing was
+ * pruned (ten times the evaluations). The far one must cost about what
+ * the near one does, and both must be valid. */
+static void test_quadric_far_from_origin_is_pruned_as_well(void **state)
+{
+    (void)state;
+    static const char *const objs[2] = {
+        "{\"format\":\"frep-object/1\","
+        "\"bounds\":[[-1,-1,-1],[1,1,1]],\"shape\":{\"quadric\":["
+        "-3.2483416195270527,-4.0874857977028505,-2.9265182617824399,"
+        "1.5828353509050865,3.9204754853038932,-2.6612729419894836,"
+        "0,0,0,1]}}",
+        "{\"format\":\"frep-object/1\","
+        "\"bounds\":[[46,-40,-25],[48,-38,-23]],\"shape\":{\"quadric\":["
+        "-3.2483416195270527,-4.0874857977028505,-2.9265182617824399,"
+        "1.5828353509050865,3.9204754853038932,-2.6612729419894836,"
+        "303.20414031309377,-299.12574206606797,137.50549563480047,"
+        "-11307.183320028422]}}",
+    };
+    uint64_t evals[2];
+    for (int i = 0; i < 2; i++) {
+        geo_frep *f = parse(objs[i]);
+        geo_poly *m = NULL;
+        geo_tri_report rep = {0};
+        geo_err err = {{0}};
+        assert_int_equal(run(f, 6, &m, &rep, &err), 0);
+        assert_valid(m);
+        evals[i] = rep.nevals;
+        geo_poly_free(m);
+        geo_tri_report_clear(&rep);
+        geo_frep_free(f);
+    }
+    assert_true(evals[1] < 2 * evals[0]);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -258,6 +295,7 @@ int main(void)
         cmocka_unit_test(test_huge_amplitude_keeps_vertices_on_the_surface),
         cmocka_unit_test(test_report_with_infinite_deviation_becomes_json),
         cmocka_unit_test(test_slab_thinner_than_a_voxel_leaves_no_flat_pieces),
+        cmocka_unit_test(test_quadric_far_from_origin_is_pruned_as_well),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
