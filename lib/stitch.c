@@ -209,6 +209,58 @@ static void meridians(uint32_t na, uint32_t nb, uint32_t *jof)
     }
 }
 
+/* Step 5a: lines of equal length whose meridians (one per vertex, the
+ * identity when N = M) are all within geo_poly_eps(out) long — the two
+ * halves of one cut — are one curve: a band of zero width would be
+ * zero-area facets. B's vertices are replaced by their A partners (in
+ * mesh 2's facets, from f2 on, whose planes are refitted) and dropped,
+ * the later vertices moving down in order; *ret is the number welded.
+ * Nothing changes and *ret = 0 when any meridian is longer. 0 or -ENOMEM
+ * (out unchanged). */
+static int weld(geo_poly *out, uint32_t f2, const uint32_t *A,
+                const uint32_t *B, uint32_t n, const uint32_t *jof,
+                uint32_t twist, uint32_t *ret)
+{
+    double tol = geo_poly_eps(out);
+    *ret = 0;
+    for (uint32_t c = 0; c < n; c++)
+        if (jof[c] != c ||
+            geo_vdist(out->verts[A[c]], out->verts[B[(c + twist) % n]]) > tol)
+            return 0;
+    uint32_t *to = malloc((size_t)out->nverts * sizeof *to);
+    uint8_t *gone = calloc(out->nverts, 1);
+    if (!to || !gone) {
+        free(to), free(gone);
+        return -ENOMEM;
+    }
+    for (uint32_t c = 0; c < n; c++)
+        gone[B[(c + twist) % n]] = 1;
+    /* the others move down over the dropped ones, in order */
+    uint32_t nv = 0;
+    for (uint32_t v = 0; v < out->nverts; v++)
+        if (!gone[v]) {
+            memmove(out->verts[nv], out->verts[v], sizeof out->verts[0]);
+            to[v] = nv++;
+        }
+    for (uint32_t c = 0; c < n; c++)
+        to[B[(c + twist) % n]] = to[A[c]];
+    out->nverts = nv;
+    for (uint32_t f = 0; f < out->nfacets; f++) {
+        uint32_t *fv = out->fidx + out->fstart[f];
+        bool moved = false;
+        for (uint32_t i = 0; i < geo_poly_facet_size(out, f); i++) {
+            moved |= gone[fv[i]];
+            fv[i] = to[fv[i]];
+        }
+        if (moved && f >= f2)
+            geo_poly_facet_fit_plane(out, f, GEO_PLANE_UNWEIGHTED,
+                                     out->planes[f]);
+    }
+    free(to), free(gone);
+    *ret = n;
+    return 0;
+}
+
 int geo_stitch(const geo_poly *m1, const geo_poly *m2,
                const geo_stitch_opts *opts, const geo_ctx *ctx, geo_poly *out,
                geo_stitch_report *rep, geo_err *err)
@@ -392,6 +444,13 @@ int geo_stitch(const geo_poly *m1, const geo_poly *m2,
     R.twist = twist;
     R.meridians = ncol;
     R.meridian_length = total;
+    if (N == M && (rc = weld(out, m1->nfacets, A, B, N, jof, twist,
+                             &R.welded)) < 0)
+        goto oom;
+    if (R.welded) {
+        R.rows = 1;
+        goto openings;
+    }
     uint64_t e1, e2;
     double s1 = mean_edge(m1, &e1), s2 = mean_edge(m2, &e2);
     R.segment = o.segment > 0 ? o.segment
@@ -470,6 +529,7 @@ int geo_stitch(const geo_poly *m1, const geo_poly *m2,
         geo_err_set(err, rc, "canceled");
         goto fail;
     }
+openings:
     /* the openings left: the loop vertices not bridged, other loops */
     if ((rc = geo_fill_mesh(out, &o.fill, NULL, &R.fill, err)) < 0) {
         geo_err_prefix(err, "closing the openings");

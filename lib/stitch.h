@@ -37,6 +37,12 @@
  *    For a closed band the lines are the loops closed by their first
  *    vertex, and the start of B is the rotation (twist) that minimises
  *    the total meridian length, tried for every one of the M starts.
+ * 5a. Loops that coincide — lines of equal length whose every meridian
+ *    is within geo_poly_eps of the merged mesh long, as the two halves
+ *    of one plane cut — are welded instead: a band of zero width would
+ *    be zero-area facets. Mesh 2's loop vertices are replaced by mesh
+ *    1's and dropped (the vertices after them move down in order); no
+ *    band is made.
  * 6. The vertex matrix P: row 0 the A ends, the last row the B ends
  *    (B_j repeated where several meridians meet it), between them K rows
  *    of points dividing each meridian evenly, K + 1 = round(mean meridian
@@ -91,6 +97,8 @@ typedef struct geo_stitch_report {
     double meridian_length;    /* total length of the meridians, mm */
     double segment;            /* segment length used, mm */
     uint32_t band_vertices, band_facets;
+    uint32_t welded;           /* loop vertex pairs welded (loops that
+                                  coincide: no band, see step 5a) */
     geo_mesh_fill_report fill; /* the openings closed afterwards */
 } geo_stitch_report;
 

@@ -159,6 +159,42 @@ static void test_side_by_side_meshes_bridge_facing_vertices(void **s)
     geo_poly_free(cap), geo_poly_free(sp);
 }
 
+/* Halves cut from one mesh share their loop: the zero-width band was
+ * made of zero-area facets (every stitch of a model cut in two with one
+ * plane was invalid); the loops are welded instead. */
+static void test_halves_whose_loops_coincide_are_welded(void **s)
+{
+    (void)s;
+    geo_poly *sp = gs_sphere(16, 1.0);
+    geo_poly *top = part(sp, 2, 0.0, 9), *bot = part(sp, 2, -9, 0.0);
+    /* the second half a few units in the last place off, as a cut by the
+     * opposite plane computes its crossings */
+    for (uint32_t v = 0; v < bot->nverts; v++)
+        bot->verts[v][0] *= 1 + 4e-16;
+    geo_poly *out = geo_poly_new();
+    geo_stitch_report rep;
+    assert_int_equal(geo_stitch(top, bot, NULL, NULL, out, &rep, NULL), 0);
+    assert_int_equal(rep.welded, rep.nloop1);
+    assert_int_equal(rep.band_facets, 0);
+    assert_int_equal(rep.fill.nloops, 0);
+    assert_int_equal(out->nverts, sp->nverts);
+    assert_int_equal(out->nfacets, sp->nfacets);
+    assert_true(is_valid(out));
+    assert_true(fabs(geo_poly_volume(out) - geo_poly_volume(sp)) <
+                1e-12 * geo_poly_volume(sp));
+    geo_stitch_report_clear(&rep);
+    /* turned over, the second half is welded all the same */
+    for (uint32_t f = 0; f < bot->nfacets; f++)
+        geo_poly_flip_facet(bot, f);
+    assert_int_equal(geo_stitch(top, bot, NULL, NULL, out, &rep, NULL), 0);
+    assert_true(rep.flipped2);
+    assert_int_equal(rep.welded, rep.nloop1);
+    assert_true(is_valid(out));
+    geo_stitch_report_clear(&rep);
+    geo_poly_free(out), geo_poly_free(top), geo_poly_free(bot);
+    geo_poly_free(sp);
+}
+
 static void test_pipeline_form_needs_exactly_two_pieces(void **s)
 {
     (void)s;
@@ -202,6 +238,7 @@ int main(void)
         cmocka_unit_test(test_twist_is_chosen_whatever_the_loops_start),
         cmocka_unit_test(test_side_by_side_meshes_bridge_facing_vertices),
         cmocka_unit_test(test_pipeline_form_needs_exactly_two_pieces),
+        cmocka_unit_test(test_halves_whose_loops_coincide_are_welded),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
