@@ -195,6 +195,58 @@ static void test_halves_whose_loops_coincide_are_welded(void **s)
     geo_poly_free(sp);
 }
 
+/* A torus around z (radii 2 and 0.7), nu × nv quads split into
+ * triangles, outward. */
+static geo_poly *torus(uint32_t nu, uint32_t nv)
+{
+    geo_poly *p = geo_poly_new();
+    for (uint32_t i = 0; i < nu; i++)
+        for (uint32_t j = 0; j < nv; j++) {
+            double u = 2 * M_PI * i / nu, v = 2 * M_PI * j / nv;
+            double x[3] = {(2 + 0.7 * cos(v)) * cos(u),
+                           (2 + 0.7 * cos(v)) * sin(u), 0.7 * sin(v)};
+            geo_poly_add_vertex(p, x);
+        }
+    for (uint32_t i = 0; i < nu; i++)
+        for (uint32_t j = 0; j < nv; j++) {
+            uint32_t a = i * nv + j, b = ((i + 1) % nu) * nv + j;
+            uint32_t c = ((i + 1) % nu) * nv + (j + 1) % nv;
+            uint32_t d = i * nv + (j + 1) % nv;
+            uint32_t tri[2][3] = {{a, b, c}, {a, c, d}};
+            for (int k = 0; k < 2; k++) {
+                uint32_t f = (uint32_t)geo_poly_add_facet(p, tri[k], 3);
+                geo_poly_facet_fit_plane(p, f, GEO_PLANE_UNWEIGHTED,
+                                         p->planes[f]);
+            }
+        }
+    return p;
+}
+
+/* Cut across its hole, each half of a torus has two loops; the pair not
+ * chosen was closed by two planar facets on top of each other and left
+ * open as intersecting. Both pairs are welded now. */
+static void test_every_pair_of_coinciding_loops_is_welded(void **s)
+{
+    (void)s;
+    geo_poly *t = torus(24, 12);
+    assert_true(is_valid(t));
+    geo_poly *l = part(t, 0, -9, 0.0), *r = part(t, 0, 0.0, 9);
+    geo_poly *out = geo_poly_new();
+    geo_stitch_report rep;
+    assert_int_equal(geo_stitch(l, r, NULL, NULL, out, &rep, NULL), 0);
+    assert_int_equal(rep.loops1, 2);
+    assert_int_equal(rep.loops2, 2);
+    assert_int_equal(rep.welded_loops, 1);
+    assert_int_equal(rep.welded, 2 * 12);
+    assert_int_equal(rep.fill.nloops, 0);
+    assert_int_equal(out->nverts, t->nverts);
+    assert_true(is_valid(out));
+    assert_true(fabs(geo_poly_volume(out) - geo_poly_volume(t)) <
+                1e-12 * geo_poly_volume(t));
+    geo_stitch_report_clear(&rep);
+    geo_poly_free(out), geo_poly_free(l), geo_poly_free(r), geo_poly_free(t);
+}
+
 static void test_pipeline_form_needs_exactly_two_pieces(void **s)
 {
     (void)s;
@@ -239,6 +291,7 @@ int main(void)
         cmocka_unit_test(test_side_by_side_meshes_bridge_facing_vertices),
         cmocka_unit_test(test_pipeline_form_needs_exactly_two_pieces),
         cmocka_unit_test(test_halves_whose_loops_coincide_are_welded),
+        cmocka_unit_test(test_every_pair_of_coinciding_loops_is_welded),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
