@@ -91,7 +91,9 @@ typedef struct geo_merge_opts {
     double max_angle_deg;
     /* Automatic groups: largest distance of a group vertex from the
      * group's plane, mm; 0 means rel_deviation × the model's size
-     * (bounding-box diagonal). */
+     * (bounding-box diagonal). Every group, given or found: the deepest
+     * a vertex may lie above the merged plane and be cut off (a group
+     * whose cut would go deeper is refused). */
     double max_deviation;
     double rel_deviation;
     /* Automatic groups on a scan (see merge_groups.c, README): the

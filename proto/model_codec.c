@@ -411,9 +411,39 @@ static int fit_failed(uint32_t f, geo_err *err)
                        "vertices (coordinates too large)", f);
 }
 
+/* -ERANGE unless every coordinate is within ±PROTO_MAX_COORD and the
+ * model, if it has any extent, is at least PROTO_MIN_EXTENT across: the
+ * exact predicates multiply three coordinate differences, which must
+ * neither overflow nor fall into the subnormal range. */
+static int check_coordinates(const geo_poly *p, geo_err *err)
+{
+    double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    for (uint32_t v = 0; v < p->nverts; v++)
+        for (int k = 0; k < 3; k++) {
+            double x = p->verts[v][k];
+            if (!(fabs(x) <= PROTO_MAX_COORD))
+                return geo_err_set(err, -ERANGE,
+                                   "vertices[%u][%d]: %g mm is beyond the "
+                                   "±%g mm a model may span", v, k, x,
+                                   PROTO_MAX_COORD);
+            lo[k] = v ? fmin(lo[k], x) : x;
+            hi[k] = v ? fmax(hi[k], x) : x;
+        }
+    double extent = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
+    if (extent > 0 && extent < PROTO_MIN_EXTENT)
+        return geo_err_set(err, -ERANGE,
+                           "the model is %g mm across, below the %g mm "
+                           "the exact predicates can resolve (wrong "
+                           "units?)", extent, PROTO_MIN_EXTENT);
+    return 0;
+}
+
 int proto_finish_planes(geo_poly *p, const bool *given,
                         proto_read_report *rep, geo_err *err)
 {
+    int r = check_coordinates(p, err);
+    if (r < 0)
+        return r;
     rep->worst_facet = UINT32_MAX;
     double eps = geo_poly_eps(p);
     for (uint32_t f = 0; f < p->nfacets; f++) {

@@ -96,12 +96,18 @@ const char *proto_tok_show(const char *tok, size_t len, char *out);
 int proto_check_limits(const proto_limits *lim, uint64_t nverts,
                        uint64_t nfacets, uint64_t ncorners, geo_err *err);
 
-/* Completes the planes of a freshly read model: facets with given[f]
- * false (or given NULL: all) get a least-squares plane; given planes are
- * normalised and checked against their vertices, filling rep (see
- * proto_read_report). 0, or -ERANGE when a plane cannot be computed in
- * doubles (coordinates so large that the fit overflows), err naming the
- * facet. */
+/* The range of coordinates a model may have, mm: within ±PROTO_MAX_COORD
+ * (a kilometre is 1e6), and, unless all vertices coincide, at least
+ * PROTO_MIN_EXTENT across in some axis (a nanometre). */
+#define PROTO_MAX_COORD 1e9
+#define PROTO_MIN_EXTENT 1e-6
+
+/* Completes a freshly read model: checks the range of its coordinates
+ * (above), then its planes: facets with given[f] false (or given NULL:
+ * all) get a least-squares plane; given planes are normalised and
+ * checked against their vertices, filling rep (see proto_read_report).
+ * 0, or -ERANGE with err naming the vertex (out of range, or a model
+ * too small) or the facet (a plane that cannot be computed in doubles). */
 int proto_finish_planes(geo_poly *p, const bool *given,
                         proto_read_report *rep, geo_err *err);
 

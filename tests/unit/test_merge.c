@@ -19,12 +19,14 @@
 #include "correct_json.h"
 #include "cut.h"
 #include "edit.h"
+#include "frep_json.h"
 #include "hausdorff.h"
 #include "merge.h"
 #include "merge_impl.h"
 #include "merge_shapes.h"
 #include "model_cmp.h"
 #include "stone_sim.h"
+#include "triangulate.h"
 #include "tu_load.h"
 #include "vec.h"
 
@@ -582,6 +584,48 @@ static void test_report_json_has_the_documented_keys(void **state)
     geo_poly_free(p);
 }
 
+/* A smooth closed mesh with saddles (an F-rep torus): groups of nearly
+ * coplanar triangles merge, but none whose plane would cut the model
+ * deeper than the deviation bound — on the inner rim the surroundings
+ * rise above a group's plane, and cutting them off once took 80 % of the
+ * torus away. */
+static void test_correction_of_a_torus_keeps_its_volume(void **state)
+{
+    (void)state;
+    json_t *j = json_load_file("tests/data/frep/torus.json", 0, NULL);
+    assert_non_null(j);
+    geo_err err = {{0}};
+    geo_frep *f = proto_frep_from_json(j, NULL, "torus", &err);
+    json_decref(j);
+    if (!f)
+        fail_msg("%s", err.msg);
+    geo_tri_opts to;
+    geo_tri_opts_default(&to);
+    to.quad_levels = 6;
+    to.binary_levels = 7;
+    geo_poly *m = NULL;
+    geo_tri_report tr;
+    if (geo_frep_triangulate(f, &to, NULL, &m, &tr, &err) != 0)
+        fail_msg("triangulate: %s", err.msg);
+    geo_tri_report_clear(&tr);
+    geo_frep_free(f);
+    double before = geo_poly_volume(m);
+    uint32_t facets = m->nfacets;
+    geo_correct_report rep;
+    assert_int_equal(geo_correct_auto(m, NULL, NULL, &rep, &err), 0);
+    assert_true(rep.merge.merged > 0);
+    assert_true(m->nfacets < facets);
+    double after = geo_poly_volume(m);
+    if (!(fabs(after - before) < 0.01 * before))
+        fail_msg("volume %.6g -> %.6g", before, after);
+    geo_stats st;
+    assert_int_equal(geo_inspect(m, NULL, NULL, &st, &err), 0);
+    assert_true(st.valid);
+    geo_stats_clear(&st);
+    geo_correct_report_clear(&rep);
+    geo_poly_free(m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -604,6 +648,7 @@ int main(void)
         cmocka_unit_test(test_collapse_joins_vertices_of_short_edges),
         cmocka_unit_test(test_hausdorff_of_two_boxes),
         cmocka_unit_test(test_report_json_has_the_documented_keys),
+        cmocka_unit_test(test_correction_of_a_torus_keeps_its_volume),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -433,8 +433,12 @@ static void test_obj_errors_name_line_and_place(void **state)
                         "index, found \"99999999999999999999\"");
     assert_string_equal(text_err("v 0 0 0\nv 1e300 0 0\nv 0 1e300 0\n"
                                  "f 1 2 3\n", PROTO_FMT_OBJ),
-                        "facets[0].plane: no finite plane fits the vertices "
-                        "(coordinates too large)");
+                        "vertices[1][0]: 1e+300 mm is beyond the ±1e+09 "
+                        "mm a model may span");
+    assert_string_equal(text_err("v 0 0 0\nv 1e-9 0 0\nv 0 1e-9 0\n"
+                                 "f 1 2 3\n", PROTO_FMT_OBJ),
+                        "the model is 1e-09 mm across, below the 1e-06 mm "
+                        "the exact predicates can resolve (wrong units?)");
     assert_string_equal(text_err("v 1 2\n", PROTO_FMT_OBJ),
                         "line 1: vertices[0]: expected 3 numbers");
     assert_string_equal(text_err("\n\nv 1 2 inf\n", PROTO_FMT_OBJ),

@@ -361,9 +361,11 @@ static void test_json_round_trip_is_bit_exact(void **state)
 static void test_awkward_doubles_round_trip_exactly(void **state)
 {
     (void)state;
-    double v[9] = {0.1, -0.0, 1e-300, 5e-324, 1.7976931348623157e308,
-                   -123456789012345678.0, 1.0 / 3, 2.5e-17,
-                   12345678901234568.0};
+    /* within the coordinate range of a model (±1e9 mm, model_codec.h);
+     * the extremes of the double range are refused on reading, below */
+    double v[9] = {0.1, -0.0, 1e-300, 5e-324, 999999999.99999988,
+                   -123456789.01234567, 1.0 / 3, 2.5e-17,
+                   -0.30000000000000004};
     uint32_t start[] = {0, 3}, idx[] = {0, 1, 2};
     double planes[4] = {0, 0, 1, 0};
     geo_poly *a = geo_poly_from_arrays(3, v, 1, start, idx, planes, NULL);
@@ -380,8 +382,17 @@ static void test_awkward_doubles_round_trip_exactly(void **state)
     if (!tu_poly_same(a, b, 0, -1, why, sizeof why))
         fail_msg("%s", why);
     free(buf);
-    geo_poly_free(a);
     geo_poly_free(b);
+    /* the largest double is written exactly but refused as a coordinate */
+    a->verts[1][1] = 1.7976931348623157e308;
+    assert_int_equal(proto_model_write_mem(a, PROTO_FMT_JSON, &buf, &len,
+                                           NULL), 0);
+    geo_err err = {{0}};
+    assert_null(proto_model_read_mem(buf, len, PROTO_FMT_JSON, NULL, &err));
+    assert_non_null(strstr(err.msg, "vertices[1][1]: 1.79769e+308 mm is "
+                                    "beyond the ±1e+09 mm"));
+    free(buf);
+    geo_poly_free(a);
 }
 
 static void test_to_json_value_reads_back_exactly(void **state)
