@@ -28,7 +28,8 @@ static const char USAGE[] =
     "  --report FILE     write the full JSON report to FILE\n"
     "\n"
     "Prints one line of JSON: band (loops joined whole), flipped, meridians,\n"
-    "rows, band_vertices, band_facets, openings_filled, left_open, valid,\n"
+    "rows, band_vertices, band_facets, welded (loop vertices joined where\n"
+    "the loops coincide), openings_filled, left_open, valid,\n"
     "vertices, facets, ms. exit status: 0 OUT written, 1 bad input (also\n"
     "meshes without free edges), 2 usage error\n";
 
@@ -115,12 +116,12 @@ int cmd_stitch(int argc, char **argv)
                              report, strerror(errno));
     } else {
         printf("{\"band\":%s,\"flipped\":%s,\"meridians\":%u,\"rows\":%u,"
-               "\"band_vertices\":%u,\"band_facets\":%u,"
+               "\"band_vertices\":%u,\"band_facets\":%u,\"welded\":%u,"
                "\"openings_filled\":%u,\"left_open\":%u,\"valid\":%s,"
                "\"vertices\":%u,\"facets\":%u,\"ms\":%.3f}\n",
                rep.band ? "true" : "false", rep.flipped2 ? "true" : "false",
                rep.meridians, rep.rows, rep.band_vertices, rep.band_facets,
-               rep.fill.nfilled, rep.fill.nopen, st.valid ? "true" : "false",
+               rep.welded, rep.fill.nfilled, rep.fill.nopen, st.valid ? "true" : "false",
                out->nverts, out->nfacets, ms);
     }
     geo_stats_clear(&st);

@@ -232,9 +232,17 @@ static double loop_planarity(const geo_poly *p, const loop_ref *L,
 }
 
 /* Appends the loop as one facet when it is a valid planar facet. 1 kept,
- * 0 not (out unchanged), -ENOMEM. */
+ * 0 not (out unchanged), -ENOMEM. Not where two consecutive loop edges
+ * belong to one facet of p: the new facet would share both with it and
+ * leave the vertex between them in two facets only (a triangle left
+ * standing in a hole in a flat region); a triangulation gives it more
+ * (an ear there would lie on that facet: the search never repeats an
+ * edge of p, and the check rejects an overlap). */
 static int try_planar(mfill *M, const loop_ref *L, bool check)
 {
+    for (uint32_t j = 0; j < L->n; j++)
+        if (facet_across(M, L, j) == facet_across(M, L, (j + 1) % L->n))
+            return 0;
     geo_poly *out = M->out;
     uint32_t nf = out->nfacets;
     int64_t f = geo_poly_add_facet(out, L->w, L->n);

@@ -209,6 +209,96 @@ static void meridians(uint32_t na, uint32_t nb, uint32_t *jof)
     }
 }
 
+/* Step 5a: lines of equal length whose meridians (one per vertex, the
+ * identity when N = M) are all within tol long — the two halves of one
+ * cut — are one curve: a band of zero width would be zero-area facets.
+ * Appends the pairs (A_c, B_c) to (wa, wb, *nw) and returns true; returns
+ * false, appending nothing, when any meridian is longer. */
+static bool lines_coincide(const geo_poly *out, const uint32_t *A,
+                           const uint32_t *B, uint32_t n, const uint32_t *jof,
+                           uint32_t twist, double tol, uint32_t *wa,
+                           uint32_t *wb, uint32_t *nw)
+{
+    for (uint32_t c = 0; c < n; c++)
+        if (jof[c] != c ||
+            geo_vdist(out->verts[A[c]], out->verts[B[(c + twist) % n]]) > tol)
+            return false;
+    for (uint32_t c = 0; c < n; c++) {
+        wa[*nw] = A[c];
+        wb[*nw] = B[(c + twist) % n];
+        ++*nw;
+    }
+    return true;
+}
+
+/* Another pair of loops that coincide (a body cut by a plane into halves
+ * with several loops each, such as a torus cut across its hole): loop a
+ * of mesh 1 and loop b of mesh 2 (indices in out, b in the direction it
+ * has as merged) of equal length, b running the other way along the same
+ * points within tol. Appends the pairs as lines_coincide. */
+static bool loops_coincide(const geo_poly *out, const uint32_t *a,
+                           const uint32_t *b, uint32_t n, double tol,
+                           uint32_t *wa, uint32_t *wb, uint32_t *nw)
+{
+    uint32_t s = 0;
+    double best = INFINITY;
+    for (uint32_t k = 0; k < n; k++) {
+        double d = geo_vdist(out->verts[a[0]], out->verts[b[k]]);
+        if (d < best) {
+            best = d;
+            s = k;
+        }
+    }
+    for (uint32_t i = 0; i < n; i++)
+        if (geo_vdist(out->verts[a[i]], out->verts[b[(s + n - i) % n]]) > tol)
+            return false;
+    for (uint32_t i = 0; i < n; i++) {
+        wa[*nw] = a[i];
+        wb[*nw] = b[(s + n - i) % n];
+        ++*nw;
+    }
+    return true;
+}
+
+/* Welds the pairs: mesh 2's vertex wb[k] is replaced by mesh 1's wa[k] in
+ * every facet (mesh 2's facets, from f2 on, get their planes refitted)
+ * and dropped, the later vertices moving down in order. 0 or -ENOMEM
+ * (out unchanged). */
+static int weld(geo_poly *out, uint32_t f2, const uint32_t *wa,
+                const uint32_t *wb, uint32_t nw)
+{
+    uint32_t *to = malloc((size_t)out->nverts * sizeof *to);
+    uint8_t *gone = calloc(out->nverts, 1);
+    if (!to || !gone) {
+        free(to), free(gone);
+        return -ENOMEM;
+    }
+    for (uint32_t k = 0; k < nw; k++)
+        gone[wb[k]] = 1;
+    uint32_t nv = 0;
+    for (uint32_t v = 0; v < out->nverts; v++)
+        if (!gone[v]) {
+            memmove(out->verts[nv], out->verts[v], sizeof out->verts[0]);
+            to[v] = nv++;
+        }
+    for (uint32_t k = 0; k < nw; k++)
+        to[wb[k]] = to[wa[k]];
+    out->nverts = nv;
+    for (uint32_t f = 0; f < out->nfacets; f++) {
+        uint32_t *fv = out->fidx + out->fstart[f];
+        bool moved = false;
+        for (uint32_t i = 0; i < geo_poly_facet_size(out, f); i++) {
+            moved |= gone[fv[i]];
+            fv[i] = to[fv[i]];
+        }
+        if (moved && f >= f2)
+            geo_poly_facet_fit_plane(out, f, GEO_PLANE_UNWEIGHTED,
+                                     out->planes[f]);
+    }
+    free(to), free(gone);
+    return 0;
+}
+
 int geo_stitch(const geo_poly *m1, const geo_poly *m2,
                const geo_stitch_opts *opts, const geo_ctx *ctx, geo_poly *out,
                geo_stitch_report *rep, geo_err *err)
@@ -232,7 +322,8 @@ int geo_stitch(const geo_poly *m1, const geo_poly *m2,
     geo_stitch_report R = {0};
     loops L1 = {0}, L2 = {0};
     uint32_t *X = NULL, *Y = NULL, *jof = NULL, *P = NULL;
-    uint8_t *keep = NULL;
+    uint32_t *wa = NULL, *wb = NULL, *lb2 = NULL, nw = 0;
+    uint8_t *keep = NULL, *used2 = NULL;
     geo_poly_clear(out);
     if ((rc = find_loops(m1, &L1, err)) < 0 ||
         (rc = find_loops(m2, &L2, err)) < 0)
@@ -392,6 +483,43 @@ int geo_stitch(const geo_poly *m1, const geo_poly *m2,
     R.twist = twist;
     R.meridians = ncol;
     R.meridian_length = total;
+    /* pairs to weld: the chosen lines if they coincide, and any other
+     * pair of loops that does (mesh 1's vertices first in out, so A is
+     * X, mesh 1's line, whenever N = M) */
+    uint32_t nl1 = 0, maxl2 = 0;
+    for (uint32_t a = 0; a < L1.n; a++)
+        nl1 += L1.l[a].n;
+    for (uint32_t b = 0; b < L2.n; b++)
+        maxl2 = L2.l[b].n > maxl2 ? L2.l[b].n : maxl2;
+    double tol = geo_poly_eps(out);
+    wa = malloc(((size_t)nl1 + 1) * sizeof *wa);
+    wb = malloc(((size_t)nl1 + 1) * sizeof *wb);
+    lb2 = malloc(((size_t)maxl2 + 1) * sizeof *lb2);
+    used2 = calloc((size_t)L2.n + 1, 1);
+    if (!wa || !wb || !lb2 || !used2)
+        goto oom;
+    bool welded = N == M && lines_coincide(out, A, B, N, jof, twist, tol, wa,
+                                           wb, &nw);
+    used2[R.loop2] = 1;
+    for (uint32_t a = 0; a < L1.n; a++) {
+        const loop *la = &L1.l[a];
+        for (uint32_t b = 0; b < L2.n && a != R.loop1; b++) {
+            const loop *lb = &L2.l[b];
+            if (used2[b] || la->n != lb->n)
+                continue;
+            for (uint32_t k = 0; k < lb->n; k++)
+                lb2[k] = off2 + (R.flipped2 ? lb->v[lb->n - 1 - k] : lb->v[k]);
+            if (loops_coincide(out, la->v, lb2, la->n, tol, wa, wb, &nw)) {
+                used2[b] = 1;
+                R.welded_loops++;
+                break;
+            }
+        }
+    }
+    if (welded) {
+        R.rows = 1;
+        goto openings;
+    }
     uint64_t e1, e2;
     double s1 = mean_edge(m1, &e1), s2 = mean_edge(m2, &e2);
     R.segment = o.segment > 0 ? o.segment
@@ -470,6 +598,10 @@ int geo_stitch(const geo_poly *m1, const geo_poly *m2,
         geo_err_set(err, rc, "canceled");
         goto fail;
     }
+openings:
+    if (nw && weld(out, m1->nfacets, wa, wb, nw) < 0)
+        goto oom;
+    R.welded = nw;
     /* the openings left: the loop vertices not bridged, other loops */
     if ((rc = geo_fill_mesh(out, &o.fill, NULL, &R.fill, err)) < 0) {
         geo_err_prefix(err, "closing the openings");
@@ -490,6 +622,7 @@ done:
     loops_free(&L1);
     loops_free(&L2);
     free(X), free(Y), free(jof), free(P), free(keep);
+    free(wa), free(wb), free(lb2), free(used2);
     if (rep)
         *rep = R;
     else

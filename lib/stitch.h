@@ -37,6 +37,14 @@
  *    For a closed band the lines are the loops closed by their first
  *    vertex, and the start of B is the rotation (twist) that minimises
  *    the total meridian length, tried for every one of the M starts.
+ * 5a. Loops that coincide — lines of equal length whose every meridian
+ *    is within geo_poly_eps of the merged mesh long, as the two halves
+ *    of one plane cut — are welded instead: a band of zero width would
+ *    be zero-area facets. Mesh 2's loop vertices are replaced by mesh
+ *    1's and dropped (the vertices after them move down in order); no
+ *    band is made. Any other pair of loops (one per mesh) that coincides
+ *    — a torus cut across its hole has two on each half — is welded the
+ *    same way, whatever was done with the chosen pair.
  * 6. The vertex matrix P: row 0 the A ends, the last row the B ends
  *    (B_j repeated where several meridians meet it), between them K rows
  *    of points dividing each meridian evenly, K + 1 = round(mean meridian
@@ -52,8 +60,8 @@
  *    not choose) and any other loop are closed by lib/fill.h.
  *
  * Output: mesh 1's vertices and facets first (same indices), then mesh
- * 2's (turned over if needed), then the band's new vertices and facets,
- * then the fill's. Ownership: out is overwritten (callers pass an empty
+ * 2's (turned over if needed; welded vertices dropped), then the band's
+ * new vertices and facets, then the fill's. Ownership: out is overwritten (callers pass an empty
  * geo_poly); rep->fill.holes is malloc'd (geo_stitch_report_clear).
  * Errors: -EINVAL (a mesh without a free-edge loop, loops of fewer than
  * 2 chosen vertices, invalid indices), -ENOMEM, -ECANCELED; out is then
@@ -91,6 +99,9 @@ typedef struct geo_stitch_report {
     double meridian_length;    /* total length of the meridians, mm */
     double segment;            /* segment length used, mm */
     uint32_t band_vertices, band_facets;
+    uint32_t welded;           /* loop vertex pairs welded (loops that
+                                  coincide, see step 5a) */
+    uint32_t welded_loops;     /* other loop pairs welded (step 5a) */
     geo_mesh_fill_report fill; /* the openings closed afterwards */
 } geo_stitch_report;
 

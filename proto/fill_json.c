@@ -117,7 +117,7 @@ json_t *proto_stitch_report_to_json(const geo_stitch_report *r)
         return NULL;
     return json_pack(
         "{s:[I,I], s:[I,I], s:[I,I], s:[I,I], s:b, s:b, s:b, s:I, s:I, s:I,"
-        " s:f, s:f, s:I, s:I, s:o}",
+        " s:f, s:f, s:I, s:I, s:I, s:I, s:o}",
         "loops", (json_int_t)r->loops1, (json_int_t)r->loops2, "joined",
         (json_int_t)r->loop1, (json_int_t)r->loop2, "loop_vertices",
         (json_int_t)r->nloop1, (json_int_t)r->nloop2, "chosen",
@@ -126,5 +126,7 @@ json_t *proto_stitch_report_to_json(const geo_stitch_report *r)
         (json_int_t)r->twist, "meridians", (json_int_t)r->meridians, "rows",
         (json_int_t)r->rows, "meridian_length", r->meridian_length, "segment",
         r->segment, "band_vertices", (json_int_t)r->band_vertices,
-        "band_facets", (json_int_t)r->band_facets, "openings", fill);
+        "band_facets", (json_int_t)r->band_facets, "welded",
+        (json_int_t)r->welded, "welded_loops", (json_int_t)r->welded_loops,
+        "openings", fill);
 }

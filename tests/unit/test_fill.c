@@ -101,6 +101,56 @@ static geo_poly *block_with_touching_holes(void)
     return p;
 }
 
+/* A block 2 × 2 × 1 whose top is a 2 × 2 grid of which only the triangle
+ * (0,0) (1,0) (1,1) is left: the rest of the top is one planar hole whose
+ * loop runs along two edges of that triangle, round the grid's centre. */
+static geo_poly *block_with_a_triangle_in_its_open_top(void)
+{
+    geo_poly *p = geo_poly_new();
+    for (int j = 0; j <= 2; j++)
+        for (int i = 0; i <= 2; i++) {
+            double v[3] = {i, j, 0};
+            geo_poly_add_vertex(p, v);
+        }
+    static const double bottom[4][3] = {
+        {0, 0, -1}, {2, 0, -1}, {2, 2, -1}, {0, 2, -1}};
+    for (int k = 0; k < 4; k++)
+        geo_poly_add_vertex(p, bottom[k]);
+    uint32_t tri[3] = {0, 1, 4};
+    geo_poly_add_facet(p, tri, 3);
+    static const uint32_t side[4][3] = {
+        {0, 1, 2}, {2, 5, 8}, {8, 7, 6}, {6, 3, 0}};
+    for (int k = 0; k < 4; k++) {
+        uint32_t w[5] = {9 + (uint32_t)k, 9 + (uint32_t)(k + 1) % 4,
+                         side[k][2], side[k][1], side[k][0]};
+        geo_poly_add_facet(p, w, 5);
+    }
+    uint32_t under[4] = {9, 12, 11, 10};
+    geo_poly_add_facet(p, under, 4);
+    geo_poly_compute_planes(p, GEO_PLANE_UNWEIGHTED);
+    return p;
+}
+
+/* One facet over that hole would meet the triangle along two edges and
+ * leave the grid's centre in two facets only (a stress test of random
+ * patches cut from flat gem facets made such holes: "filled_planar",
+ * model invalid). The hole is triangulated instead. */
+static void test_planar_hole_sharing_two_edges_with_a_facet_is_triangulated(
+    void **s)
+{
+    (void)s;
+    geo_poly *p = block_with_a_triangle_in_its_open_top();
+    geo_mesh_fill_report rep;
+    assert_int_equal(geo_fill_mesh(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(rep.nloops, 1);
+    assert_int_equal(rep.nfilled, 1);
+    assert_int_equal(rep.holes[0].status, GEO_HOLE_FILLED);
+    assert_true(is_valid(p));
+    assert_true(fabs(geo_poly_volume(p) - 4.0) < 1e-12);
+    geo_mesh_fill_report_clear(&rep);
+    geo_poly_free(p);
+}
+
 static void test_holes_touching_at_a_vertex_are_two_loops(void **s)
 {
     (void)s;
@@ -279,6 +329,8 @@ int main(void)
         cmocka_unit_test(test_unfillable_hole_stays_open_with_reason),
         cmocka_unit_test(test_every_weight_fills_a_nonplanar_hole_validly),
         cmocka_unit_test(test_closed_mesh_is_left_alone),
+        cmocka_unit_test(
+            test_planar_hole_sharing_two_edges_with_a_facet_is_triangulated),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -159,6 +159,94 @@ static void test_side_by_side_meshes_bridge_facing_vertices(void **s)
     geo_poly_free(cap), geo_poly_free(sp);
 }
 
+/* Halves cut from one mesh share their loop: the zero-width band was
+ * made of zero-area facets (every stitch of a model cut in two with one
+ * plane was invalid); the loops are welded instead. */
+static void test_halves_whose_loops_coincide_are_welded(void **s)
+{
+    (void)s;
+    geo_poly *sp = gs_sphere(16, 1.0);
+    geo_poly *top = part(sp, 2, 0.0, 9), *bot = part(sp, 2, -9, 0.0);
+    /* the second half a few units in the last place off, as a cut by the
+     * opposite plane computes its crossings */
+    for (uint32_t v = 0; v < bot->nverts; v++)
+        bot->verts[v][0] *= 1 + 4e-16;
+    geo_poly *out = geo_poly_new();
+    geo_stitch_report rep;
+    assert_int_equal(geo_stitch(top, bot, NULL, NULL, out, &rep, NULL), 0);
+    assert_int_equal(rep.welded, rep.nloop1);
+    assert_int_equal(rep.band_facets, 0);
+    assert_int_equal(rep.fill.nloops, 0);
+    assert_int_equal(out->nverts, sp->nverts);
+    assert_int_equal(out->nfacets, sp->nfacets);
+    assert_true(is_valid(out));
+    assert_true(fabs(geo_poly_volume(out) - geo_poly_volume(sp)) <
+                1e-12 * geo_poly_volume(sp));
+    geo_stitch_report_clear(&rep);
+    /* turned over, the second half is welded all the same */
+    for (uint32_t f = 0; f < bot->nfacets; f++)
+        geo_poly_flip_facet(bot, f);
+    assert_int_equal(geo_stitch(top, bot, NULL, NULL, out, &rep, NULL), 0);
+    assert_true(rep.flipped2);
+    assert_int_equal(rep.welded, rep.nloop1);
+    assert_true(is_valid(out));
+    geo_stitch_report_clear(&rep);
+    geo_poly_free(out), geo_poly_free(top), geo_poly_free(bot);
+    geo_poly_free(sp);
+}
+
+/* A torus around z (radii 2 and 0.7), nu × nv quads split into
+ * triangles, outward. */
+static geo_poly *torus(uint32_t nu, uint32_t nv)
+{
+    geo_poly *p = geo_poly_new();
+    for (uint32_t i = 0; i < nu; i++)
+        for (uint32_t j = 0; j < nv; j++) {
+            double u = 2 * M_PI * i / nu, v = 2 * M_PI * j / nv;
+            double x[3] = {(2 + 0.7 * cos(v)) * cos(u),
+                           (2 + 0.7 * cos(v)) * sin(u), 0.7 * sin(v)};
+            geo_poly_add_vertex(p, x);
+        }
+    for (uint32_t i = 0; i < nu; i++)
+        for (uint32_t j = 0; j < nv; j++) {
+            uint32_t a = i * nv + j, b = ((i + 1) % nu) * nv + j;
+            uint32_t c = ((i + 1) % nu) * nv + (j + 1) % nv;
+            uint32_t d = i * nv + (j + 1) % nv;
+            uint32_t tri[2][3] = {{a, b, c}, {a, c, d}};
+            for (int k = 0; k < 2; k++) {
+                uint32_t f = (uint32_t)geo_poly_add_facet(p, tri[k], 3);
+                geo_poly_facet_fit_plane(p, f, GEO_PLANE_UNWEIGHTED,
+                                         p->planes[f]);
+            }
+        }
+    return p;
+}
+
+/* Cut across its hole, each half of a torus has two loops; the pair not
+ * chosen was closed by two planar facets on top of each other and left
+ * open as intersecting. Both pairs are welded now. */
+static void test_every_pair_of_coinciding_loops_is_welded(void **s)
+{
+    (void)s;
+    geo_poly *t = torus(24, 12);
+    assert_true(is_valid(t));
+    geo_poly *l = part(t, 0, -9, 0.0), *r = part(t, 0, 0.0, 9);
+    geo_poly *out = geo_poly_new();
+    geo_stitch_report rep;
+    assert_int_equal(geo_stitch(l, r, NULL, NULL, out, &rep, NULL), 0);
+    assert_int_equal(rep.loops1, 2);
+    assert_int_equal(rep.loops2, 2);
+    assert_int_equal(rep.welded_loops, 1);
+    assert_int_equal(rep.welded, 2 * 12);
+    assert_int_equal(rep.fill.nloops, 0);
+    assert_int_equal(out->nverts, t->nverts);
+    assert_true(is_valid(out));
+    assert_true(fabs(geo_poly_volume(out) - geo_poly_volume(t)) <
+                1e-12 * geo_poly_volume(t));
+    geo_stitch_report_clear(&rep);
+    geo_poly_free(out), geo_poly_free(l), geo_poly_free(r), geo_poly_free(t);
+}
+
 static void test_pipeline_form_needs_exactly_two_pieces(void **s)
 {
     (void)s;
@@ -202,6 +290,8 @@ int main(void)
         cmocka_unit_test(test_twist_is_chosen_whatever_the_loops_start),
         cmocka_unit_test(test_side_by_side_meshes_bridge_facing_vertices),
         cmocka_unit_test(test_pipeline_form_needs_exactly_two_pieces),
+        cmocka_unit_test(test_halves_whose_loops_coincide_are_welded),
+        cmocka_unit_test(test_every_pair_of_coinciding_loops_is_welded),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
