@@ -23,6 +23,7 @@
 #include <string.h>
 
 #include "gen_convex.h"
+#include "gen_garbage.h"
 #include "gen_sphere.h"
 #include "model_io.h"
 #include "parallel.h"
@@ -292,28 +293,8 @@ static void test_convex_and_garbage_models_match(void **state)
     all[0] = '\0';
     uint64_t rng = 91;
     for (int trial = 0; trial < 80; trial++) {
-        geo_poly *p = geo_poly_new();
-        uint32_t nv = 4 + (uint32_t)(geo_rand_next(&rng) % 12);
-        for (uint32_t v = 0; v < nv; v++) {
-            double x[3];
-            for (int k = 0; k < 3; k++)
-                x[k] = (double)(geo_rand_next(&rng) % 3);
-            geo_poly_add_vertex(p, x);
-        }
-        uint32_t nf = 1 + (uint32_t)(geo_rand_next(&rng) % 20);
-        for (uint32_t f = 0; f < nf; f++) {
-            uint32_t n = 3 + (uint32_t)(geo_rand_next(&rng) % 5), idx[8];
-            for (uint32_t i = 0; i < n; i++) {
-                idx[i] = (uint32_t)(geo_rand_next(&rng) % nv);
-                if (i && idx[i] == idx[i - 1])
-                    idx[i] = (idx[i] + 1) % nv;
-            }
-            if (idx[n - 1] == idx[0])
-                n--;
-            if (n >= 3 && idx[n - 1] != idx[0])
-                geo_poly_add_facet(p, idx, n);
-        }
-        geo_poly_compute_planes(p, GEO_PLANE_UNWEIGHTED);
+        geo_poly *p = gen_garbage_model(&rng);
+        assert_non_null(p);
         char *one = stats_text(p, 0, JSON_COMPACT);
         char *two = stats_text(p, 2, JSON_COMPACT);
         assert_string_equal(one, two);
