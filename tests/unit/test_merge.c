@@ -386,27 +386,39 @@ static void test_surface_noise_follows_the_scanners_noise(void **state)
     geo_poly_free(stone);
 }
 
-/* Neighbouring girdle facets 3.75° apart and 0.21 mm wide part by less
- * than the deviation bound from their common plane; the noise test keeps
- * them apart (without it this scan comes out with 173 facets for 209). */
-static void test_auto_groups_keep_neighbouring_girdle_facets_apart(void **state)
+/* Corrects a simulated scan of stone (cut, seed) with k views: the
+ * result is valid and not farther from the stone than the scan; with
+ * strict, also the views read off the scan are k and the facet count is
+ * within 10 % of the stone's. */
+static void check_scan_correction(enum sim_cut cut, uint64_t seed, uint32_t k,
+                                  bool strict)
 {
-    (void)state;
-    geo_poly *stone = sim_stone(SIM_JUBILEE96, 1);
-    geo_poly *scan = sim_scan(stone, 100, 0.001, 1);
+    geo_poly *stone = sim_stone(cut, seed);
+    geo_poly *scan = sim_scan(stone, k, 0.001, seed);
     assert_non_null(scan);
     geo_poly *p = geo_poly_copy(scan);
     geo_correct_report rep;
     geo_err err = {{0}};
     assert_int_equal(geo_correct_auto(p, NULL, NULL, &rep, &err), 0);
     assert_true(rep.after.valid);
-    assert_int_equal(rep.views, 100);
-    assert_true(fabs((double)p->nfacets / stone->nfacets - 1) <= 0.1);
+    if (strict) {
+        assert_int_equal(rep.views, k);
+        assert_true(fabs((double)p->nfacets / stone->nfacets - 1) <= 0.1);
+    }
     assert_true(sim_hausdorff(p, stone, 500) <= sim_hausdorff(scan, stone, 500));
     geo_correct_report_clear(&rep);
     geo_poly_free(p);
     geo_poly_free(scan);
     geo_poly_free(stone);
+}
+
+/* Neighbouring girdle facets 3.75° apart and 0.21 mm wide part by less
+ * than the deviation bound from their common plane; the noise test keeps
+ * them apart (without it this scan comes out with 173 facets for 209). */
+static void test_auto_groups_keep_neighbouring_girdle_facets_apart(void **state)
+{
+    (void)state;
+    check_scan_correction(SIM_JUBILEE96, 1, 100, true);
 }
 
 /* At a 1.8° view step the slivers of a princess's wide, steep facets
@@ -416,21 +428,7 @@ static void test_auto_groups_keep_neighbouring_girdle_facets_apart(void **state)
 static void test_wide_facets_merge_within_the_roof_of_the_view_step(void **state)
 {
     (void)state;
-    geo_poly *stone = sim_stone(SIM_PRINCESS, 1);
-    geo_poly *scan = sim_scan(stone, 100, 0.001, 1);
-    assert_non_null(scan);
-    geo_poly *p = geo_poly_copy(scan);
-    geo_correct_report rep;
-    geo_err err = {{0}};
-    assert_int_equal(geo_correct_auto(p, NULL, NULL, &rep, &err), 0);
-    assert_true(rep.after.valid);
-    assert_int_equal(rep.views, 100);
-    assert_true(fabs((double)p->nfacets / stone->nfacets - 1) <= 0.1);
-    assert_true(sim_hausdorff(p, stone, 500) <= sim_hausdorff(scan, stone, 500));
-    geo_correct_report_clear(&rep);
-    geo_poly_free(p);
-    geo_poly_free(scan);
-    geo_poly_free(stone);
+    check_scan_correction(SIM_PRINCESS, 1, 100, true);
 }
 
 /* A group found at the start of a round whose facets an earlier group of
@@ -439,19 +437,7 @@ static void test_wide_facets_merge_within_the_roof_of_the_view_step(void **state
 static void test_group_changed_by_an_earlier_group_is_checked_again(void **state)
 {
     (void)state;
-    geo_poly *stone = sim_stone(SIM_EMERALD, 2);
-    geo_poly *scan = sim_scan(stone, 400, 0.001, 2);
-    assert_non_null(scan);
-    geo_poly *p = geo_poly_copy(scan);
-    geo_correct_report rep;
-    geo_err err = {{0}};
-    assert_int_equal(geo_correct_auto(p, NULL, NULL, &rep, &err), 0);
-    assert_true(rep.after.valid);
-    assert_true(sim_hausdorff(p, stone, 500) <= sim_hausdorff(scan, stone, 500));
-    geo_correct_report_clear(&rep);
-    geo_poly_free(p);
-    geo_poly_free(scan);
-    geo_poly_free(stone);
+    check_scan_correction(SIM_EMERALD, 2, 400, false);
 }
 
 /* Automatic merging of p with a 5 µm deviation bound and no noise test
