@@ -339,3 +339,33 @@ done:
     geo_topo_free(t);
     return bad;
 }
+
+geo_poly *cs_dented_box(double apex_z)
+{
+    double v[13][3] = {
+        {0, 0, 0}, {10, 0, 0}, {10, 10, 0}, {0, 10, 0},
+        {3, 3, 0}, {7, 3, 0}, {7, 7, 0}, {3, 7, 0}, {5, 5, apex_z},
+        {0, 0, 10}, {10, 0, 10}, {10, 10, 10}, {0, 10, 10}};
+    uint32_t idx[64], start[18], c = 0, f = 0;
+    static const uint32_t top[4] = {9, 10, 11, 12};
+    start[f++] = c;
+    for (int i = 0; i < 4; i++)
+        idx[c++] = top[i];
+    for (uint32_t i = 0; i < 4; i++) {
+        uint32_t j = (i + 1) % 4;
+        uint32_t side[4] = {i, j, 9 + j, 9 + i};
+        uint32_t trap[4] = {j, i, 4 + i, 4 + j};
+        uint32_t dent[3] = {4 + j, 4 + i, 8};
+        start[f++] = c;
+        for (int q = 0; q < 4; q++)
+            idx[c++] = side[q];
+        start[f++] = c;
+        for (int q = 0; q < 4; q++)
+            idx[c++] = trap[q];
+        start[f++] = c;
+        for (int q = 0; q < 3; q++)
+            idx[c++] = dent[q];
+    }
+    start[f] = c;
+    return geo_poly_from_arrays(13, &v[0][0], f, start, idx, NULL, NULL);
+}

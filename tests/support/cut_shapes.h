@@ -25,6 +25,11 @@ geo_poly *cs_comb_prism(uint32_t prongs);
  * top and bottom each made of four trapezoids. Volume 336. */
 geo_poly *cs_frame(void);
 
+/* A 10-cube with a square pyramid on its bottom face [3,7]², apex
+ * (5, 5, apex_z): dug into the cube (apex_z > 0) or standing out of it
+ * (apex_z < 0). */
+geo_poly *cs_dented_box(double apex_z);
+
 /* A closed triangulated sphere-like surface: nlat rings × nlon segments
  * (2·nlon·(nlat − 1) triangles), radius 1 + bump·sin(5θ)·sin(4φ) around
  * the origin (star-shaped; convex when bump = 0). */

@@ -506,43 +506,10 @@ static void test_pinching_results_are_refused(void **state)
     geo_poly_free(p);
 }
 
-/* A 10-cube with a square pyramid on its bottom face [3,7]², apex
- * (5, 5, apex_z): dug into the cube (apex_z > 0) or standing out of it
- * (apex_z < 0). */
-static geo_poly *dented_box(double apex_z)
-{
-    double v[13][3] = {
-        {0, 0, 0}, {10, 0, 0}, {10, 10, 0}, {0, 10, 0},
-        {3, 3, 0}, {7, 3, 0}, {7, 7, 0}, {3, 7, 0}, {5, 5, apex_z},
-        {0, 0, 10}, {10, 0, 10}, {10, 10, 10}, {0, 10, 10}};
-    uint32_t idx[64], start[18], c = 0, f = 0;
-    static const uint32_t top[4] = {9, 10, 11, 12};
-    start[f++] = c;
-    for (int i = 0; i < 4; i++)
-        idx[c++] = top[i];
-    for (uint32_t i = 0; i < 4; i++) {
-        uint32_t j = (i + 1) % 4;
-        uint32_t side[4] = {i, j, 9 + j, 9 + i};
-        uint32_t trap[4] = {j, i, 4 + i, 4 + j};
-        uint32_t dent[3] = {4 + j, 4 + i, 8};
-        start[f++] = c;
-        for (int q = 0; q < 4; q++)
-            idx[c++] = side[q];
-        start[f++] = c;
-        for (int q = 0; q < 4; q++)
-            idx[c++] = trap[q];
-        start[f++] = c;
-        for (int q = 0; q < 3; q++)
-            idx[c++] = dent[q];
-    }
-    start[f] = c;
-    return geo_poly_from_arrays(13, &v[0][0], f, start, idx, NULL, NULL);
-}
-
 static void test_cavity_apex_on_plane(void **state)
 {
     (void)state;
-    geo_poly *p = dented_box(4);
+    geo_poly *p = cs_dented_box(4);
     assert_null(cs_check_valid(p, 1e-12));
     assert_close(geo_poly_volume(p), 1000.0 - 64.0 / 3.0, 1e-12);
     geo_err err = {{0}};
@@ -565,7 +532,7 @@ static void test_cavity_apex_on_plane(void **state)
     geo_poly_free(p);
     /* the apex of a peak of the solid on the plane is fine: the new facet
      * keeps away from it */
-    p = dented_box(-4);
+    p = cs_dented_box(-4);
     double vol = 1000.0 + 64.0 / 3.0;
     assert_close(geo_poly_volume(p), vol, 1e-12);
     o = cut_ok(p, 1.5, 0, -1, -11.5, &rep);

@@ -282,38 +282,6 @@ static geo_poly *l_prism(void)
     return cs_prism(xy, 6, 0, 6);
 }
 
-/* A 10-cube with a square pyramid dug into its bottom face, apex at
- * (5, 5, 4). */
-static geo_poly *dented_box(void)
-{
-    double v[13][3] = {
-        {0, 0, 0}, {10, 0, 0}, {10, 10, 0}, {0, 10, 0},
-        {3, 3, 0}, {7, 3, 0}, {7, 7, 0}, {3, 7, 0}, {5, 5, 4},
-        {0, 0, 10}, {10, 0, 10}, {10, 10, 10}, {0, 10, 10}};
-    uint32_t idx[64], start[18], c = 0, f = 0;
-    static const uint32_t top[4] = {9, 10, 11, 12};
-    start[f++] = c;
-    for (int i = 0; i < 4; i++)
-        idx[c++] = top[i];
-    for (uint32_t i = 0; i < 4; i++) {
-        uint32_t j = (i + 1) % 4;
-        uint32_t side[4] = {i, j, 9 + j, 9 + i};
-        uint32_t trap[4] = {j, i, 4 + i, 4 + j};
-        uint32_t dent[3] = {4 + j, 4 + i, 8};
-        start[f++] = c;
-        for (int q = 0; q < 4; q++)
-            idx[c++] = side[q];
-        start[f++] = c;
-        for (int q = 0; q < 4; q++)
-            idx[c++] = trap[q];
-        start[f++] = c;
-        for (int q = 0; q < 3; q++)
-            idx[c++] = dent[q];
-    }
-    start[f] = c;
-    return geo_poly_from_arrays(13, &v[0][0], f, start, idx, NULL, NULL);
-}
-
 /* Block [−1,1]² × [−1, ·] with a saddle top around (0, 0, 0). */
 static geo_poly *saddle_block(void)
 {
@@ -350,7 +318,7 @@ static void test_pinches_are_refused_and_moving_the_plane_works(void **state)
     } cases[] = {
         {notch_prism(), {0, 1, 0, -5}, "reflex edge"},
         {l_prism(), {-1, -1, 0, 8}, "reflex edge"},
-        {dented_box(), {0, 0, 1, -4}, "cavity"},
+        {cs_dented_box(4), {0, 0, 1, -4}, "cavity"},
         {saddle_block(), {0, 0, -1, 0}, "touch itself"},
         {hs_saddle_ring(), {0, 0, -1, 2}, "touch itself"},
     };
@@ -441,7 +409,7 @@ static uint32_t make_models(model *m)
     m[n++] = (model){"plate with 5 holes", hs_grid_prism(plate_map, 5, 2), true};
     m[n++] = (model){"ring with a pillar", hs_grid_prism(pillar_map, 5, 3), true};
     m[n++] = (model){"saddle ring", hs_saddle_ring(), true};
-    m[n++] = (model){"dented box", dented_box(), true};
+    m[n++] = (model){"dented box", cs_dented_box(4), true};
     m[n++] = (model){"bumpy sphere", cs_sphere(24, 32, 0.25), false};
     m[n++] = (model){"torus", hs_torus(24, 12, 2, 1), false};
     for (uint32_t i = 0; i < n; i++) {
