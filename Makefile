@@ -1,10 +1,16 @@
 # facetd — one entry point: make, make run, make test, make bench,
 # make fuzz, make install (DESTDIR, PREFIX), make deps.
 #
-# Layout (see README): lib/ → build/libfacet.a (geometry, libc/libm only),
-# proto/ → build/libfacetproto.a, scanner/ → build/libfacetscan.a,
-# daemon/ → build/facetd and build/facet. `make SANITIZE=1 …` builds the
-# same under AddressSanitizer + UndefinedBehaviorSanitizer in build/asan.
+# Layout (docs/architecture.md): lib/GROUP/ → build/libfacet.a (geometry,
+# libc/libm only), proto/ → build/libfacetproto.a (formats, pipelines, the
+# op runner), scanner/ → build/libfacetscan.a, daemon/ → build/facetd,
+# daemon/cli/ → build/facet. `make SANITIZE=1 …` builds the same under
+# AddressSanitizer + UndefinedBehaviorSanitizer in build/asan.
+#
+# Layering is enforced by include paths: each lib group sees only the
+# groups below it (LIB_DEPS_*), a group's private/ headers only itself, and
+# lib/ sees nothing of proto/, scanner/ or daemon/. A file that includes
+# upward does not build.
 
 PREFIX  ?= /usr/local
 DESTDIR ?=
@@ -34,16 +40,32 @@ pkg_libs   = $(shell pkg-config --libs $(1) 2>/dev/null)
 
 override CFLAGS += -std=c11 -D_GNU_SOURCE -Wall -Wextra -Wpedantic -Werror \
     -Wshadow -Wno-unused-parameter -ffp-contract=off -MMD -MP \
-    $(OPT) $(SANFLAGS) -Ilib -Iproto -Iscanner -Idaemon
+    $(OPT) $(SANFLAGS)
+
+# lib/ groups, lowest first, and the groups each may include.
+LIB_GROUPS       := core inspect cut replanar mesh frep correct
+LIB_DEPS_core    := core
+LIB_DEPS_inspect := core inspect
+LIB_DEPS_cut     := core inspect cut
+LIB_DEPS_replanar:= core inspect replanar
+LIB_DEPS_mesh    := core inspect mesh
+LIB_DEPS_frep    := core inspect mesh frep
+LIB_DEPS_correct := core inspect cut replanar correct correct/private
+INC_LIB     := $(foreach g,$(LIB_GROUPS),-Ilib/$(g))
+INC_PROTO   := $(INC_LIB) -Iproto
+INC_SCANNER := $(INC_PROTO) -Iscanner
+INC_DAEMON  := $(INC_SCANNER) -Idaemon
+INC_CLI     := $(INC_PROTO) -Idaemon/cli
+INC_TESTS   := $(INC_DAEMON) -Ilib/correct/private -Itests/support
 override LDFLAGS += $(SANFLAGS)
 LDLIBS_BASE := -lm -lpthread
 
-LIB_SRCS     := $(sort $(wildcard lib/*.c))
+LIB_SRCS     := $(sort $(foreach g,$(LIB_GROUPS),$(wildcard lib/$(g)/*.c)))
 PROTO_SRCS   := $(sort $(wildcard proto/*.c))
-SCANNER_SRCS := $(sort $(filter-out scanner/mock_%.c,$(wildcard scanner/*.c)))
-DAEMON_MAINS := daemon/facetd.c daemon/facet.c
-CLI_SRCS     := $(sort $(wildcard daemon/cmd_*.c))
-DAEMON_SRCS  := $(sort $(filter-out $(DAEMON_MAINS) $(CLI_SRCS),$(wildcard daemon/*.c)))
+SCANNER_SRCS := $(sort $(wildcard scanner/*.c))
+DAEMON_MAINS := daemon/facetd.c
+CLI_SRCS     := $(sort $(wildcard daemon/cli/*.c))
+DAEMON_SRCS  := $(sort $(filter-out $(DAEMON_MAINS),$(wildcard daemon/*.c)))
 UNIT_SRCS    := $(sort $(wildcard tests/unit/test_*.c))
 BENCH_SRCS   := $(sort $(wildcard tests/bench/bench_*.c))
 TOOL_SRCS    := $(sort $(wildcard tests/tools/*.c))
@@ -68,13 +90,29 @@ ALL_LDLIBS = $(call pkg_libs,$(PKG_DAEMON) $(PKG_SCANNER) $(PKG_PROTO)) $(LDLIBS
 .PHONY: all deps test bench fuzz run install clean check-deps
 all: $(LIBFACET) $(LIBPROTO) $(FACET) $(if $(wildcard daemon/facetd.c),$(FACETD))
 
-$(B)/obj/%.o: %.c
+define lib_group_rule
+$$(B)/obj/lib/$(1)/%.o: lib/$(1)/%.c
+	@mkdir -p $$(dir $$@)
+	$$(CC) $$(CFLAGS) $$(foreach d,$$(LIB_DEPS_$(1)),-Ilib/$$(d)) -c $$< -o $$@
+endef
+$(foreach g,$(LIB_GROUPS),$(eval $(call lib_group_rule,$(g))))
+
+$(B)/obj/proto/%.o: proto/%.c
 	@mkdir -p $(dir $@)
-	$(CC) $(CFLAGS) $(call pkg_cflags,$(PKG_PROTO) $(PKG_SCANNER) $(PKG_DAEMON)) -c $< -o $@
+	$(CC) $(CFLAGS) $(INC_PROTO) $(call pkg_cflags,$(PKG_PROTO)) -c $< -o $@
+$(B)/obj/scanner/%.o: scanner/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) $(INC_SCANNER) $(call pkg_cflags,$(PKG_PROTO) $(PKG_SCANNER)) -c $< -o $@
+$(B)/obj/daemon/cli/%.o: daemon/cli/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) $(INC_CLI) $(call pkg_cflags,$(PKG_PROTO)) -c $< -o $@
+$(B)/obj/daemon/%.o: daemon/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) $(INC_DAEMON) $(call pkg_cflags,$(PKG_PROTO) $(PKG_SCANNER) $(PKG_DAEMON)) -c $< -o $@
 
 $(B)/obj/tests/%.o: tests/%.c
 	@mkdir -p $(dir $@)
-	$(CC) $(CFLAGS) -Itests/support $(call pkg_cflags,$(PKG_PROTO) $(PKG_DAEMON) $(PKG_TEST)) -c $< -o $@
+	$(CC) $(CFLAGS) $(INC_TESTS) $(call pkg_cflags,$(PKG_PROTO) $(PKG_DAEMON) $(PKG_TEST)) -c $< -o $@
 
 $(LIBFACET): $(call obj,$(LIB_SRCS))
 	@mkdir -p $(dir $@)
@@ -89,8 +127,8 @@ $(LIBDAEMON): $(call obj,$(DAEMON_SRCS))
 	@mkdir -p $(dir $@)
 	rm -f $@ && $(AR) rcs $@ $^
 
-$(FACET): $(call obj,daemon/facet.c $(CLI_SRCS)) $(ALL_LIBS)
-	$(CC) $(LDFLAGS) -o $@ $^ $(ALL_LDLIBS)
+$(FACET): $(call obj,$(CLI_SRCS)) $(LIBPROTO) $(LIBFACET)
+	$(CC) $(LDFLAGS) -o $@ $^ $(call pkg_libs,$(PKG_PROTO)) $(LDLIBS_BASE)
 $(FACETD): $(call obj,daemon/facetd.c) $(ALL_LIBS)
 	$(CC) $(LDFLAGS) -o $@ $^ $(ALL_LDLIBS)
 
@@ -122,17 +160,18 @@ all-tests: all $(UNIT_BINS) $(TOOL_BINS)
 bench: all $(BENCH_BINS) $(TOOL_BINS)
 	@sh tests/bench/run.sh $(B)
 
-# fsp-mock, the mocked USB scanner harness of the tests (scanner/mock_*.c,
-# kept out of libfacetscan): a umockdev testbed playing FSP/1 devices.
-MOCK_SRCS := $(sort $(wildcard scanner/mock_*.c))
+# fsp-mock, the mocked USB scanner harness of the tests (tests/mock/, the
+# only code that links GLib and umockdev): a testbed playing FSP/1 devices.
+MOCK_SRCS := $(sort $(wildcard tests/mock/*.c))
 FSP_MOCK  := $(B)/fsp-mock
-$(B)/obj/scanner/mock_%.o: scanner/mock_%.c
+$(B)/obj/tests/mock/%.o: tests/mock/%.c
 	@mkdir -p $(dir $@)
-	$(CC) $(CFLAGS) $(call pkg_cflags,$(PKG_PROTO) $(PKG_MOCK)) -c $< -o $@
+	$(CC) $(CFLAGS) $(INC_SCANNER) $(call pkg_cflags,$(PKG_PROTO) $(PKG_MOCK)) -c $< -o $@
 $(FSP_MOCK): $(call obj,$(MOCK_SRCS)) $(LIBPROTO) $(LIBFACET)
 	$(CC) $(LDFLAGS) -o $@ $^ $(call pkg_libs,$(PKG_MOCK) $(PKG_PROTO)) \
 	    $(LDLIBS_BASE)
 all-tests: $(FSP_MOCK)
+bench: $(FSP_MOCK)
 
 # libFuzzer targets (tests/fuzz/fuzz_*.c), built with clang apart from the
 # unit tests: make fuzz [FUZZ_SECONDS=60] runs each for FUZZ_SECONDS.
@@ -141,7 +180,8 @@ FUZZ_CC      ?= clang
 FUZZ_DIR     := build/fuzz
 FUZZ_CFLAGS   = -std=c11 -D_GNU_SOURCE -g -O1 -fno-omit-frame-pointer \
     -fsanitize=fuzzer-no-link,address,undefined \
-    -fno-sanitize-recover=undefined -Ilib -Iproto $(call pkg_cflags,$(PKG_PROTO))
+    -fno-sanitize-recover=undefined $(INC_PROTO) -Ilib/correct/private \
+    $(call pkg_cflags,$(PKG_PROTO))
 FUZZ_SRCS    := $(sort $(wildcard tests/fuzz/fuzz_*.c))
 FUZZ_BINS    := $(patsubst tests/fuzz/%.c,$(FUZZ_DIR)/%,$(FUZZ_SRCS))
 FUZZ_OBJS    := $(patsubst %.c,$(FUZZ_DIR)/obj/%.o,$(LIB_SRCS) $(PROTO_SRCS))

@@ -28,7 +28,7 @@
 #include <systemd/sd-daemon.h>
 
 #include "cfg.h"
-#include "cli.h"
+#include "version.h"
 #include "http_listen.h"
 #include "http_server.h"
 #include "job_exec.h"

@@ -13,7 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "cli.h"
+#include "version.h"
 #include "log.h"
 #include "model_io.h"
 #include "runner.h"

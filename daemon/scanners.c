@@ -18,7 +18,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "cli.h"
+#include "version.h"
 #include "job_submit.h"
 #include "log.h"
 #include "model_io.h"

@@ -1,6 +1,6 @@
-/* correct_json.h — JSON forms of the facet-merging report (lib/merge.h),
- * the cluster-collapse report (lib/clusters.h) and the automatic
- * correction's report (lib/correct.h), shared by the `facet` CLI and the
+/* correct_json.h — JSON forms of the facet-merging report (lib/correct/merge.h),
+ * the cluster-collapse report (lib/correct/clusters.h) and the automatic
+ * correction's report (lib/correct/correct.h), shared by the `facet` CLI and the
  * daemon's pipeline.
  *
  * Shapes (lengths mm, volumes mm³; a non-finite number is null):
@@ -24,7 +24,7 @@
  *              "volume_change", "hausdorff", "rounds", "merge_passes",
  *              "reoriented_facets", "clusters": {"found", "collapsed",
  *              "rolled_back", "max_displacement"}, "merge": merge (its
- *              group ids numbered per pass, see lib/correct.h; "facet" of
+ *              group ids numbered per pass, see lib/correct/correct.h; "facet" of
  *              a group is its index after that pass), "moved_vertices":
  *              [...], "valid": after.valid, "before": stats, "after":
  *              stats (proto/stats_json.h)}

@@ -1,4 +1,4 @@
-/* fill_json.h — the hole-filling report (lib/fill.h) as JSON, for `facet
+/* fill_json.h — the hole-filling report (lib/mesh/fill.h) as JSON, for `facet
  * fill --report`, the fill_holes operation and the stitch report.
  *
  * Shape (lengths in model units, angles in degrees):
@@ -23,7 +23,7 @@
 
 json_t *proto_fill_report_to_json(const geo_mesh_fill_report *r);
 
-/* The stitching report (lib/stitch.h):
+/* The stitching report (lib/mesh/stitch.h):
  *   {"loops": [l1, l2], "joined": [i1, i2], "loop_vertices": [n1, n2],
  *    "chosen": [c1, c2], "band", "flipped", "swapped", "twist",
  *    "meridians", "rows", "meridian_length", "segment",

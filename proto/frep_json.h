@@ -1,5 +1,5 @@
 /* frep_json.h — frep-object/1 (formats.md): a functionally defined object
- * as JSON, read into a finished geo_frep (lib/frep.h).
+ * as JSON, read into a finished geo_frep (lib/frep/frep.h).
  *
  *   {"format": "frep-object/1",
  *    "bounds": [[x0,y0,z0],[x1,y1,z1]],

@@ -2,7 +2,7 @@
  * format of seed 001's triangulation program. One GEOMOBJECT holds the
  * model as a triangle mesh: *MESH_VERTEX_LIST with every vertex,
  * *MESH_FACE_LIST with every facet split into triangles
- * (lib/polygon_triangulate.h), AB/BC/CA marking which triangle edges are
+ * (lib/core/polygon_triangulate.h), AB/BC/CA marking which triangle edges are
  * edges of the original facet (1) and which are diagonals added by the
  * split (0), and *MESH_NORMALS with each triangle's facet normal (flat
  * shading: the vertex normals of a triangle are its facet's). Numbers are

@@ -1,7 +1,7 @@
 /* model_stl.c — STL, binary and ASCII. STL stores loose triangles, so
  * reading merges vertices whose coordinates are exactly equal (a hash on
  * the coordinates; −0 and +0 are one value) and writing splits every
- * facet into triangles (lib/polygon_triangulate.h).
+ * facet into triangles (lib/core/polygon_triangulate.h).
  *
  * Telling the two forms apart: a file whose size is exactly 84 + 50·n,
  * n being the triangle count at byte 80, is binary even if it starts with

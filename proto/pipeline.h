@@ -15,7 +15,7 @@
  *                 contours over 180°) [0: read off the model], groups?:
  *                 [[facet, facet, ...], ...]}
  *   auto {radius, max_angle_deg, max_deviation, views: as above} — the whole
- *                 post-scan correction of lib/correct.h in one op
+ *                 post-scan correction of lib/correct/correct.h in one op
  *   cut {plane: [a, b, c, d]} — keeps plane(p) ≤ 0; (a,b,c) non-zero,
  *                 normalised to unit length (d scaled with it) unless
  *                 already unit to rounding, so that the canonical JSON
@@ -29,7 +29,7 @@
  *   triangulate {quad_levels 1..11 [9], binary_levels 1..20 [10],
  *                 fill "area"|"edges" ["area"], refine [true],
  *                 fair "uniform"|"length"|"none" ["uniform"],
- *                 sharpen [true]} — an F-rep input (lib/triangulate.h)
+ *                 sharpen [true]} — an F-rep input (lib/frep/triangulate.h)
  *                 to a mesh; only as the first op of a job whose input is
  *                 a frep-object/1
  *   fill_holes {weight "area"|"length" ["area"], refine [true],
@@ -39,7 +39,7 @@
  * defaults above; the auto op merges (automatic groups) and collapses
  * clusters, repeating both until nothing changes (formats.md's inspect →
  * collapse_clusters → merge_facets → inspect, in the order and with the
- * repeats that lib/correct.h explains).
+ * repeats that lib/correct/correct.h explains).
  *
  * Ownership: a proto_pipeline owns its arrays; proto_pipeline_free
  * releases them. Functions are reentrant and thread-safe. */

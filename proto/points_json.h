@@ -39,7 +39,7 @@ int proto_points_read_mem(const void *data, size_t len, size_t max_points,
 int proto_points_read_file(const char *path, size_t max_points,
                            double (**ret_pts)[3], size_t *ret_n, geo_err *err);
 
-/* The name of a classification (lib/inside.h enum geo_loc: −1, 0, 1):
+/* The name of a classification (lib/inspect/inside.h enum geo_loc: −1, 0, 1):
  * "inside", "boundary", "outside"; "invalid" for anything else. */
 const char *proto_loc_name(int loc);
 

@@ -1,5 +1,5 @@
-/* replanar_json.h — JSON forms of the vertex-move results (lib/replanar.h)
- * and the inversion statistics (lib/inversion.h), shared by the `facet`
+/* replanar_json.h — JSON forms of the vertex-move results (lib/replanar/replanar.h)
+ * and the inversion statistics (lib/replanar/inversion.h), shared by the `facet`
  * CLI and the daemon.
  *
  * Shapes (units: mm, mm²; a non-finite number, e.g. S2 of a diverged run,

@@ -1,7 +1,7 @@
-/* stats_json.h — the inspection statistics (lib/stats.h) as a JSON object:
+/* stats_json.h — the inspection statistics (lib/inspect/stats.h) as a JSON object:
  * the body `facet inspect` prints and the daemon serves.
  *
- * Keys (definitions in lib/stats.h): vertices, edges, facets, closed,
+ * Keys (definitions in lib/inspect/stats.h): vertices, edges, facets, closed,
  * boundary_edges, holes, nonmanifold_edges, nonmanifold_vertices,
  * orientation ("outward" | "inward" | "inconsistent"),
  * inconsistent_facets, volume (mm³), area (mm²), max_nonplanarity (mm),

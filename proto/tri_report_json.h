@@ -1,4 +1,4 @@
-/* tri_report_json.h — the triangulation report (lib/triangulate.h) as
+/* tri_report_json.h — the triangulation report (lib/frep/triangulate.h) as
  * JSON, for `facet triangulate --metrics` and the job statistics.
  *
  * Shape (units: model units, degrees, seconds):

@@ -1,4 +1,4 @@
-/* bench_correct.c — the automatic correction (lib/correct.h) and its
+/* bench_correct.c — the automatic correction (lib/correct/correct.h) and its
  * parts. Targets: `facet correct`'s kernel on brilliant.scan-k400.json
  * under 50 ms, on brilliant.scan-k800.json (4,404 vertices) under 100 ms,
  * on a synthetic scan of about 8,000 vertices under 200 ms: the jubilee

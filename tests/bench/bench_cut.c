@@ -1,8 +1,8 @@
-/* bench_cut.c — plane cut times (lib/cut.h). Targets: the K=400 scan cut
+/* bench_cut.c — plane cut times (lib/cut/cut.h). Targets: the K=400 scan cut
  * by 1,000 random planes through its bounding box under 1 ms per cut; a
  * 1,000,000-facet star-shaped model cut once under 0.5 s. Also a
  * 1,000,000-triangle torus cut along its plane, whose section is an
- * annulus split into several facets (lib/region_split.h). Best of several
+ * annulus split into several facets (lib/cut/region_split.h). Best of several
  * runs where it is cheap to repeat. */
 #include <math.h>
 #include <stdio.h>

@@ -1,5 +1,5 @@
-/* bench_fill.c — hole filling and stitching times (lib/hole_fill.h,
- * lib/fill.h, lib/stitch.h). Targets: Liepa's triangulation of a
+/* bench_fill.c — hole filling and stitching times (lib/mesh/hole_fill.h,
+ * lib/mesh/fill.h, lib/mesh/stitch.h). Targets: Liepa's triangulation of a
  * 200-vertex planar and a 200-vertex curved loop under 50 ms each;
  * refinement + fairing of a 1,000-vertex hole under 1 s. Also: the
  * checked fill of a 500-vertex hole in a sphere, and stitching two

@@ -1,7 +1,7 @@
 # mock.sh — bash helpers that drive fsp-mock, the mocked USB scanner
 # harness, from the integration tests (source it). The harness reads
 # commands from the FIFO $MOCK_DIR/ctl and logs replies and events to
-# $MOCK_DIR/mock.log (see scanner/mock_main.c for the commands).
+# $MOCK_DIR/mock.log (see tests/mock/mock_main.c for the commands).
 
 # wait_line FILE REGEX [SECONDS]: waits until a line of FILE matches the
 # extended REGEX; fails after SECONDS (default 10).

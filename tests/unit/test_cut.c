@@ -1,4 +1,4 @@
-/* test_cut.c — the plane cut (lib/cut.h, seed 000 §3): every case of the
+/* test_cut.c — the plane cut (lib/cut/cut.h, seed 000 §3): every case of the
  * paper on hand-built models, exact ordering of crossings, the §3.4
  * variant, refusals, and random planes on non-convex and convex models
  * (validity of every result, volumes of the two halves adding up, convex
@@ -755,7 +755,7 @@ static geo_poly *load(const char *name)
 /* Planes through a vertex as users compute them, d = −n·v in floating
  * point, so that the vertex lies off the plane by a rounding error (and
  * the crossings on its edges would round onto it): the vertex counts as
- * on the plane (lib/poly.h's tolerance), every result is valid, and
+ * on the plane (lib/core/poly.h's tolerance), every result is valid, and
  * only true pinches are refused (-ENOTSUP). */
 static void test_planes_through_vertices_in_floating_point(void **state)
 {

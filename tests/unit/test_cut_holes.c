@@ -1,5 +1,5 @@
 /* test_cut_holes.c — plane cuts of non-convex solids whose section has
- * holes (lib/cut.h with lib/region_split.h): a ring cut along its plane,
+ * holes (lib/cut/cut.h with lib/cut/region_split.h): a ring cut along its plane,
  * a block with two and three holes, an island in a hole, a cavity's cross
  * section, the notch cube's inner corner clipped, a hole touching the
  * outer boundary at a vertex, a torus along its plane; the pinches that

@@ -1,4 +1,4 @@
-/* test_fill.c — checked hole filling on any mesh (lib/fill.h): missing
+/* test_fill.c — checked hole filling on any mesh (lib/mesh/fill.h): missing
  * planar facets come back as one facet each (the brilliant's volume
  * exactly), holes touching at a vertex are separate loops, a large hole
  * of a curved mesh is filled validly at the density around it, and a

@@ -1,5 +1,5 @@
-/* test_merge.c — facet merging (lib/merge.h, seed 000 §2) and the
- * automatic correction (lib/correct.h, lib/clusters.h): the editable
+/* test_merge.c — facet merging (lib/correct/merge.h, seed 000 §2) and the
+ * automatic correction (lib/correct/correct.h, lib/correct/clusters.h): the editable
  * model's undo, the paper's examples of merging 2, 3 and 4 facets on a
  * scan (fig. 3–5), a group bordered by non-convex facets, the statements
  * of §2.7, the local §3.4 cut against geo_cut, refusals that leave the

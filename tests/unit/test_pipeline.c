@@ -42,7 +42,7 @@ static void test_names_and_objects_parse_with_defaults(void **state)
     assert_int_equal(p.ops[0].kind, PROTO_OP_INSPECT);
     assert_int_equal(p.ops[1].kind, PROTO_OP_MERGE_FACETS);
     assert_true(p.ops[1].u.merge.max_angle_deg == 0.5);
-    /* 0: relative to the model's size (lib/merge.h, lib/clusters.h) */
+    /* 0: relative to the model's size (lib/correct/merge.h, lib/correct/clusters.h) */
     assert_true(p.ops[1].u.merge.max_deviation == 0);
     assert_int_equal(p.ops[1].u.merge.ngroups, 0);
     assert_true(p.ops[2].u.collapse.radius == 0);

@@ -1,5 +1,5 @@
 /* test_region_split.c — splitting planar regions with holes into simple
- * pieces (lib/region_split.h): every piece is a simple counter-clockwise
+ * pieces (lib/cut/region_split.h): every piece is a simple counter-clockwise
  * polygon without a repeated point, the pieces tile the region (every
  * input edge used once in its own direction, every other edge twice in
  * opposite directions by two different pieces, areas adding up), and a

@@ -1,6 +1,6 @@
 /* test_runner_ops.c — the kernels wired into the runner's op table: cut
- * (lib/cut.h), move_vertex (lib/replanar.h) and inversion_stats
- * (lib/inversion.h). Each replaces or keeps the model as it should,
+ * (lib/cut/cut.h), move_vertex (lib/replanar/replanar.h) and inversion_stats
+ * (lib/replanar/inversion.h). Each replaces or keeps the model as it should,
  * reports in the stats, names its place on errors, and inversion_stats
  * gives the same report with and without a thread pool. */
 #include "testutil.h"

@@ -1,0 +1,213 @@
+/* cmd_merge.c — `facet merge MODEL (--groups "3,13,248,252;1,12" | --auto)
+ * -o OUT`: merges groups of adjacent, nearly coplanar facets into one
+ * facet each (lib/correct/merge.h), writes the result and prints a summary. */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <jansson.h>
+
+#include "cli.h"
+#include "correct_json.h"
+#include "merge.h"
+#include "model_io.h"
+
+static const char USAGE[] =
+    "usage: facet merge MODEL --groups \"F,F,...;F,F,...\" -o OUT [options]\n"
+    "       facet merge MODEL --auto [--max-angle DEG] [--max-deviation D] -o OUT\n"
+    "\n"
+    "Merges each group of adjacent facets of MODEL into one facet (seed 000\n"
+    "§2: contour, least-squares plane, lifting of the points below it, cut\n"
+    "by it) and writes OUT. Every merge is checked; a group that cannot be\n"
+    "merged, or whose result would not be a valid polyhedron, is left as it\n"
+    "was and named on stderr with the reason.\n"
+    "\n"
+    "  --groups LIST        groups of facet indices of MODEL: commas within a\n"
+    "                       group, semicolons between groups\n"
+    "  --auto               find the groups: adjacent facets within\n"
+    "                       --max-angle of their common plane and with every\n"
+    "                       vertex within --max-deviation of it\n"
+    "  --max-angle DEG      default 60\n"
+    "  --max-deviation D    mm; default 5e-4 of the model's size; for\n"
+    "                       every group also how deep the merged plane\n"
+    "                       may cut into the model\n"
+    "  --plane contour|weighted|area   the plane fit (default area)\n"
+    "  --report FILE        write the full report as JSON\n"
+    "  -o, --output OUT     the result\n"
+    "\n"
+    "Prints one line of JSON: groups, merged, failed, rounds, vertices and\n"
+    "facets before and after, volume_before, volume_after.\n"
+    "exit status: 0 every group merged (or, with --auto, success), 1 bad\n"
+    "input or a group not merged (OUT is still written with the others),\n"
+    "2 usage error\n";
+
+/* "1,2,3;4,5" into CSR arrays; -1 on a syntax error. */
+static int parse_groups(const char *s, uint32_t *ret_n, uint32_t **ret_start,
+                        uint32_t **ret_facets)
+{
+    size_t len = strlen(s), ng = 1;
+    for (size_t i = 0; i < len; i++)
+        ng += s[i] == ';';
+    uint32_t *start = calloc(ng + 1, sizeof *start);
+    uint32_t *facets = malloc((len / 2 + 2) * sizeof *facets);
+    if (!start || !facets) {
+        free(start), free(facets);
+        return -1;
+    }
+    uint32_t g = 0, k = 0;
+    const char *p = s;
+    for (;;) {
+        char *end;
+        errno = 0;
+        if (*p < '0' || *p > '9')
+            goto bad;
+        unsigned long v = strtoul(p, &end, 10);
+        if (errno || v >= UINT32_MAX)
+            goto bad;
+        facets[k++] = (uint32_t)v;
+        p = end;
+        if (*p == ',') {
+            p++;
+        } else if (*p == ';' || *p == '\0') {
+            if (k - start[g] < 2)
+                goto bad;
+            start[++g] = k;
+            if (*p == '\0')
+                break;
+            p++;
+        } else {
+            goto bad;
+        }
+    }
+    *ret_n = g;
+    *ret_start = start;
+    *ret_facets = facets;
+    return 0;
+bad:
+    free(start), free(facets);
+    return -1;
+}
+
+static int parse_number(const char *s, double lo, double hi, double *ret)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (end == s || *end || errno || !isfinite(v) || v <= lo || v > hi)
+        return -1;
+    *ret = v;
+    return 0;
+}
+
+int cmd_merge(int argc, char **argv)
+{
+    if (cli_wants_help(argc, argv)) {
+        fputs(USAGE, stdout);
+        return CLI_OK;
+    }
+    const char *in = NULL, *outpath = NULL, *groups = NULL, *report = NULL;
+    bool automatic = false;
+    geo_merge_opts o;
+    geo_merge_opts_default(&o);
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (strcmp(a, "--auto") == 0) {
+            automatic = true;
+        } else if (strcmp(a, "--groups") == 0 || strcmp(a, "-o") == 0 ||
+                   strcmp(a, "--output") == 0 || strcmp(a, "--max-angle") == 0 ||
+                   strcmp(a, "--max-deviation") == 0 ||
+                   strcmp(a, "--report") == 0 || strcmp(a, "--plane") == 0) {
+            if (i + 1 == argc)
+                return cli_usage_error("merge", "%s needs a value", a);
+            const char *v = argv[++i];
+            if (strcmp(a, "--groups") == 0)
+                groups = v;
+            else if (strcmp(a, "--report") == 0)
+                report = v;
+            else if (strcmp(a, "--max-angle") == 0) {
+                if (parse_number(v, 0, 89.999, &o.max_angle_deg) < 0)
+                    return cli_usage_error("merge", "--max-angle: expected "
+                                           "degrees in (0, 90), got '%s'", v);
+            } else if (strcmp(a, "--max-deviation") == 0) {
+                if (parse_number(v, 0, 1e9, &o.max_deviation) < 0)
+                    return cli_usage_error("merge", "--max-deviation: expected "
+                                           "a positive length in mm, got '%s'", v);
+            } else if (strcmp(a, "--plane") == 0) {
+                if (strcmp(v, "contour") == 0)
+                    o.plane = GEO_MERGE_PLANE_CONTOUR;
+                else if (strcmp(v, "weighted") == 0)
+                    o.plane = GEO_MERGE_PLANE_CONTOUR_WEIGHTED;
+                else if (strcmp(v, "area") == 0)
+                    o.plane = GEO_MERGE_PLANE_AREA;
+                else
+                    return cli_usage_error("merge", "--plane: expected contour, "
+                                           "weighted or area, got '%s'", v);
+            } else {
+                outpath = v;
+            }
+        } else if (a[0] == '-' && a[1] != '\0') {
+            return cli_usage_error("merge", "unknown option '%s'", a);
+        } else if (!in) {
+            in = a;
+        } else {
+            return cli_usage_error("merge", "unexpected argument '%s'", a);
+        }
+    }
+    if (!in)
+        return cli_usage_error("merge", "needs a model file");
+    if (!!groups == automatic)
+        return cli_usage_error("merge", "needs exactly one of --groups and --auto");
+    if (!outpath)
+        return cli_usage_error("merge", "needs -o OUT");
+    if (proto_format_from_path(outpath) == PROTO_FMT_UNKNOWN)
+        return cli_usage_error("merge", "%s: cannot tell the format from the "
+                               "name", outpath);
+    uint32_t ng = 0, *gstart = NULL, *gfacets = NULL;
+    if (groups && parse_groups(groups, &ng, &gstart, &gfacets) < 0)
+        return cli_usage_error("merge", "--groups: expected facet indices "
+                               "like \"3,13,248;1,12\" (two or more per "
+                               "group), got '%s'", groups);
+
+    geo_err err = {{0}};
+    geo_poly *p = proto_model_read_file(in, PROTO_FMT_UNKNOWN, NULL, &err);
+    if (!p) {
+        free(gstart), free(gfacets);
+        return cli_input_error("merge", "%s", err.msg);
+    }
+    geo_merge_report rep = {0};
+    int r = automatic ? geo_merge_auto(p, &o, NULL, &rep, &err)
+                      : geo_merge_groups(p, ng, gstart, gfacets, &o, NULL,
+                                         &rep, &err);
+    free(gstart), free(gfacets);
+    if (r < 0) {
+        geo_poly_free(p);
+        return cli_input_error("merge", "%s: %s", in, err.msg);
+    }
+    int rc = CLI_OK;
+    if (proto_model_write_file(p, outpath, PROTO_FMT_UNKNOWN, &err) < 0)
+        rc = cli_input_error("merge", "%s", err.msg);
+    if (rc == CLI_OK && report) {
+        json_t *j = proto_merge_report_to_json(&rep);
+        if (!j || json_dump_file(j, report, JSON_INDENT(1)) < 0)
+            rc = cli_input_error("merge", "%s: cannot write the report", report);
+        json_decref(j);
+    }
+    if (!automatic)
+        for (uint32_t g = 0; g < rep.ngroups; g++)
+            if (rep.groups[g].status != 0) {
+                fprintf(stderr, "facet merge: group %u: %s\n", g,
+                        rep.groups[g].reason);
+                rc = CLI_INPUT;
+            }
+    printf("{\"groups\":%u,\"merged\":%u,\"failed\":%u,\"rounds\":%u,"
+           "\"vertices_before\":%u,\"facets_before\":%u,\"vertices_after\":%u,"
+           "\"facets_after\":%u,\"volume_before\":%.17g,\"volume_after\":%.17g}\n",
+           rep.ngroups, rep.merged, rep.failed, rep.rounds, rep.vertices_before,
+           rep.facets_before, rep.vertices_after, rep.facets_after,
+           rep.volume_before, rep.volume_after);
+    geo_merge_report_clear(&rep);
+    geo_poly_free(p);
+    return rc;
+}

@@ -1,0 +1,113 @@
+/* fill.h — closing the holes of any polygon mesh, each fill checked: the
+ * driver around lib/mesh/hole_fill.h for meshes that are not being
+ * triangulated from a surface (scans, stitched meshes, models with
+ * missing facets).
+ *
+ * 1. Loops: the boundary loops of lib/core/topo.h (split at non-manifold
+ *    vertices, so two holes touching at a vertex are two holes). Each is
+ *    handled on its own, in loop order.
+ * 2. A planar hole — a missing facet — gets ONE facet: when every loop
+ *    vertex lies within geo_poly_eps(p) of the loop's least-squares plane
+ *    and the loop, as a polygon, is simple and not degenerate (decided
+ *    exactly by geo_facet_self_intersects / geo_facet_shape_of in
+ *    lib/inspect/selfint.h), the new facet is the loop reversed, with its
+ *    least-squares plane (outward like the facets around it). Any other
+ *    loop is triangulated.
+ * 3. Otherwise the loop is filled by lib/hole_fill (minimum-weight
+ *    triangulation, refinement to the surrounding density, fairing with
+ *    the loop and the mesh around it fixed) on a local copy: the facets
+ *    touching the loop's vertices (all the hole filler reads: the loop
+ *    vertices' edges give the chords it must not repeat and the desired
+ *    lengths, their neighbours the fixed ring of the U² operator), so the
+ *    cost of a hole does not grow with the mesh.
+ * 4. Every patch is checked before it is kept: none of its facets may
+ *    intersect (lib/inspect/selfint.h, exact) a facet of the mesh, of a patch
+ *    kept earlier, or of itself, other than along shared edges and
+ *    vertices. Candidates come from a BVH of the mesh's facets and the
+ *    kept patches' boxes, so the check is local. A rejected patch is
+ *    taken back and, when opts.fallback, the hole is tried again with
+ *    Liepa's dihedral-angle weight, then without fairing, then without
+ *    refinement; a hole that no attempt fills validly stays open with
+ *    status GEO_HOLE_INTERSECTS. No hole is ever reported filled with
+ *    nothing added.
+ *
+ * Output: vertices and facets of p keep their indices; new vertices and
+ * facets are appended, hole after hole. Ownership: p is modified in
+ * place (left unchanged on error); rep->holes is malloc'd (release with
+ * geo_mesh_fill_report_clear). Errors: -EINVAL (invalid indices or
+ * options), -ENOMEM, -ECANCELED. Not thread-safe for one p. */
+#ifndef GEO_FILL_H
+#define GEO_FILL_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "ctx.h"
+#include "hole_fill.h"
+#include "poly.h"
+
+/* The attempts, in the order they are tried. */
+enum geo_fill_attempt {
+    GEO_ATTEMPT_PLANAR = 0,   /* one planar facet */
+    GEO_ATTEMPT_AS_ASKED = 1, /* the caller's weight, refinement, fairing */
+    GEO_ATTEMPT_ANGLE = 2,    /* Liepa's dihedral-angle weight */
+    GEO_ATTEMPT_NO_FAIR = 3,  /* angle weight, refined, not faired */
+    GEO_ATTEMPT_PLAIN = 4,    /* angle weight, the bare triangulation */
+};
+
+/* A stable name ("planar", "as_asked", "angle", "no_fair", "plain"). */
+const char *geo_fill_attempt_name(enum geo_fill_attempt a);
+
+typedef struct geo_mesh_fill_opts {
+    geo_fill_opts fill; /* weight, refine, fair, ... (hole_fill.h) with
+                           max_dp_vertices [600]: a loop of up to 600
+                           vertices gets the exact O(n³) search (36·10⁶
+                           triangles, ~16 MB of tables), a longer one is
+                           cut by bridges first; select_loop is ignored */
+    bool planar;        /* [true] planar simple loops get one facet */
+    bool check;         /* [true] reject patches that intersect */
+    bool fallback;      /* [true] retry rejected patches (see above) */
+} geo_mesh_fill_opts;
+
+/* Fills the defaults above (fill: geo_fill_opts_default). */
+void geo_mesh_fill_opts_default(geo_mesh_fill_opts *o);
+
+typedef struct geo_mesh_hole {
+    uint32_t nverts;       /* loop vertices */
+    uint32_t first_vertex; /* one loop vertex (index in p) */
+    uint8_t status;        /* enum geo_hole_status: GEO_HOLE_FILLED,
+                              GEO_HOLE_FILLED_PLANAR, or why it is open */
+    uint8_t attempt;       /* enum geo_fill_attempt that filled it, or the
+                              last one tried */
+    uint32_t facets_added, verts_added;
+    double planarity;      /* largest distance of a loop vertex from the
+                              loop's least-squares plane (mm; INFINITY
+                              when the loop has no plane) */
+    double max_dihedral_deg; /* largest angle between the normals of a
+                                patch facet and the mesh facet across a
+                                loop edge (0 = the surface goes on flat) */
+    double edge_ratio;     /* mean edge length inside the patch over the
+                              mean length of the mesh edges at the loop's
+                              vertices (0 for a single facet) */
+} geo_mesh_hole;
+
+typedef struct geo_mesh_fill_report {
+    uint32_t nloops;       /* boundary loops found */
+    uint32_t nfilled;      /* of which filled (planar ones included) */
+    uint32_t nplanar;      /* filled with one planar facet */
+    uint32_t nopen;        /* left open, each with its status */
+    uint32_t nrejected;    /* patches taken back by the check */
+    uint32_t verts_added, facets_added;
+    double max_dihedral_deg; /* over every filled hole */
+    geo_mesh_hole *holes;  /* nloops entries, in loop order */
+} geo_mesh_fill_report;
+
+/* Fills the holes of p as described above. rep may be NULL; opts NULL
+ * means defaults. 0 or a negative errno (see the file comment). */
+int geo_fill_mesh(geo_poly *p, const geo_mesh_fill_opts *opts,
+                  const geo_ctx *ctx, geo_mesh_fill_report *rep, geo_err *err);
+
+/* Frees rep->holes and zeroes *rep; accepts NULL. */
+void geo_mesh_fill_report_clear(geo_mesh_fill_report *rep);
+
+#endif
