@@ -157,8 +157,22 @@ test: deps
 .PHONY: all-tests
 all-tests: all $(UNIT_BINS) $(TOOL_BINS)
 
-bench: all $(BENCH_BINS) $(TOOL_BINS)
+bench: all $(BENCH_BINS) $(TOOL_BINS) $(CGAL_BINS)
 	@sh tests/bench/run.sh $(B)
+
+# Side-by-side benchmarks against CGAL (tests/bench/cgal_*.cpp): built only
+# where libcgal-dev is installed (make bench-deps); CGAL is never linked
+# into facet or facetd.
+CGAL_SRCS := $(sort $(wildcard tests/bench/cgal_*.cpp))
+CGAL_BINS := $(if $(wildcard /usr/include/CGAL/version.h),\
+    $(patsubst tests/bench/%.cpp,$(B)/bench/%,$(CGAL_SRCS)))
+CXX ?= g++
+$(B)/bench/cgal_%: tests/bench/cgal_%.cpp
+	@mkdir -p $(dir $@)
+	$(CXX) -std=c++17 -O2 -DNDEBUG -o $@ $< -lgmp -lmpfr $(LDLIBS_BASE)
+.PHONY: bench-deps
+bench-deps: deps
+	@sh tests/tools/install-deps.sh libcgal-dev g++
 
 # fsp-mock, the mocked USB scanner harness of the tests (tests/mock/, the
 # only code that links GLib and umockdev): a testbed playing FSP/1 devices.
