@@ -157,7 +157,7 @@ test: deps
 .PHONY: all-tests
 all-tests: all $(UNIT_BINS) $(TOOL_BINS)
 
-bench: all $(BENCH_BINS) $(TOOL_BINS) $(CGAL_BINS)
+bench: all $(BENCH_BINS) $(TOOL_BINS)
 	@sh tests/bench/run.sh $(B)
 
 # Side-by-side benchmarks against CGAL (tests/bench/cgal_*.cpp): built only
@@ -170,6 +170,7 @@ CXX ?= g++
 $(B)/bench/cgal_%: tests/bench/cgal_%.cpp
 	@mkdir -p $(dir $@)
 	$(CXX) -std=c++17 -O2 -DNDEBUG -o $@ $< -lgmp -lmpfr $(LDLIBS_BASE)
+bench: $(CGAL_BINS)
 .PHONY: bench-deps
 bench-deps: deps
 	@sh tests/tools/install-deps.sh libcgal-dev g++
