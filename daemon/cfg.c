@@ -98,8 +98,8 @@ static const key keys[] = {
      SCAN_DEFAULT_DEVICES, "VID:PID:bulk|hid [PIPELINE]: a scanner model "
      "(repeatable; the first replaces the default list)"},
     {"Scanners", "Pipeline", "scanner-pipeline", K_PIPELINE,
-     F(scanner_pipeline), 0, 0, true, "auto",
-     "pipeline of scanner jobs: auto, op names (inspect,triangulate), "
+     F(scanner_pipeline), 0, 0, true, "correct",
+     "pipeline of scanner jobs: correct, op names (inspect,triangulate), "
      "inline JSON or a /path/to/pipeline.json"},
 };
 enum { NKEYS = sizeof keys / sizeof keys[0] };
@@ -656,8 +656,8 @@ json_t *cfg_pipeline_json(const char *spec, geo_err *err)
                         je.column, je.text);
             return NULL;
         }
-    } else if (strcmp(spec, "auto") == 0) {
-        pj = json_string("auto");
+    } else if (strcmp(spec, "correct") == 0 || strcmp(spec, "auto") == 0) {
+        pj = json_string(spec);
     } else {
         pj = json_array();
         char buf[CFG_PIPELINE_LEN];
