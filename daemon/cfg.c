@@ -154,13 +154,12 @@ static const key keys[] = {
      "empty Scanner= restores it. Add a udev rule for every model "
      "listed (70-facetd-scanners.rules)."},
     {"Scanners", "Pipeline", "scanner-pipeline", K_PIPELINE,
-     F(scanner_pipeline), 0, 0, true, "auto",
-     "pipeline of scanner jobs: auto, op names (inspect,triangulate), "
+     F(scanner_pipeline), 0, 0, true, "correct",
+     "pipeline of scanner jobs: correct, op names (inspect,triangulate), "
      "inline JSON or a /path/to/pipeline.json",
-     "auto is the post-scan correction; a JSON file is read again on "
-     "SIGHUP, as `facet run` takes it. facetd does not start when a "
-     "configured pipeline uses an operation the build lacks; when the "
-     "default (auto) is missing, only the intake stays off."},
+     "correct is the post-scan correction; a JSON file is read again "
+     "on SIGHUP, as `facet run` takes it. facetd does not start when a "
+     "configured pipeline names an unknown operation."},
 };
 enum { NKEYS = sizeof keys / sizeof keys[0] };
 
@@ -728,8 +727,8 @@ json_t *cfg_pipeline_json(const char *spec, geo_err *err)
                         je.column, je.text);
             return NULL;
         }
-    } else if (strcmp(spec, "auto") == 0) {
-        pj = json_string("auto");
+    } else if (strcmp(spec, "correct") == 0 || strcmp(spec, "auto") == 0) {
+        pj = json_string(spec);
     } else {
         pj = json_array();
         char buf[CFG_PIPELINE_LEN];
