@@ -123,6 +123,23 @@ static const key keys[] = {
      "accept and keep jobs but start none (maintenance)",
      "Jobs (and scans) are still accepted and stored durably; no "
      "worker starts one until Paused=no is reloaded."},
+    {"Jobs", "Lease", "job-lease", K_DURATION, F(job_lease_ms), SEC,
+     3600 * SEC, false, "30s", "with a shared store: how long a node's "
+     "claim on a job lasts unless renewed (a dead node's jobs run again "
+     "after it)",
+     "A node renews the claims of the jobs it runs; a worker whose lease "
+     "was lost stops its run. Without Store URL= it has no effect."},
+    {"Store", "URL", "store-url", K_STR, F(store_url), 0, 0, false, "",
+     "job store shared by a cluster: postgresql://HOST[:PORT]/DB (no "
+     "password in it); empty: SQLite in StateDirectory",
+     "Every node of a cluster names the same database; cluster events "
+     "wake the workers, waiting clients and scanner RESULTs of every "
+     "node. An unreachable store answers 503 with Retry-After."},
+    {"Store", "PasswordFile", "store-password-file", K_STR,
+     F(store_password_file), 0, 0, false, "", "libpq password file for "
+     "URL (default: PGPASSFILE or ~/.pgpass)",
+     "A URL= that carries a password is refused: it goes here, in "
+     "PGPASSFILE or in a service file."},
     {"Store", "StateDirectory", "state-dir", K_STR, F(state_dir), 0, 0, false,
      "/var/lib/facetd", "directory of the job store",
      "The SQLite job store lives here (facetd.db, WAL mode); a lock "
@@ -136,6 +153,10 @@ static const key keys[] = {
      F(retention_bytes), MiB, 1ull << 50, true, "1G",
      "finished jobs beyond this total size are deleted, oldest first",
      "Counts the inputs and results of all jobs."},
+    {"Cluster", "NodeName", "node-name", K_STR, F(node_name), 0, 0, false,
+     "", "this node's name in the cluster (default: HOST:PORT)",
+     "Recorded with each claim in the shared store; the default is the "
+     "host name and the listening port."},
     {"Log", "LogLevel", "log-level", K_LEVEL, F(log_level), 0, 0, true,
      "info", "log level: err, warning, notice, info or debug",
      "Logs go to standard error, one line per event with its level and "
@@ -170,6 +191,8 @@ static const struct { const char *name, *doc; } sections[] = {
                "limits."},
     {"Jobs", "The queue and the workers that run the pipelines."},
     {"Store", "The durable job store, and how long finished jobs are kept."},
+    {"Cluster", "Several facetd nodes sharing one job store ([Store] "
+                "URL=)."},
     {"Log", "What facetd logs."},
     {"Scanners", "USB scanners speaking FSP/1: which devices, and the "
                  "pipeline of their jobs."},
