@@ -1117,6 +1117,29 @@ typedef struct visit_state {
     uint32_t since_check;
 } visit_state;
 
+/* Triangles x and y share one vertex, and y's two others c, d lie
+ * strictly on either side of x's plane: true when segment cd misses
+ * closed triangle x (the line cd passes on one side of all three of its
+ * edges, exact signs). */
+static bool free_edge_misses(const geo_poly *p, const uint32_t *x,
+                             const uint32_t *y)
+{
+    int k = 0;
+    while (y[k] == x[0] || y[k] == x[1] || y[k] == x[2])
+        k++;
+    const double *c = V(p, y[k]), *d = V(p, y[(k + 1) % 3]);
+    if (y[(k + 1) % 3] == x[0] || y[(k + 1) % 3] == x[1] ||
+        y[(k + 1) % 3] == x[2])
+        d = V(p, y[(k + 2) % 3]);
+    bool pos = false, neg = false;
+    for (int i = 0; i < 3; i++) {
+        int o = geo_orient3d(c, d, V(p, x[i]), V(p, x[(i + 1) % 3]));
+        pos |= o > 0;
+        neg |= o < 0;
+    }
+    return pos && neg;
+}
+
 /* Two triangles x, y (distinct, non-degenerate): false when one or two
  * exact signs show them apart, true when pair_test must decide. A
  * triangle is exactly planar and its reference plane is its own, so:
@@ -1124,9 +1147,11 @@ typedef struct visit_state {
  * uw, which each triangle meets only in uw itself — the shared edge;
  * sharing one vertex v, or none, with the other's remaining vertices
  * strictly on one side of a triangle's plane, they can meet only at v —
- * a shared vertex — or not at all. These are pair_test's own answers,
- * reached without its general bookkeeping; every other case (coplanar,
- * straddling, a triangle listed twice) goes to it. */
+ * a shared vertex — or not at all; sharing v and each across the other's
+ * plane, by where their free edges cross (free_edge_misses). These are
+ * pair_test's own answers, reached without its general bookkeeping;
+ * every other case (coplanar, touching a plane, straddling without a
+ * shared vertex, a triangle listed twice) goes to it. */
 static bool triangles_need_test(const geo_poly *p, const uint32_t *x,
                                 const uint32_t *y)
 {
@@ -1148,6 +1173,7 @@ static bool triangles_need_test(const geo_poly *p, const uint32_t *x,
     if (nshared == 3)
         return true;
     geo_orient3d_plane pl;
+    bool straddle = true;
     for (int pass = 0; pass < 2; pass++) {
         const uint32_t *f = pass ? y : x, *g = pass ? x : y;
         geo_orient3d_plane_init(&pl, V(p, f[0]), V(p, f[1]), V(p, f[2]));
@@ -1162,8 +1188,17 @@ static bool triangles_need_test(const geo_poly *p, const uint32_t *x,
         }
         if (!zero && !(pos && neg))
             return false; /* strictly on one side */
+        straddle &= !zero;
     }
-    return true;
+    if (nshared == 0 || !straddle)
+        return true;
+    /* one shared vertex v, each triangle's free edge strictly across the
+     * other's plane: each meets the planes' common line (through v) in a
+     * segment from v, and they overlap beyond v exactly when the shorter
+     * one's far end — where a free edge crosses the other plane — lies
+     * in the other triangle; a contact anywhere on it counts (v is not on
+     * a free edge: the triangles are not degenerate) */
+    return !(free_edge_misses(p, x, y) && free_edge_misses(p, y, x));
 }
 
 static bool visit_pair(void *user, uint32_t a, uint32_t b)

@@ -6,8 +6,9 @@
 // Reads the mesh into a Surface_mesh (Epick, as CGAL's own examples do),
 // then times PMP::does_self_intersect alone — the mesh already built, the
 // reading not counted — RUNS times (default 1) and prints
-// "cgal_selfint_ms: BEST self_intersect: 0|1 triangles: N". Exit 0, 1 when
-// the file cannot be read.
+// "cgal_selfint_ms: BEST cpu_ms: CPU self_intersect: 0|1 triangles: N"
+// (BEST the best wall time, CPU the processor time of that run). Exit 0,
+// 1 when the file cannot be read.
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/IO/polygon_mesh_io.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
@@ -16,6 +17,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 
 typedef CGAL::Exact_predicates_inexact_constructions_kernel K;
 typedef CGAL::Surface_mesh<K::Point_3> Mesh;
@@ -35,17 +37,22 @@ int main(int argc, char **argv)
         std::fprintf(stderr, "cgal_selfint: %s: cannot read a mesh\n", argv[1]);
         return 1;
     }
-    double best = 1e30;
+    double best = 1e30, best_cpu = 0;
     bool si = false;
     for (int r = 0; r < runs; r++) {
+        std::clock_t c0 = std::clock();
         auto t0 = std::chrono::steady_clock::now();
         si = PMP::does_self_intersect<CGAL::Sequential_tag>(m);
         auto t1 = std::chrono::steady_clock::now();
+        std::clock_t c1 = std::clock();
         double ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
-        if (ms < best)
+        if (ms < best) {
             best = ms;
+            best_cpu = 1e3 * (double)(c1 - c0) / CLOCKS_PER_SEC;
+        }
     }
-    std::printf("cgal_selfint_ms: %.3f self_intersect: %d triangles: %zu\n",
-                best, si ? 1 : 0, (size_t)m.number_of_faces());
+    std::printf("cgal_selfint_ms: %.3f cpu_ms: %.3f self_intersect: %d "
+                "triangles: %zu\n",
+                best, best_cpu, si ? 1 : 0, (size_t)m.number_of_faces());
     return 0;
 }

@@ -4,7 +4,8 @@
  * surface reconstruction: no planes in the file, uneven triangles, random
  * edge directions, sub-millimetre noise on every vertex.
  *
- *   gen_scanmesh --triangles N [--seed S] [--radius R] OUT.json|OUT.obj...
+ *   gen_scanmesh --triangles N [--seed S] [--radius R] [--sphere]
+ *                OUT.json|OUT.obj...
  *
  * Construction: a cube-sphere lattice (n×n cells per cube face, 12·n²
  * triangles, n chosen so that the count is the nearest to N) whose points
@@ -15,7 +16,9 @@
  * spherical triangulation cannot fold it, so the mesh is closed, outward
  * and free of self-intersections, like a cleaned scan. The .json file is
  * facet-model/1 without planes (the reader fits them); any other
- * extension is written by proto_model_write_file. Prints
+ * extension is written by proto_model_write_file. --sphere writes the
+ * plain cube-sphere of tests/support/gen_sphere.h instead (the 1M-triangle
+ * benchmark sphere: --triangles 1000000 gives 1,002,252). Prints
  * "triangles=T vertices=V" and exits 0; 1 on failure, 2 on bad usage. */
 #include <errno.h>
 #include <math.h>
@@ -23,13 +26,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gen_sphere.h"
 #include "model_io.h"
 #include "vec.h"
 
 static int usage(const char *msg)
 {
     fprintf(stderr, "gen_scanmesh: %s\nusage: gen_scanmesh --triangles N "
-            "[--seed S] [--radius R] OUT.json|OUT.obj...\n", msg);
+            "[--seed S] [--radius R] [--sphere] OUT.json|OUT.obj...\n", msg);
     return 2;
 }
 
@@ -205,10 +209,13 @@ int main(int argc, char **argv)
     unsigned long tris = 0, seed = 1;
     double radius = 50.0;
     int first_out = 0;
+    bool sphere = false;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         char *end;
-        if (strcmp(a, "--triangles") == 0 || strcmp(a, "--seed") == 0 ||
+        if (strcmp(a, "--sphere") == 0) {
+            sphere = true;
+        } else if (strcmp(a, "--triangles") == 0 || strcmp(a, "--seed") == 0 ||
             strcmp(a, "--radius") == 0) {
             if (i + 1 == argc)
                 return usage("an option needs a value");
@@ -238,7 +245,7 @@ int main(int argc, char **argv)
         n = 1;
     blob b;
     blob_init(&b, seed, radius);
-    geo_poly *p = scanmesh(n, &b);
+    geo_poly *p = sphere ? gs_sphere(n, radius) : scanmesh(n, &b);
     if (!p) {
         fprintf(stderr, "gen_scanmesh: out of memory\n");
         return 1;
