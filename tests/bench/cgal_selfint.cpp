@@ -4,7 +4,8 @@
 //   cgal_selfint MODEL.obj|.off|.ply [RUNS]
 //
 // Reads the mesh into a Surface_mesh (Epick, as CGAL's own examples do),
-// then times PMP::does_self_intersect alone — the mesh already built, the
+// triangulates polygonal faces (the test requires a triangle mesh; a gem
+// scan's facets are polygons), then times PMP::does_self_intersect alone — the mesh already built, the
 // reading not counted — RUNS times (default 1) and prints
 // "cgal_selfint_ms: BEST cpu_ms: CPU self_intersect: 0|1 triangles: N"
 // (BEST the best wall time, CPU the processor time of that run). Exit 0,
@@ -12,6 +13,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/IO/polygon_mesh_io.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
 #include <CGAL/Surface_mesh.h>
 
 #include <chrono>
@@ -37,6 +39,8 @@ int main(int argc, char **argv)
         std::fprintf(stderr, "cgal_selfint: %s: cannot read a mesh\n", argv[1]);
         return 1;
     }
+    if (!CGAL::is_triangle_mesh(m))
+        PMP::triangulate_faces(m);
     double best = 1e30, best_cpu = 0;
     bool si = false;
     for (int r = 0; r < runs; r++) {
