@@ -19,7 +19,7 @@ static const char USAGE[] =
     "usage: facet correct MODEL -o OUT [--report FILE] [options]\n"
     "\n"
     "Corrects a scanned model: merges the groups of nearly coplanar facets\n"
-    "a shadow-profile scanner makes of each true facet (seed 000 §2) and\n"
+    "a shadow-profile scanner makes of each true facet (Palachev 2012, §2) and\n"
     "collapses the clusters of vertices joined by very short edges (§4.1),\n"
     "repeating both until nothing changes; every step is checked and\n"
     "nothing invalid is written. Same as the daemon's \"auto\" pipeline.\n"
@@ -125,7 +125,7 @@ int cmd_correct(int argc, char **argv)
     if (!p)
         return cli_input_error("correct", "%s", err.msg);
     geo_correct_report rep;
-    int r = geo_correct_auto(p, &o, NULL, &rep, &err);
+    int r = geo_correct(p, &o, NULL, &rep, &err);
     if (r < 0) {
         geo_poly_free(p);
         return cli_input_error("correct", "%s: %s", in, err.msg);
