@@ -180,10 +180,12 @@ static bool turned_back(const double n1[3], const double n2[3])
 
 /* Whether triangle (w_i, w_m, w_k) of an n-gon, with edge cross product
  * nt (not degenerate), obeys dp's rules at strictness strict. */
-static bool admissible(const filler *F, double (*en)[3], int strict,
-                       uint32_t i, uint32_t m, uint32_t k, uint32_t n,
-                       const double nt[3])
+static bool admissible(const filler *F, const uint32_t *w, double (*en)[3],
+                       int strict, uint32_t i, uint32_t m, uint32_t k,
+                       uint32_t n, const double nt[3])
 {
+    if (F->o.admit && !F->o.admit(F->o.admit_user, w[i], w[m], w[k]))
+        return false;
     if (strict >= 2 && !(geo_vdot(nt, F->up) > 0))
         return false;
     if (strict < 1 || !en)
@@ -216,7 +218,8 @@ static bool edges_coverable(const filler *F, const uint32_t *w, uint32_t n,
                         t = c[b], c[b] = c[b + 1], c[b + 1] = t;
             double nt[3];
             if (isfinite(tri_weight(F, w[c[0]], w[c[1]], w[c[2]], nt)))
-                found = admissible(F, en, strict, c[0], c[1], c[2], n, nt);
+                found = admissible(F, w, en, strict, c[0], c[1], c[2], n,
+                                   nt);
         }
         if (!found)
             return false;
@@ -284,7 +287,8 @@ static int dp(filler *F, const uint32_t *w, uint32_t n,
                     continue;
                 double nt[3];
                 double t = tri_weight(F, w[i], w[m], w[k], nt);
-                if (!isfinite(t) || !admissible(F, en, strict, i, m, k, n, nt))
+                if (!isfinite(t) ||
+                    !admissible(F, w, en, strict, i, m, k, n, nt))
                     continue;
                 geo_vnormalize(nt);
                 a = fmax(a, normal_angle(nt, TN[im]));
@@ -303,7 +307,7 @@ static int dp(filler *F, const uint32_t *w, uint32_t n,
                     continue;
                 double nt[3];
                 double t = ws + tri_weight(F, w[i], w[m], w[k], nt);
-                if (t < best && admissible(F, en, strict, i, m, k, n, nt)) {
+                if (t < best && admissible(F, w, en, strict, i, m, k, n, nt)) {
                     best = t;
                     bm = m;
                 }

@@ -192,6 +192,13 @@ typedef struct geo_fill_opts {
      * loop it rejects is neither filled nor reported. NULL fills all. */
     bool (*select_loop)(void *user, const uint32_t *cycle, uint32_t n);
     void *select_user;
+    /* Whether the minimum-weight triangulation may use triangle (a, b, c)
+     * (vertex indices of p); a rejected triangle is treated like a
+     * degenerate one. It must answer the same for the same triangle
+     * during one call. lib/mesh/fill.c steers the search around the
+     * triangles that crossed the mesh. NULL admits all. */
+    bool (*admit)(void *user, uint32_t a, uint32_t b, uint32_t c);
+    void *admit_user;
 } geo_fill_opts;
 
 /* Fills the defaults above. */
