@@ -39,6 +39,10 @@ const char *geo_fill_attempt_name(enum geo_fill_attempt a)
         return "avoid_refined";
     case GEO_ATTEMPT_AVOID:
         return "avoid";
+    case GEO_ATTEMPT_LIFT:
+        return "lift";
+    case GEO_ATTEMPT_LOWER:
+        return "lower";
     }
     return "unknown";
 }
@@ -738,6 +742,142 @@ done:
     return rc;
 }
 
+/* Unit Newell normal of the patch cycle (zero when it has none). */
+static void cycle_normal(const geo_poly *out, const loop_ref *L, double n[3])
+{
+    n[0] = n[1] = n[2] = 0;
+    for (uint32_t k = 0; k < L->n; k++) {
+        const double *a = out->verts[L->w[k]];
+        const double *b = out->verts[L->w[(k + 1) % L->n]];
+        n[0] += (a[1] - b[1]) * (a[2] + b[2]);
+        n[1] += (a[2] - b[2]) * (a[0] + b[0]);
+        n[2] += (a[0] - b[0]) * (a[1] + b[1]);
+    }
+    if (geo_vnormalize(n) == 0)
+        n[0] = n[1] = n[2] = 0;
+}
+
+/* Appends a fan from the loop's centroid: the patch the lift bends when
+ * refinement added no vertex to bend. */
+static int append_fan(geo_poly *out, const loop_ref *L)
+{
+    double c[3] = {0, 0, 0};
+    for (uint32_t k = 0; k < L->n; k++)
+        for (int d = 0; d < 3; d++)
+            c[d] += out->verts[L->w[k]][d] / L->n;
+    int64_t v = geo_poly_add_vertex(out, c);
+    if (v < 0)
+        return (int)v;
+    for (uint32_t k = 0; k < L->n; k++) {
+        uint32_t t[3] = {L->w[k], L->w[(k + 1) % L->n], (uint32_t)v};
+        int64_t f = geo_poly_add_facet(out, t, 3);
+        if (f < 0)
+            return (int)f;
+    }
+    return 0;
+}
+
+/* The patch lifted or lowered along the loop's normal: the vertices the
+ * patch added move by amp × (mean patch edge) × (their distance in edges
+ * from the loop), a dome instead of a lid, which clears a sheet the lid
+ * would lie on (an open sheet, a hole in a flat region whose only
+ * triangulation overlaps it) or a thin wall next to the hole. Amplitudes
+ * are tried from small to large, lifting first; the first patch that
+ * crosses nothing is kept. 1 kept, 0 none (out unchanged), -ENOMEM. */
+static int try_lift(mfill *M, const geo_mesh_fill_opts *mo, const loop_ref *L,
+                    geo_mesh_hole *h, geo_mesh_fill_report *rep, geo_err *err)
+{
+    geo_poly *out = M->out;
+    uint32_t nv0 = out->nverts, nf0 = out->nfacets;
+    double nrm[3];
+    cycle_normal(out, L, nrm);
+    if (geo_vdot(nrm, nrm) == 0)
+        return 0;
+    geo_fill_opts o = mo->fill;
+    o.weight = GEO_FILL_ANGLE;
+    uint8_t st = GEO_HOLE_NO_TRIANGULATION;
+    int rc = try_liepa(M, L, &o, NULL, &st, err);
+    if (rc < 0)
+        return rc;
+    if (st != GEO_HOLE_FILLED || out->nverts == nv0) {
+        truncate_out(out, nv0, nf0);
+        if ((rc = append_fan(out, L)) < 0) {
+            truncate_out(out, nv0, nf0);
+            return geo_err_set(err, rc, "out of memory lifting a patch");
+        }
+    }
+    uint32_t nnew = out->nverts - nv0;
+    uint32_t *depth = malloc((size_t)nnew * sizeof *depth);
+    double(*base)[3] = malloc((size_t)nnew * sizeof *base);
+    if (!depth || !base) {
+        free(depth), free(base);
+        truncate_out(out, nv0, nf0);
+        return geo_err_set(err, -ENOMEM, "out of memory lifting a patch");
+    }
+    memcpy(base, out->verts + nv0, (size_t)nnew * sizeof *base);
+    for (uint32_t v = 0; v < nnew; v++)
+        depth[v] = UINT32_MAX;
+    /* distances in edges from the loop: relax over the patch's edges */
+    double elen = 0;
+    uint64_t ne = 0;
+    for (bool changed = true; changed;) {
+        changed = false;
+        for (uint32_t f = nf0; f < out->nfacets; f++) {
+            const uint32_t *fv = geo_poly_facet(out, f);
+            uint32_t k = geo_poly_facet_size(out, f);
+            for (uint32_t i = 0; i < k; i++) {
+                uint32_t a = fv[i], b = fv[(i + 1) % k];
+                for (int dir = 0; dir < 2; dir++) {
+                    uint32_t x = dir ? b : a, y = dir ? a : b;
+                    if (y < nv0)
+                        continue;
+                    uint32_t dx = x < nv0 ? 0 : depth[x - nv0];
+                    if (dx != UINT32_MAX && dx + 1 < depth[y - nv0]) {
+                        depth[y - nv0] = dx + 1;
+                        changed = true;
+                    }
+                }
+            }
+        }
+    }
+    for (uint32_t f = nf0; f < out->nfacets; f++) {
+        const uint32_t *fv = geo_poly_facet(out, f);
+        uint32_t k = geo_poly_facet_size(out, f);
+        for (uint32_t i = 0; i < k; i++, ne++)
+            elen += geo_vdist(out->verts[fv[i]], out->verts[fv[(i + 1) % k]]);
+    }
+    elen = ne ? elen / (double)ne : 0;
+    static const double amps[] = {0.25, 0.5, 1.0, 2.0, -0.25, -0.5, -1.0,
+                                  -2.0};
+    rc = 0;
+    for (size_t a = 0; a < sizeof amps / sizeof amps[0] && elen > 0; a++) {
+        for (uint32_t v = 0; v < nnew; v++) {
+            double d = depth[v] == UINT32_MAX ? 1 : depth[v];
+            for (int c = 0; c < 3; c++)
+                out->verts[nv0 + v][c] = base[v][c] + amps[a] * elen * d *
+                                                          nrm[c];
+        }
+        for (uint32_t f = nf0; f < out->nfacets; f++)
+            geo_poly_facet_fit_plane(out, f, GEO_PLANE_UNWEIGHTED,
+                                     out->planes[f]);
+        int r = patch_intersects(M, nf0, out->nfacets, NULL);
+        if (r < 0) {
+            rc = geo_err_set(err, r, "out of memory checking a patch");
+            break;
+        }
+        if (r == 0) {
+            h->attempt = amps[a] > 0 ? GEO_ATTEMPT_LIFT : GEO_ATTEMPT_LOWER;
+            rc = 1;
+            break;
+        }
+        rep->nrejected++;
+    }
+    free(depth), free(base);
+    if (rc != 1)
+        truncate_out(out, nv0, nf0);
+    return rc;
+}
+
 static int fill_one(mfill *M, const geo_mesh_fill_opts *mo, const loop_ref *L,
                     geo_mesh_hole *h, geo_mesh_fill_report *rep, geo_err *err)
 {
@@ -781,12 +921,15 @@ static int fill_one(mfill *M, const geo_mesh_fill_opts *mo, const loop_ref *L,
     }
     if (h->status == GEO_HOLE_INTERSECTS && mo->fallback) {
         int r = try_avoid(M, mo, L, h, rep, err);
+        if (r == 0)
+            r = try_lift(M, mo, L, h, rep, err);
         if (r < 0)
             return r;
         if (r == 1) {
             h->status = GEO_HOLE_FILLED;
             goto kept;
         }
+        h->attempt = GEO_ATTEMPT_LOWER;
     }
     return 0;
 kept:

@@ -32,8 +32,13 @@
  *    crossed forbidden (geo_fill_opts.admit), so it takes other
  *    diagonals, splitting the hole into other sub-holes, until a patch
  *    crosses nothing; that triangulation is then refined and faired,
- *    refined, or kept bare, whichever first crosses nothing. A hole that
- *    no attempt fills validly stays open with status GEO_HOLE_INTERSECTS. No hole is ever reported filled with
+ *    refined, or kept bare, whichever first crosses nothing. Last, the
+ *    refined patch (or a fan from the loop's centroid) is bent into a
+ *    dome along the loop's normal (GEO_ATTEMPT_LIFT, then _LOWER; the
+ *    added vertices move by a multiple of the mean edge length times
+ *    their distance in edges from the loop), which clears an open sheet
+ *    or a thin wall a flat lid would lie on. A hole that no attempt
+ *    fills validly stays open with status GEO_HOLE_INTERSECTS. No hole is ever reported filled with
  *    nothing added.
  *
  * 5. When every hole is closed, a shell that is consistent but turned
@@ -67,10 +72,14 @@ enum geo_fill_attempt {
     GEO_ATTEMPT_AVOID_FAIRED = 5,
     GEO_ATTEMPT_AVOID_REFINED = 6,
     GEO_ATTEMPT_AVOID = 7,
+    /* the patch (or, without added vertices, a fan from the centroid)
+     * bent into a dome along the loop's normal, outward or inward */
+    GEO_ATTEMPT_LIFT = 8,
+    GEO_ATTEMPT_LOWER = 9,
 };
 
 /* A stable name ("planar", "as_asked", "angle", "no_fair", "plain",
- * "avoid_faired", "avoid_refined", "avoid"). */
+ * "avoid_faired", "avoid_refined", "avoid", "lift", "lower"). */
 const char *geo_fill_attempt_name(enum geo_fill_attempt a);
 
 typedef struct geo_mesh_fill_opts {
