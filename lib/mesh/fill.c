@@ -51,7 +51,7 @@ void geo_mesh_fill_opts_default(geo_mesh_fill_opts *o)
 {
     memset(o, 0, sizeof *o);
     geo_fill_opts_default(&o->fill);
-    o->fill.max_dp_vertices = 600;
+    o->fill.max_dp_vertices = 96;
     o->planar = true;
     o->check = true;
     o->fallback = true;
@@ -901,23 +901,31 @@ static int fill_one(mfill *M, const geo_mesh_fill_opts *mo, const loop_ref *L,
     h->status = GEO_HOLE_NO_TRIANGULATION;
     for (int a = 0; a < na; a++) {
         h->attempt = kinds[a];
-        uint8_t st = GEO_HOLE_NO_TRIANGULATION;
-        int r = try_liepa(M, L, &fo[a], NULL, &st, err);
-        if (r < 0)
-            return r;
-        h->status = st;
-        if (st != GEO_HOLE_FILLED)
-            return 0; /* nothing another weight could change */
-        if (!mo->check)
-            goto kept;
-        r = patch_intersects(M, nf0, out->nfacets, NULL);
-        if (r < 0)
-            return geo_err_set(err, r, "out of memory checking a patch");
-        if (r == 0)
-            goto kept;
-        rep->nrejected++;
-        truncate_out(out, nv0, nf0);
-        h->status = GEO_HOLE_INTERSECTS;
+        /* refined patches are built first without the per-split checks
+         * (the whole patch is checked below, which is much cheaper), and
+         * only when that patch crosses, again with them */
+        bool fast = mo->check && fo[a].refine && fo[a].check_each;
+        for (int pass = fast ? 0 : 1; pass < 2; pass++) {
+            geo_fill_opts o = fo[a];
+            o.check_each = pass == 1 && fo[a].check_each;
+            uint8_t st = GEO_HOLE_NO_TRIANGULATION;
+            int r = try_liepa(M, L, &o, NULL, &st, err);
+            if (r < 0)
+                return r;
+            h->status = st;
+            if (st != GEO_HOLE_FILLED)
+                return 0; /* nothing another weight could change */
+            if (!mo->check)
+                goto kept;
+            r = patch_intersects(M, nf0, out->nfacets, NULL);
+            if (r < 0)
+                return geo_err_set(err, r, "out of memory checking a patch");
+            if (r == 0)
+                goto kept;
+            rep->nrejected++;
+            truncate_out(out, nv0, nf0);
+            h->status = GEO_HOLE_INTERSECTS;
+        }
     }
     if (h->status == GEO_HOLE_INTERSECTS && mo->fallback) {
         int r = try_avoid(M, mo, L, h, rep, err);
