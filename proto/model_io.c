@@ -127,6 +127,7 @@ geo_poly *proto_model_read_mem_ex(const void *data, size_t len,
         break;
     case PROTO_FMT_OFF:
         p = proto_off_read(data, len, lim, &rep, err);
+        break;
     case PROTO_FMT_ASC:
         p = proto_asc_read(data, len, lim, &rep, err);
         break;
@@ -305,6 +306,7 @@ int proto_model_write_mem(const geo_poly *p, proto_format fmt, char **ret_buf,
         break;
     case PROTO_FMT_OFF:
         r = proto_off_write(p, &b, err);
+        break;
     case PROTO_FMT_ASC:
         r = proto_asc_write(p, &b, err);
         break;
