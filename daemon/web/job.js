@@ -329,6 +329,9 @@ async function showResult(c) {
     body.firstFrameMs = String(Math.round(performance.now()));
     body.loadMs = String(Math.round(tParse - t0));
     body.triangles = String(result.ntris);
+    // where the canvas is, for a test that looks at a screenshot of it
+    const r = canvas.getBoundingClientRect();
+    body.canvas = [r.left, r.top, r.right, r.bottom].map(Math.round).join(' ');
     body.state = 'ready';
     const bench = Number(args.get('bench') || 0);
     if (bench > 0) {

@@ -49,7 +49,7 @@ export async function submitView(app) {
     el('p', {}, el('label', {}, 'Pipeline ', preset), ' ', el('label', {}, 'ops ', pipeline)),
     el('p', {}, el('label', {}, 'Label ', label)), zone, out,
     el('p', { class: 'muted' }, 'From a shell: ',
-       el('code', {}, "curl -H 'Content-Type: application/octet-stream' --data-binary @stone.stl 'http://HOST/v1/jobs?format=stl&pipeline=correct'"))));
+       el('code', {}, `curl -H 'Content-Type: application/octet-stream' --data-binary @stone.stl '${location.origin}/v1/jobs?format=stl&pipeline=correct'`))));
   document.body.dataset.state = 'ready';
   return () => {};
 }
