@@ -69,14 +69,14 @@ typedef enum proto_op_kind {
 } proto_op_kind;
 
 typedef enum proto_schedule {
-    PROTO_SCHED_LOCAL_EXP = 0, /* seed 000 §4.3.1 */
+    PROTO_SCHED_LOCAL_EXP = 0, /* Palachev 2012, §4.3.1 */
     PROTO_SCHED_SCALED,        /* §4.3.2 */
     PROTO_SCHED_GLOBAL_EXP,    /* §4.3.3 */
 } proto_schedule;
 
 typedef enum proto_fair {
     PROTO_FAIR_NONE = 0,
-    PROTO_FAIR_UNIFORM, /* w = 1 (seed 001, closed form) */
+    PROTO_FAIR_UNIFORM, /* w = 1 (Vyatkin, closed form) */
     PROTO_FAIR_LENGTH,  /* w = edge length (gradient descent) */
 } proto_fair;
 

@@ -249,7 +249,7 @@ static int run_stitch(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
     return 0;
 }
 
-/* cut (lib/cut/cut.h, seed 000 §3): keeps plane(p) ≤ 0 and closes the
+/* cut (lib/cut/cut.h, Palachev 2012, §3): keeps plane(p) ≤ 0 and closes the
  * section; an unchanged or empty result is reported, not an error. */
 static int run_cut(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
                    json_t **ret_report, json_t *summary, geo_err *err)
@@ -295,7 +295,7 @@ static enum geo_replanar_schedule schedule_of(proto_schedule s)
                                          : GEO_REPLANAR_LOCAL_EXP;
 }
 
-/* move_vertex (lib/replanar/replanar.h, seed 000 §4): places the vertex and
+/* move_vertex (lib/replanar/replanar.h, Palachev 2012, §4): places the vertex and
  * re-planarises. A result that is not a valid polyhedron (no convergence
  * within max_steps, a self-intersection, an inverted facet) fails the
  * job, as `facet move` refuses to write it: nothing invalid is passed on.
@@ -353,7 +353,7 @@ static int run_move_vertex(const proto_op *op, geo_poly **model,
     return 0;
 }
 
-/* inversion_stats (lib/replanar/inversion.h, seed 000 §4.3.4): the model is only
+/* inversion_stats (lib/replanar/inversion.h, Palachev 2012, §4.3.4): the model is only
  * read; the runs go through ctx's parallel_for (the daemon's pool), the
  * op's seed replaces the job's. */
 static int run_inversion_stats(const proto_op *op, geo_poly **model,

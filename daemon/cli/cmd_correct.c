@@ -19,7 +19,7 @@ static const char USAGE[] =
     "usage: facet correct MODEL -o OUT [--report FILE] [options]\n"
     "\n"
     "Corrects a scanned model: merges the groups of nearly coplanar facets\n"
-    "a shadow-profile scanner makes of each true facet (seed 000 §2) and\n"
+    "a shadow-profile scanner makes of each true facet (Palachev 2012, §2) and\n"
     "collapses the clusters of vertices joined by very short edges (§4.1),\n"
     "repeating both until nothing changes; every step is checked and\n"
     "nothing invalid is written. Same as the daemon's \"auto\" pipeline.\n"

@@ -1,5 +1,5 @@
 /* clusters.h — collapsing clusters of vertices joined by very short edges
- * (seed 000 §4.1 and the paper's open §4.3.6): a scanner splits a vertex
+ * (Palachev 2012, §4.1 and the paper's open §4.3.6): a scanner splits a vertex
  * where four or more facets meet into a heap of degree-3 vertices joined
  * by edges of a few µm; each heap becomes one vertex, and the planarity of
  * the facets around it is restored by the re-planarization of

@@ -1,4 +1,4 @@
-/* correct.h — the automatic post-scan correction (seed 000 §2, §4.1): the
+/* correct.h — the automatic post-scan correction (Palachev 2012, §2, §4.1): the
  * correction every scan gets before anything else is done with it.
  *
  *   inspect → re-orient if needed → repeat { merge the groups of nearly

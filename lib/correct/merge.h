@@ -1,5 +1,5 @@
 /* merge.h — merging groups of adjacent, nearly coplanar facets into one
- * facet (seed 000 §2): the correction that removes the edges a
+ * facet (Palachev 2012, §2): the correction that removes the edges a
  * shadow-profile scanner adds when it splits one true facet into slivers.
  *
  * One group is merged by the paper's four steps:

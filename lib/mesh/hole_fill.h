@@ -1,4 +1,4 @@
-/* hole_fill.h — filling the holes of a polygon or triangle mesh (seed 001
+/* hole_fill.h — filling the holes of a polygon or triangle mesh (Vyatkin,
  * after Liepa, "Filling holes in meshes", 2003): every boundary loop is
  * closed by a minimum-weight triangulation, the patches are refined to the
  * density of the surrounding mesh and faired.

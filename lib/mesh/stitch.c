@@ -1,4 +1,4 @@
-/* stitch.c — seed 004's stitching of two open meshes (see stitch.h).
+/* stitch.c — Nesterenko's stitching of two open meshes (see stitch.h).
  *
  * Invariants: a loop is kept as its vertex cycle in the direction of its
  * corners (its mesh's facets on the left seen from outside); the two

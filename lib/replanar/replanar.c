@@ -1,4 +1,4 @@
-/* replanar.c — vertex move and re-planarisation (seed 000 §4.2.3, §4.3.1–3):
+/* replanar.c — vertex move and re-planarisation (Palachev 2012, §4.2.3, §4.3.1–3):
  * alternating least-squares planes and penalised per-vertex 3×3 solves over
  * a growing active region (see replanar.h for the quantities and the
  * schedules).

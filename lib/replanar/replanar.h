@@ -1,5 +1,5 @@
 /* replanar.h — moving vertices of a polyhedron and restoring the planarity
- * of its facets (seed 000 §4, variant 3 of §4.2.3): alternate
+ * of its facets (Palachev 2012, §4, variant 3 of §4.2.3): alternate
  *   (a) least-squares planes of the facets (by default a facet through a
  *       fixed vertex is fitted through that vertex exactly), and
  *   (b) per-vertex penalised positions: every free vertex x minimises

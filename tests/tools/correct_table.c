@@ -1,5 +1,5 @@
 /* correct_table.c — the acceptance table of the automatic correction
- * (README "Automatic correction"): simulated stones of several cuts and
+ * (docs/kernels/correct.md): simulated stones of several cuts and
  * seeds scanned with K views (tests/support/stone_sim.h; silhouette noise
  * --sim-noise, 1 µm by default), each scan
  * corrected by geo_correct_auto, and the result compared with the stone.

@@ -1,4 +1,4 @@
-/* test_merge.c — facet merging (lib/correct/merge.h, seed 000 §2) and the
+/* test_merge.c — facet merging (lib/correct/merge.h, Palachev 2012, §2) and the
  * automatic correction (lib/correct/correct.h, lib/correct/clusters.h): the editable
  * model's undo, the paper's examples of merging 2, 3 and 4 facets on a
  * scan (fig. 3–5), a group bordered by non-convex facets, the statements
@@ -87,7 +87,7 @@ static void test_edit_rollback_restores_the_model_bit_for_bit(void **state)
 }
 
 /* Merges a connected group of n nearly coplanar facets around the table
- * of the K=100 scan (seed 000 fig. 3–5: 2, 3 and 4 facets). */
+ * of the K=100 scan (Palachev 2012, fig. 3–5: 2, 3 and 4 facets). */
 static void merge_n(uint32_t n)
 {
     geo_poly *p = tu_load_model("brilliant.scan-k100.json");
@@ -175,7 +175,7 @@ static void test_paper_statements_hold_when_merging_a_scan(void **state)
         assert_int_equal(geo_merge_auto(p, &o, NULL, &rep, &err), 0);
         assert_true(rep.merged > 100);
         /* with the event order no group breaks §2.7; the paper's order may
-         * (README: counted), and such groups are rolled back */
+         * (docs/kernels/correct.md: counted), and such groups are rolled back */
         if (o.lift_order == GEO_LIFT_EVENT_HEIGHT)
             assert_int_equal(rep.statement_violations, 0);
         assert_valid(p);

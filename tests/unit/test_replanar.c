@@ -1,4 +1,4 @@
-/* test_replanar.c — vertex move and re-planarisation (seed 000 §4): the
+/* test_replanar.c — vertex move and re-planarisation (Palachev 2012, §4): the
  * invariants of every converged result (each vertex within the final bound
  * of each of its facets' planes, the fixed vertex exactly where it was
  * put, the planes through it passing through it), the schedules' K and ε
