@@ -1,30 +1,28 @@
 // gl.js — the WebGL 2 view: an orbit camera (drag: orbit, right or
 // shift drag: pan, wheel: zoom, fit), meshes as indexed triangle buffers
-// with flat shading from screen-space derivatives (no normal attribute),
-// and layers each drawn in one call: the surface (colour per corner), the
-// facet edges, and highlight layers (a subset of triangles or lines in
-// one colour). Frames are drawn on demand, not in a loop.
+// over the model's shared vertices with flat shading from screen-space
+// derivatives (no normal or colour attribute), and layers each drawn in
+// one call: the surface in its colour, then colour layers (a subset of
+// triangles in one colour: a merged group, a tier, the self-intersecting
+// facets), then lines (facet edges, free edges). Frames are drawn on
+// demand, not in a loop.
 
 const VS = `#version 300 es
 in vec3 a_pos;
-in vec4 a_col;
 uniform mat4 u_mvp, u_mv;
 out vec3 v_view;
-out vec4 v_col;
 void main() {
   v_view = (u_mv * vec4(a_pos, 1.0)).xyz;
-  v_col = a_col;
   gl_Position = u_mvp * vec4(a_pos, 1.0);
 }`;
 const FS = `#version 300 es
 precision highp float;
 in vec3 v_view;
-in vec4 v_col;
-uniform vec4 u_col;     // a layer's colour when u_mode > 0
-uniform int u_mode;     // 0 corner colour, lit; 1 u_col, lit; 2 u_col, unlit
+uniform vec4 u_col;     // the layer's colour
+uniform int u_mode;     // 1 lit (surfaces), 2 unlit (lines)
 out vec4 o;
 void main() {
-  vec4 c = u_mode == 0 ? v_col : u_col;
+  vec4 c = u_col;
   if (u_mode == 2) { o = c; return; }
   vec3 n = normalize(cross(dFdx(v_view), dFdy(v_view)));
   // a key light above the camera, both sides lit (an open mesh's inside)
@@ -68,21 +66,22 @@ function invert(m) {
 }
 
 export class View {
-  constructor(canvas, onPick) {
+  // antialias: multisampling, which a software renderer pays for on
+  // every frame; worth it for a stone, not for 10^6 triangles.
+  constructor(canvas, onPick, antialias = true) {
     this.canvas = canvas;
-    const gl = canvas.getContext('webgl2', { antialias: true, preserveDrawingBuffer: true });
+    const gl = canvas.getContext('webgl2', { antialias, preserveDrawingBuffer: false });
     if (!gl) throw new Error('this browser has no WebGL 2');
     this.gl = gl;
     this.prog = this.program(VS, FS);
     this.loc = {
       pos: gl.getAttribLocation(this.prog, 'a_pos'),
-      col: gl.getAttribLocation(this.prog, 'a_col'),
       mvp: gl.getUniformLocation(this.prog, 'u_mvp'),
       mv: gl.getUniformLocation(this.prog, 'u_mv'),
       ucol: gl.getUniformLocation(this.prog, 'u_col'),
       mode: gl.getUniformLocation(this.prog, 'u_mode'),
     };
-    this.meshes = [];     // {mesh, vao, buffers, layers: [...], alpha}
+    this.meshes = [];     // {mesh, vao, pb, tb, ntri, color, layers}
     this.yaw = 0.6; this.pitch = 0.5; this.dist = 3; this.target = [0, 0, 0];
     this.radius = 1;
     this.frames = 0;
@@ -112,8 +111,9 @@ export class View {
     return p;
   }
 
-  // Replaces the meshes drawn. Each entry: {mesh, colors (Uint8Array, 4
-  // per corner), alpha}; returns handles for setColors / setLayers.
+  // Replaces the meshes drawn. Each entry: {mesh, color: [r, g, b, a]}
+  // (a < 1: translucent, drawn without depth writes); returns handles
+  // for setLayers.
   setMeshes(list) {
     const gl = this.gl;
     for (const h of this.meshes) this.release(h);
@@ -125,17 +125,12 @@ export class View {
       gl.bufferData(gl.ARRAY_BUFFER, e.mesh.pos, gl.STATIC_DRAW);
       gl.enableVertexAttribArray(this.loc.pos);
       gl.vertexAttribPointer(this.loc.pos, 3, gl.FLOAT, false, 0, 0);
-      const cb = gl.createBuffer();
-      gl.bindBuffer(gl.ARRAY_BUFFER, cb);
-      gl.bufferData(gl.ARRAY_BUFFER, e.colors, gl.DYNAMIC_DRAW);
-      gl.enableVertexAttribArray(this.loc.col);
-      gl.vertexAttribPointer(this.loc.col, 4, gl.UNSIGNED_BYTE, true, 0, 0);
       const tb = gl.createBuffer();
       gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, tb);
       gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, e.mesh.tris, gl.STATIC_DRAW);
       gl.bindVertexArray(null);
-      return { mesh: e.mesh, vao, pb, cb, tb, ntri: e.mesh.tris.length,
-               alpha: e.alpha ?? 1, layers: [] };
+      return { mesh: e.mesh, vao, pb, tb, ntri: e.mesh.tris.length,
+               color: e.color, layers: [] };
     });
     this.redraw();
     return this.meshes;
@@ -144,15 +139,8 @@ export class View {
   release(h) {
     const gl = this.gl;
     for (const l of h.layers) gl.deleteBuffer(l.buf);
-    gl.deleteBuffer(h.pb); gl.deleteBuffer(h.cb); gl.deleteBuffer(h.tb);
+    gl.deleteBuffer(h.pb); gl.deleteBuffer(h.tb);
     gl.deleteVertexArray(h.vao);
-  }
-
-  setColors(h, colors) {
-    const gl = this.gl;
-    gl.bindBuffer(gl.ARRAY_BUFFER, h.cb);
-    gl.bufferData(gl.ARRAY_BUFFER, colors, gl.DYNAMIC_DRAW);
-    this.redraw();
   }
 
   // Layers of h: [{kind: 'tris'|'lines', index: Uint32Array, color: [r,g,b,a]}]
@@ -174,7 +162,7 @@ export class View {
   fit(radius) {
     if (radius) this.radius = radius;
     this.target = [0, 0, 0];
-    this.dist = this.radius / Math.sin(this.fov() / 2) * 0.9;
+    this.dist = this.radius / Math.sin(this.fov() / 2) * 1.02;
     this.redraw();
   }
   fov() { return 35 * Math.PI / 180; }
@@ -226,7 +214,7 @@ export class View {
     gl.uniformMatrix4fv(this.loc.mv, false, view);
     for (const h of this.meshes) {
       gl.bindVertexArray(h.vao);
-      const translucent = h.alpha < 1;
+      const translucent = h.color[3] < 1;
       if (translucent) {
         gl.enable(gl.BLEND);
         gl.blendFunc(gl.SRC_ALPHA, gl.ONE_MINUS_SRC_ALPHA);
@@ -235,7 +223,8 @@ export class View {
       // surfaces pushed back a little so that lines on them win
       gl.enable(gl.POLYGON_OFFSET_FILL);
       gl.polygonOffset(1, 1);
-      gl.uniform1i(this.loc.mode, 0);
+      gl.uniform1i(this.loc.mode, 1);
+      gl.uniform4fv(this.loc.ucol, h.color);
       gl.drawElements(gl.TRIANGLES, h.ntri, gl.UNSIGNED_INT, 0);
       gl.polygonOffset(0.5, 0.5);
       for (const l of h.layers) {

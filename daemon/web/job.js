@@ -11,16 +11,18 @@
 // the model that operation saw, so a layer is used only on the model with
 // that many facets.
 //
-// Hash arguments: ?bench=MS spins the camera for MS ms after the first
-// frame and writes the frame rate into body[data-fps].
+// Hash arguments: ?model=result|input|overlay and ?colour=plain|groups|
+// tiers choose the first view (a link can show a job as it should be
+// seen); ?bench=MS spins the camera for MS ms after the first frame and
+// writes the frame rate into body[data-fps].
 import { api, getJson, events, download, el, fmt } from './api.js';
-import { parseFmb1, buildMesh, facetTris, facetAngles } from './model.js';
+import { parseFmb1, buildMesh, facetTris, keyedTris, facetAngles } from './model.js';
 import { View } from './gl.js';
 
-const GREY = [190, 194, 202], TIER_RGB = {
-  table: [240, 200, 60], crown: [90, 160, 230], girdle: [150, 150, 150],
-  pavilion: [110, 200, 120], culet: [220, 90, 200],
-};
+const GREY = [0.75, 0.77, 0.8, 1], INPUT_GHOST = [0.9, 0.32, 0.24, 0.3];
+const TIERS = ['table', 'crown', 'girdle', 'pavilion', 'culet'];
+const TIER_RGB = [[0.94, 0.78, 0.24], [0.35, 0.63, 0.9], [0.6, 0.6, 0.6],
+                  [0.43, 0.78, 0.47], [0.86, 0.35, 0.78]];
 const FALLBACK_FORMATS = ['json', 'poly', 'obj', 'stl', 'stl-ascii', 'ply', 'ply-ascii', 'ase', 'fmb1'];
 let formatsCache = null;
 
@@ -83,18 +85,7 @@ function signedVolume(mesh) {
 function hue(i) {
   const h = (i * 0.618033988749895) % 1, s = 0.55, l = 0.58;
   const f = n => { const k = (n + h * 12) % 12; return l - s * Math.min(l, 1 - l) * Math.max(-1, Math.min(k - 3, 9 - k, 1)); };
-  return [f(0), f(8), f(4)].map(x => Math.round(x * 255));
-}
-
-function cornerColors(mesh, facetRgb, alpha = 255) {
-  const m = mesh.model, out = new Uint8Array(4 * m.fidx.length);
-  for (let f = 0; f < m.nf; f++) {
-    const c = facetRgb(f) || GREY;
-    for (let i = m.fstart[f]; i < m.fstart[f + 1]; i++) {
-      out[4 * i] = c[0]; out[4 * i + 1] = c[1]; out[4 * i + 2] = c[2]; out[4 * i + 3] = alpha;
-    }
-  }
-  return out;
+  return [f(0), f(8), f(4), 1];
 }
 
 export async function jobView(app, id, args) {
@@ -213,9 +204,10 @@ async function showResult(c) {
     el('button', { type: 'button', onclick: () => download(`/v1/jobs/${id}/stats`, `${id}.stats.json`) }, 'stats'),
     el('button', { type: 'button', onclick: () => download(`/v1/jobs/${id}/model?which=input&format=json`, `${id}-input.json`) }, 'input'));
 
-  const view = new View(canvas, f => showPick(f));
+  const view = new View(canvas, f => showPick(f), result.ntris <= 200000);
   let state = {
-    model: 'result', colour: 'plain',
+    model: ['result', 'input', 'overlay'].includes(args.get('model')) ? args.get('model') : 'result',
+    colour: ['groups', 'tiers'].includes(args.get('colour')) ? args.get('colour') : 'plain',
     edges: result.model.nf <= 300000, selfint: true, inverted: true, free: true,
   };
   // per-model facet sets of the layers
@@ -226,47 +218,44 @@ async function showResult(c) {
     for (const [p, q] of pairs) { si.add(p); si.add(q); }
     return { selfint: [...si], pairs, inverted: mesh.inverted };
   };
-  // facet → colour for the colour scheme on mesh
+  // the colour scheme on mesh: {key: facet → layer key or -1, colour}
   const scheme = mesh => {
     const nf = mesh.model.nf;
     if (state.colour === 'groups' && a.groups) {
-      const col = new Map();
-      const list = a.groups.group_list;
+      const key = new Int32Array(nf).fill(-1);
       const onInput = mesh !== result;
-      if (onInput && a.groups.facets_before !== undefined && a.groups.facets_before !== nf) return () => null;
-      list.forEach((g, i) => {
+      if (onInput && a.groups.facets_before !== undefined && a.groups.facets_before !== nf) return null;
+      a.groups.group_list.forEach((g, i) => {
         if (!g.merged) return;
-        const rgb = hue(i);
-        if (onInput) for (const f of g.facets) col.set(f, rgb);
-        else if (g.facet !== undefined) col.set(g.facet, rgb);
+        if (onInput) { for (const f of g.facets) if (f < nf) key[f] = i; }
+        else if (g.facet !== undefined && g.facet < nf) key[g.facet] = i;
       });
-      return f => col.get(f);
+      return { key: f => key[f], colour: hue };
     }
     if (state.colour === 'tiers' && a.report && a.report.facets && a.report.facets.length === nf) {
-      return f => TIER_RGB[a.report.facets[f].tier];
+      return { key: f => TIERS.indexOf(a.report.facets[f].tier), colour: k => TIER_RGB[k] };
     }
-    return () => null;
+    return null;
   };
   let handles = [];
   const apply = async () => {
     const list = [];
-    if (state.model === 'result' || state.model === 'overlay') list.push({ mesh: result });
+    if (state.model === 'result' || state.model === 'overlay') list.push({ mesh: result, color: GREY });
     if (state.model === 'input' || state.model === 'overlay') {
       const inp = await loadInput();
-      if (inp) list.push({ mesh: inp, alpha: state.model === 'overlay' ? 0.3 : 1 });
+      if (inp) list.push({ mesh: inp, color: state.model === 'overlay' ? INPUT_GHOST : GREY });
     }
-    if (!list.length) list.push({ mesh: result });
-    for (const e of list) {
-      const rgb = e.alpha < 1 ? () => [230, 80, 60] : scheme(e.mesh);
-      e.colors = cornerColors(e.mesh, rgb, e.alpha < 1 ? Math.round(255 * e.alpha) : 255);
-    }
+    if (!list.length) list.push({ mesh: result, color: GREY });
     handles = view.setMeshes(list);
     handles.forEach((h, i) => {
       const m = h.mesh, sets = layerSets(m), layers = [];
-      const overlayIn = list[i].alpha < 1;
-      if (state.selfint && !overlayIn) layers.push({ kind: 'tris', index: facetTris(m, sets.selfint), color: [0.9, 0.1, 0.1, 1] });
-      if (state.inverted && !overlayIn) layers.push({ kind: 'tris', index: facetTris(m, sets.inverted), color: [0.6, 0.1, 0.9, 1] });
-      if (state.edges) layers.push({ kind: 'lines', index: m.lines, color: overlayIn ? [0.8, 0.2, 0.1, 0.6] : [0.12, 0.14, 0.2, 1] });
+      const ghost = list[i].color[3] < 1;
+      const sc = ghost ? null : scheme(m);
+      if (sc)
+        for (const [k, index] of keyedTris(m, sc.key)) layers.push({ kind: 'tris', index, color: sc.colour(k) });
+      if (state.selfint && !ghost) layers.push({ kind: 'tris', index: facetTris(m, sets.selfint), color: [0.9, 0.1, 0.1, 1] });
+      if (state.inverted && !ghost) layers.push({ kind: 'tris', index: facetTris(m, sets.inverted), color: [0.6, 0.1, 0.9, 1] });
+      if (state.edges) layers.push({ kind: 'lines', index: m.lines, color: ghost ? [0.8, 0.2, 0.1, 0.6] : [0.12, 0.14, 0.2, 1] });
       if (state.free) layers.push({ kind: 'lines', index: m.free, color: [1, 0.55, 0, 1] });
       view.setLayers(h, layers);
     });

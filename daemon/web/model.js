@@ -5,9 +5,8 @@
 // inverted, free edges), all in typed arrays so that 10^6 triangles stay
 // a few hundred milliseconds and a few tens of MB.
 //
-// Drawing corners are not shared between facets (each facet is flat, and
-// its colour is its own); positions are float32 relative to the model's
-// centre, which keeps µm detail of a stone far from the origin.
+// Positions are float32 relative to the model's centre, which keeps µm
+// detail of a stone far from the origin.
 
 export function parseFmb1(buf) {
   const dv = new DataView(buf);
@@ -77,9 +76,9 @@ function newell(m, f, out) {
   out[0] = x; out[1] = y; out[2] = z;
 }
 
-// Triangles of facet f (corner offsets from fstart[f]) into tri, by ear
+// Triangles of facet f (corner offsets from fstart[f]) to pushTri, by ear
 // clipping in the facet's plane: a fan would fold a non-convex facet.
-function triangulate(m, f, nrm, tri, pushTri) {
+function triangulate(m, f, nrm, unused, pushTri) {
   const s = m.fstart[f], n = m.fstart[f + 1] - s, V = m.verts;
   if (n === 3) { pushTri(0, 1, 2); return; }
   // drop the normal's largest axis: a 2-D polygon with the same winding
@@ -119,10 +118,13 @@ function triangulate(m, f, nrm, tri, pushTri) {
   for (let k = 1; k + 1 < idx.length; k++) pushTri(idx[0], idx[k], idx[k + 1]);
 }
 
-// Everything the renderer and the layers need, from a parsed model.
+// Everything the renderer and the layers need, from a parsed model. The
+// GPU gets the model's own vertices (shared: a triangle mesh of 10^6
+// facets is 5·10^5 vertices, not 3·10^6 corners); a facet's flat shade
+// comes from screen-space derivatives and its colour from the layer that
+// draws it, so nothing per corner is needed.
 export function buildMesh(m) {
   const nc = m.fidx.length, V = m.verts;
-  // bounds and centre
   let lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
   for (let i = 0; i < m.nv; i++)
     for (let k = 0; k < 3; k++) {
@@ -132,63 +134,80 @@ export function buildMesh(m) {
     }
   if (m.nv === 0) { lo = [0, 0, 0]; hi = [0, 0, 0]; }
   const centre = [0, 1, 2].map(k => (lo[k] + hi[k]) / 2);
-  const radius = Math.max(1e-9, Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) / 2);
-  const pos = new Float32Array(3 * nc);
-  for (let i = 0; i < nc; i++) {
-    const b = 3 * m.fidx[i];
-    pos[3 * i] = V[b] - centre[0];
-    pos[3 * i + 1] = V[b + 1] - centre[1];
-    pos[3 * i + 2] = V[b + 2] - centre[2];
+  const pos = new Float32Array(3 * m.nv);
+  let r2 = 0; // the bounding sphere about the centre: what "fit" frames
+  for (let i = 0; i < m.nv; i++) {
+    for (let k = 0; k < 3; k++) pos[3 * i + k] = V[3 * i + k] - centre[k];
+    r2 = Math.max(r2, pos[3 * i] ** 2 + pos[3 * i + 1] ** 2 + pos[3 * i + 2] ** 2);
   }
+  const radius = Math.max(1e-9, Math.sqrt(r2));
   // per facet: unit normal, area, inverted (winding against its plane)
   const normal = new Float32Array(3 * m.nf), area = new Float64Array(m.nf);
   const inverted = [];
-  let tris = new Uint32Array(Math.max(3, 3 * (nc - 2 * m.nf)));
-  let nt = 0;
-  const nrm = [0, 0, 0];
-  let base = 0;
+  const ntri = nc - 2 * m.nf;
+  const tris = new Uint32Array(3 * ntri), triFacet = new Uint32Array(ntri);
+  let nt = 0, f = 0, base = 0;
   const pushTri = (a, b, c) => {
-    if (3 * nt + 3 > tris.length) {
-      const t = new Uint32Array(2 * tris.length);
-      t.set(tris);
-      tris = t;
-    }
-    tris[3 * nt] = base + a; tris[3 * nt + 1] = base + b; tris[3 * nt + 2] = base + c;
-    nt++;
+    tris[3 * nt] = m.fidx[base + a]; tris[3 * nt + 1] = m.fidx[base + b];
+    tris[3 * nt + 2] = m.fidx[base + c];
+    triFacet[nt++] = f;
   };
-  const triFacet = [];
-  for (let f = 0; f < m.nf; f++) {
+  const nrm = [0, 0, 0], P = m.planes;
+  for (f = 0; f < m.nf; f++) {
     newell(m, f, nrm);
     const len = Math.hypot(nrm[0], nrm[1], nrm[2]);
     area[f] = len / 2;
     if (len > 0)
       for (let k = 0; k < 3; k++) normal[3 * f + k] = nrm[k] / len;
-    const P = m.planes;
     if (nrm[0] * P[4 * f] + nrm[1] * P[4 * f + 1] + nrm[2] * P[4 * f + 2] < 0)
       inverted.push(f);
     base = m.fstart[f];
-    const before = nt;
-    triangulate(m, f, nrm, tris, pushTri);
-    for (let t = before; t < nt; t++) triFacet.push(f);
+    if (m.fstart[f + 1] - base === 3) pushTri(0, 1, 2);
+    else triangulate(m, f, nrm, null, pushTri);
   }
-  tris = tris.subarray(0, 3 * nt);
   // facet edges once each (the facet with u < v draws a shared edge),
-  // free edges (one corner: a hole's border) and non-manifold ones
+  // free edges (one facet: a hole's border)
   const { cnt, slotOf } = edgeCounts(m);
-  const lines = [], free = [];
-  for (let f = 0; f < m.nf; f++) {
-    const s = m.fstart[f], e = m.fstart[f + 1];
+  const lines = new Uint32Array(2 * nc);
+  let nl = 0, nfree = 0;
+  for (let i = 0; i < nc; i++) if (cnt[slotOf[i]] === 1) nfree++;
+  const free = new Uint32Array(2 * nfree);
+  nfree = 0;
+  for (let g = 0; g < m.nf; g++) {
+    const s = m.fstart[g], e = m.fstart[g + 1];
     for (let i = s; i < e; i++) {
-      const j = i + 1 < e ? i + 1 : s, c = cnt[slotOf[i]];
-      if (c === 1) free.push(i, j);
-      if (c !== 2 || m.fidx[i] < m.fidx[j]) lines.push(i, j);
+      const a = m.fidx[i], b = m.fidx[i + 1 < e ? i + 1 : s], c = cnt[slotOf[i]];
+      if (c === 1) { free[nfree++] = a; free[nfree++] = b; }
+      if (c !== 2 || a < b) { lines[nl++] = a; lines[nl++] = b; }
     }
   }
   return {
-    model: m, pos, tris, triFacet: Uint32Array.from(triFacet), ntris: nt,
-    lines: Uint32Array.from(lines), free: Uint32Array.from(free),
-    normal, area, inverted, centre, radius,
+    model: m, pos, tris: tris.subarray(0, 3 * nt), triFacet, ntris: nt,
+    lines: lines.slice(0, nl), free, normal, area, inverted, centre, radius,
   };
+}
+
+// Index buffers of facets grouped by key(f) (a non-negative integer, or
+// -1 for none), in one pass: a colour layer per key.
+export function keyedTris(mesh, key) {
+  const counts = new Map();
+  const keys = new Int32Array(mesh.model.nf);
+  for (let f = 0; f < keys.length; f++) keys[f] = key(f);
+  for (let t = 0; t < mesh.ntris; t++) {
+    const k = keys[mesh.triFacet[t]];
+    if (k >= 0) counts.set(k, (counts.get(k) || 0) + 1);
+  }
+  const out = new Map(), fill = new Map();
+  for (const [k, n] of counts) { out.set(k, new Uint32Array(3 * n)); fill.set(k, 0); }
+  for (let t = 0; t < mesh.ntris; t++) {
+    const k = keys[mesh.triFacet[t]];
+    if (k < 0) continue;
+    const a = out.get(k);
+    let o = fill.get(k);
+    a[o++] = mesh.tris[3 * t]; a[o++] = mesh.tris[3 * t + 1]; a[o++] = mesh.tris[3 * t + 2];
+    fill.set(k, o);
+  }
+  return out;
 }
 
 // The triangles of a set of facets (an index buffer for one layer).
@@ -219,7 +238,9 @@ export function facetAngles(mesh, f, gear = 96) {
   const N = mesh.normal, t = 3 * mesh.table;
   const ax = [N[t], N[t + 1], N[t + 2]], n = [N[3 * f], N[3 * f + 1], N[3 * f + 2]];
   const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-  const incl = Math.acos(Math.max(-1, Math.min(1, dot(n, ax)))) * 180 / Math.PI;
+  // the angle between the facet's plane and the table's: 0–90°, crown
+  // and pavilion alike, as a cutter states it
+  const incl = Math.acos(Math.min(1, Math.abs(dot(n, ax)))) * 180 / Math.PI;
   let ref = Math.abs(ax[0]) < 0.9 ? [1, 0, 0] : [0, 1, 0];
   const d = dot(ref, ax);
   ref = [ref[0] - d * ax[0], ref[1] - d * ax[1], ref[2] - d * ax[2]];
