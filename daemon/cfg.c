@@ -62,6 +62,14 @@ static const key keys[] = {
     {"Server", "ConnectionMemory", "connection-memory", K_SIZE,
      F(connection_memory), 8 * KiB, 16 * MiB, false, "64K",
      "memory per connection for headers"},
+    {"Server", "HeaderTimeout", "header-timeout", K_DURATION,
+     F(header_timeout_ms), 100, 3600 * SEC, false, "10s",
+     "time a client has to send a request's headers (closed after)"},
+    {"Server", "PerClientConnections", "per-client-connections", K_UINT,
+     F(per_client_connections), 0, 1000000, false, "64",
+     "concurrent connections from one address (0: no limit)"},
+    {"Server", "MaxQueryArgs", "max-query-args", K_UINT, F(max_query_args),
+     1, 100000, true, "100", "query arguments per request (400 above)"},
     {"Server", "MaxWaiters", "max-waiters", K_UINT, F(max_waiters), 1,
      1000000, true, "4096", "clients waiting on ?wait= or events (429 above)"},
     {"Server", "MaxWait", "max-wait", K_DURATION, F(max_wait_ms), 0,
@@ -98,8 +106,8 @@ static const key keys[] = {
      SCAN_DEFAULT_DEVICES, "VID:PID:bulk|hid [PIPELINE]: a scanner model "
      "(repeatable; the first replaces the default list)"},
     {"Scanners", "Pipeline", "scanner-pipeline", K_PIPELINE,
-     F(scanner_pipeline), 0, 0, true, "auto",
-     "pipeline of scanner jobs: auto, op names (inspect,triangulate), "
+     F(scanner_pipeline), 0, 0, true, "correct",
+     "pipeline of scanner jobs: correct, op names (inspect,triangulate), "
      "inline JSON or a /path/to/pipeline.json"},
 };
 enum { NKEYS = sizeof keys / sizeof keys[0] };
@@ -656,8 +664,8 @@ json_t *cfg_pipeline_json(const char *spec, geo_err *err)
                         je.column, je.text);
             return NULL;
         }
-    } else if (strcmp(spec, "auto") == 0) {
-        pj = json_string("auto");
+    } else if (strcmp(spec, "correct") == 0 || strcmp(spec, "auto") == 0) {
+        pj = json_string(spec);
     } else {
         pj = json_array();
         char buf[CFG_PIPELINE_LEN];

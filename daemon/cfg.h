@@ -52,6 +52,10 @@ typedef struct cfg {
     uint64_t max_body;            /* request body bytes, ≥ 1 KiB */
     uint64_t connection_timeout_ms; /* idle connection timeout, ≥ 1 s */
     uint64_t connection_memory;   /* per-connection header memory, ≥ 8 KiB */
+    uint64_t header_timeout_ms;   /* connect (or previous answer) to complete
+                                     request headers */
+    unsigned per_client_connections; /* from one address; 0 = no limit */
+    unsigned max_query_args;      /* query arguments per request */
     unsigned max_waiters;         /* suspended ?wait= and SSE clients */
     uint64_t max_wait_ms;         /* cap on ?wait= */
     uint64_t keepalive_ms;        /* SSE keep-alive comment interval */

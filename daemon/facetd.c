@@ -78,6 +78,7 @@ static void apply_http_settings(http_env *env, const cfg *c)
     atomic_store(&env->max_waiters, c->max_waiters);
     atomic_store(&env->queue_size, c->queue_size);
     atomic_store(&env->inspect_max_facets, c->inspect_max_facets);
+    atomic_store(&env->max_query_args, c->max_query_args);
     http_env_set_token(env, c->api_token);
 }
 
@@ -117,6 +118,8 @@ static void reload(cfg *cur, int argc, char **argv, http_env *env,
         next.max_connections = cur->max_connections;
         next.connection_timeout_ms = cur->connection_timeout_ms;
         next.connection_memory = cur->connection_memory;
+        next.header_timeout_ms = cur->header_timeout_ms;
+        next.per_client_connections = cur->per_client_connections;
         next.workers = cur->workers;
         next.scanners = cur->scanners;
         memcpy(next.scanner, cur->scanner, sizeof next.scanner);
@@ -317,6 +320,8 @@ int main(int argc, char **argv)
         .max_connections = c.max_connections,
         .timeout_s = (unsigned)((c.connection_timeout_ms + 999) / 1000),
         .connection_memory = (size_t)c.connection_memory,
+        .header_timeout_ms = c.header_timeout_ms,
+        .per_client_connections = c.per_client_connections,
     };
     hs = http_server_start(&env, &hc, &err);
     if (!hs) {

@@ -268,8 +268,18 @@ static enum MHD_Result submit_and_reply(http_req *r, const geo_poly *poly,
                            replayed ? "Idempotent-Replayed" : NULL, "true",
                            NULL};
         json_t *extra = NULL;
-        if (rep->plane_mismatches)
-            extra = json_pack("{s:[s]}", "warnings", rep->first);
+        char dep[256];
+        bool deprecated = proto_pipeline_deprecations(pl, dep, sizeof dep);
+        if (rep->plane_mismatches || deprecated) {
+            json_t *w = json_array();
+            if (rep->plane_mismatches)
+                json_array_append_new(w, json_string(rep->first));
+            if (deprecated)
+                json_array_append_new(w, json_string(dep));
+            extra = json_pack("{s:o}", "warnings", w);
+        }
+        if (deprecated && !replayed)
+            log_msg(LOG_WARNING, job.id, "%s", dep);
         if (!replayed && poly)
             log_msg(LOG_INFO, job.id, "queued (%u vertices, %u facets, "
                     "%zu ops, priority %s)", poly->nverts, poly->nfacets,
@@ -381,14 +391,13 @@ static enum MHD_Result post_job_file(http_req *r, const char *fmt_name)
     proto_pipeline pl = {0};
     bool have_pipeline = false;
     const char *pq = http_arg(r, "pipeline");
-    json_t *pv = pq ? pipeline_query(pq) : json_string("auto");
+    json_t *pv = pq ? pipeline_query(pq) : json_string("correct");
     if (!pv)
         add_error(errors, "pipeline", "expected op names separated by commas "
                   "or a JSON pipeline");
     else if (proto_pipeline_from_json(pv, "pipeline", &pl, &err) < 0)
         add_geo_error(errors, &err);
-    else if (runner_check(&pl, &err) < 0 ||
-             runner_check_input(&pl, false, &err) < 0)
+    else if (runner_check_input(&pl, false, &err) < 0)
         add_geo_error(errors, &err);
     else
         have_pipeline = true;
@@ -496,13 +505,12 @@ enum MHD_Result http_post_job(http_req *r)
     json_t *pdefault = pv       ? NULL
                        : frep   ? json_pack("[s]", "triangulate")
                        : meshes ? json_pack("[s, s]", "stitch", "inspect")
-                                : json_string("auto");
+                                : json_string("correct");
     geo_err err = {{0}};
     bool have_pipeline = false;
     if (proto_pipeline_from_json(pv ? pv : pdefault, "pipeline", &pl, &err) < 0)
         add_geo_error(errors, &err);
-    else if (runner_check(&pl, &err) < 0 ||
-             (inputs == 1 && runner_check_input(&pl, frep != NULL, &err) < 0))
+    else if (inputs == 1 && runner_check_input(&pl, frep != NULL, &err) < 0)
         add_geo_error(errors, &err);
     else
         have_pipeline = true;

@@ -27,7 +27,7 @@ req POST '/v1/jobs?format=json&pipeline=inspect' -H 'Content-Type: application/j
 expect_eq "format=json takes a facet-model/1 body with its own media type" 202 "$CODE"
 req POST '/v1/jobs?format=stl&pipeline=inspect' -H 'Content-Type: model/stl' --data-binary "@$T/cube.stl"
 expect_eq "the format's own media type is accepted" 202 "$CODE"
-req POST '/v1/jobs?format=stl&pipeline=inspect,inspect' -H "$oct" --data-binary "@$T/cube.stl"
+req POST '/v1/jobs?format=stl&pipeline=inspect,merge' -H "$oct" --data-binary "@$T/cube.stl"
 expect_eq "op names separated by commas make a pipeline" 202 "$CODE"
 req POST '/v1/jobs?format=stl&pipeline=%5B%22inspect%22%5D' -H "$oct" --data-binary "@$T/cube.stl"
 expect_eq "a JSON pipeline in the query works too" 202 "$CODE"

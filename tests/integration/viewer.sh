@@ -54,7 +54,7 @@ req GET /ui/app.js -X POST
 expect_eq "the files are read-only" 405 "$CODE"
 
 # the corrected sample scan, submitted as a file
-req POST '/v1/jobs?format=json&pipeline=auto&label=k400' -H 'Content-Type: application/json' \
+req POST '/v1/jobs?format=json&pipeline=correct&label=k400' -H 'Content-Type: application/json' \
     --data-binary "@$MODELS/brilliant.scan-k400.json"
 expect_eq "a ?format= POST becomes a job" 202 "$CODE"
 ID=$(jstr id)
