@@ -90,6 +90,16 @@ static const key keys[] = {
      "time running jobs get to finish on SIGTERM"},
     {"Jobs", "Paused", "paused", K_BOOL, F(paused), 0, 1, true, "no",
      "accept and keep jobs but start none (maintenance)"},
+    {"Jobs", "Lease", "job-lease", K_DURATION, F(job_lease_ms), SEC,
+     3600 * SEC, false, "30s", "with a shared store: how long a node's "
+     "claim on a job lasts unless renewed (a dead node's jobs run again "
+     "after it)"},
+    {"Store", "URL", "store-url", K_STR, F(store_url), 0, 0, false, "",
+     "job store shared by a cluster: postgresql://HOST[:PORT]/DB (no "
+     "password in it); empty: SQLite in StateDirectory"},
+    {"Store", "PasswordFile", "store-password-file", K_STR,
+     F(store_password_file), 0, 0, false, "", "libpq password file for "
+     "URL (default: PGPASSFILE or ~/.pgpass)"},
     {"Store", "StateDirectory", "state-dir", K_STR, F(state_dir), 0, 0, false,
      "/var/lib/facetd", "directory of the job store"},
     {"Store", "RetentionAge", "retention-age", K_DURATION,
@@ -98,6 +108,8 @@ static const key keys[] = {
     {"Store", "RetentionBytes", "retention-bytes", K_SIZE,
      F(retention_bytes), MiB, 1ull << 50, true, "1G",
      "finished jobs beyond this total size are deleted, oldest first"},
+    {"Cluster", "NodeName", "node-name", K_STR, F(node_name), 0, 0, false,
+     "", "this node's name in the cluster (default: HOST:PORT)"},
     {"Log", "LogLevel", "log-level", K_LEVEL, F(log_level), 0, 0, true,
      "info", "err, warning, notice, info or debug"},
     {"Scanners", "Enabled", "scanners", K_BOOL, F(scanners), 0, 1, false,

@@ -67,10 +67,16 @@ typedef struct cfg {
     uint64_t shutdown_timeout_ms; /* SIGTERM: how long running jobs may
                                      finish before they are requeued */
     bool paused;                  /* accept and keep jobs, start none */
+    uint64_t job_lease_ms;        /* shared store: a claim's lease */
     /* [Store] */
     char state_dir[512];          /* directory of the job store */
+    char store_url[1024];         /* PostgreSQL URI shared by a cluster;
+                                     empty: SQLite in state_dir */
+    char store_password_file[512]; /* libpq passfile for store_url */
     uint64_t retention_age_ms;    /* finished jobs older than this go */
     uint64_t retention_bytes;     /* finished jobs' total size cap */
+    /* [Cluster] */
+    char node_name[64];           /* empty: host name and port */
     /* [Log] */
     int log_level;                /* syslog level, LOG_INFO by default */
     /* [Scanners] */
