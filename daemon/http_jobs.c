@@ -386,8 +386,8 @@ static enum MHD_Result post_job_file(http_req *r, const char *fmt_name)
     proto_format fmt = proto_format_from_name(fmt_name);
     if (fmt == PROTO_FMT_UNKNOWN || fmt == PROTO_FMT_ASE)
         return http_problem(r, 400, "bad-argument", "Bad Request", NULL, NULL,
-                            "format: expected json, poly, obj, stl, ply or "
-                            "fmb1 (a format facetd reads)");
+                            "format: expected json, poly, obj, stl, ply, "
+                            "fmb1 or off (a format facetd reads)");
     const char *idem = http_header(r, "Idempotency-Key");
     if (idem && !valid_idem_key(idem))
         return http_problem(r, 400, "bad-idempotency-key", "Bad Request",
@@ -778,7 +778,7 @@ enum MHD_Result http_get_model(http_req *r)
     if (fmt == PROTO_FMT_UNKNOWN)
         return http_problem(r, 400, "bad-argument", "Bad Request", NULL, NULL,
                             "format: expected json, poly, obj, stl, "
-                            "stl-ascii, ply, ply-ascii, ase or fmb1");
+                            "stl-ascii, ply, ply-ascii, ase, fmb1 or off");
     /* which=input: the model as submitted (the viewer's before/after),
      * there from submission on; the result only once the job succeeded */
     const char *which = http_arg(r, "which");

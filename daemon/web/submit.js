@@ -3,7 +3,7 @@
 // (the format from the file's extension), and the new job opens.
 import { api, el } from './api.js';
 
-const BY_EXT = { json: 'json', poly: 'poly', obj: 'obj', stl: 'stl', ply: 'ply', fmb: 'fmb1', fmb1: 'fmb1' };
+const BY_EXT = { json: 'json', poly: 'poly', obj: 'obj', stl: 'stl', ply: 'ply', off: 'off', fmb: 'fmb1', fmb1: 'fmb1' };
 const PRESETS = [
   ['correct', 'correct — the post-scan correction'],
   ['inspect', 'inspect — statistics only'],

@@ -9,6 +9,7 @@ start_facetd --workers 1 || { not_ok "facetd starts"; finish; exit 1; }
 "$BUILD/facet" convert "$MODELS/notch-cube.json" "$T/cube.stl" >/dev/null 2>&1
 "$BUILD/facet" convert "$MODELS/notch-cube.json" "$T/cube.obj" >/dev/null 2>&1
 "$BUILD/facet" convert "$MODELS/notch-cube.json" "$T/cube.ply" >/dev/null 2>&1
+"$BUILD/facet" convert "$MODELS/notch-cube.json" "$T/cube.off" >/dev/null 2>&1
 oct='Content-Type: application/octet-stream'
 
 req POST '/v1/jobs?format=stl&pipeline=inspect&label=drop' -H "$oct" --data-binary "@$T/cube.stl"
@@ -19,7 +20,7 @@ wait_job "$ID"
 expect_eq "the job succeeds" succeeded "$STATE_OF"
 expect_eq "it read every facet of the STL (triangles)" 28 "$(jnum facets_before)"
 
-for f in obj ply; do
+for f in obj ply off; do
     req POST "/v1/jobs?format=$f&pipeline=inspect" -H "$oct" --data-binary "@$T/cube.$f"
     expect_eq "format=$f is queued" 202 "$CODE"
 done
