@@ -83,7 +83,7 @@ geo_mw *geo_mw_new(geo_edit *e, const geo_merge_opts *opts, geo_err *err)
         for (int k = 0; k < 3; k++)
             w->origin[k] = 0.5 * (lo[k] + hi[k]);
     }
-    w->eps = 1e-10 * (1 + size);
+    w->eps = geo_eps_of_size(size);
     w->max_cut = opts->max_deviation > 0 ? opts->max_deviation
                                          : opts->rel_deviation * size;
     w->gen = 1;

@@ -751,18 +751,8 @@ out:
 static double facet_volume6(const geo_poly *p, uint32_t f, double (*x)[3],
                             const double o[3])
 {
-    const uint32_t *v = geo_poly_facet(p, f);
-    uint32_t n = geo_poly_facet_size(p, f);
-    double a[3], s = 0;
-    geo_vsub(x[v[0]], o, a);
-    for (uint32_t i = 1; i + 1 < n; i++) {
-        double b[3], c[3], bc[3];
-        geo_vsub(x[v[i]], o, b);
-        geo_vsub(x[v[i + 1]], o, c);
-        geo_vcross(b, c, bc);
-        s += geo_vdot(a, bc);
-    }
-    return s;
+    return geo_fan_volume6(0, (const double(*)[3])x, geo_poly_facet(p, f),
+                           geo_poly_facet_size(p, f), o);
 }
 
 /* Newell vector of facet f from positions x. */
