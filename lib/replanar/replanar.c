@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "grow.h"
 #include "bvh.h"
 #include "plane.h"
 #include "selfint.h"
@@ -543,14 +544,9 @@ static int log_row(geo_replanar_log *log, const run *r, uint32_t stepno,
 {
     if (!log)
         return 0;
-    if (log->n == log->cap) {
-        size_t cap = log->cap ? 2 * log->cap : 64;
-        geo_replanar_step *rows = realloc(log->rows, cap * sizeof *rows);
-        if (!rows)
-            return -ENOMEM;
-        log->rows = rows;
-        log->cap = cap;
-    }
+    if (geo_grow((void **)&log->rows, &log->cap, log->n + 1,
+                 sizeof *log->rows) < 0)
+        return -ENOMEM;
     log->rows[log->n++] = (geo_replanar_step){
         .step = stepno, .outer = outer, .inner = inner, .delta = r->delta,
         .s1 = r->s1, .s2 = r->s2, .s2sum = r->s2sum, .eps0 = eps, .k = k,
