@@ -28,6 +28,11 @@ static enum MHD_Result store_failure(http_req *r, int code, const geo_err *e)
     if (code == -ENOENT)
         return http_problem(r, 404, "job-not-found", "Not Found", NULL, NULL,
                             "no job '%s'", r->id);
+    if (code == -ENOTCONN) {
+        const char *h[] = {"Retry-After", "2", NULL};
+        return http_problem(r, 503, "store-unavailable",
+                            "Service Unavailable", NULL, h, "%s", e->msg);
+    }
     log_msg(LOG_ERR, r->id[0] ? r->id : NULL, "store: %s", e->msg);
     return http_problem(r, 500, "store-error", "Internal Server Error", NULL,
                         NULL, "the job store failed: %s", e->msg);
@@ -355,6 +360,11 @@ enum MHD_Result http_post_job(http_req *r)
         const char *h[] = {"Retry-After", "1", NULL};
         res = http_problem(r, 503, "queue-full", "Service Unavailable", NULL,
                            h, "%s; retry later", err.msg);
+    } else if (rc == -ENOTCONN) {
+        /* nothing accepted: the client retries (with its key, safely) */
+        const char *h[] = {"Retry-After", "2", NULL};
+        res = http_problem(r, 503, "store-unavailable", "Service Unavailable",
+                           NULL, h, "%s; retry later", err.msg);
     } else if (rc == -EEXIST) {
         res = http_problem(r, 422, "idempotency-key-reused",
                            "Unprocessable Content", NULL, NULL, "%s", err.msg);
