@@ -85,7 +85,6 @@ int cmd_triangulate(int argc, char **argv)
     proto_format to = PROTO_FMT_UNKNOWN;
     geo_tri_opts o;
     geo_tri_opts_default(&o);
-    bool only_files = false;
     enum { O_OUT, O_QLEV, O_BLEV, O_FILL, O_FAIR, O_THREADS, O_METRICS,
            O_TO, O_NO_REFINE, O_NO_SHARPEN };
     static const cli_opt opts[] = {
