@@ -527,7 +527,8 @@ int geo_stitch(const geo_poly *m1, const geo_poly *m2,
     double mean_len = total / ncol;
     uint32_t segs = 1;
     if (R.segment > 0 && mean_len / R.segment > 1.5)
-        segs = (uint32_t)fmin(lround(mean_len / R.segment), 10000.0);
+        segs = (uint32_t)lround(fmin(mean_len / R.segment, 10000.0));
+
     uint32_t rows = segs + 1;
     R.rows = rows;
     /* P, rows × ncol; intermediate points appended as new vertices */
