@@ -8,6 +8,8 @@
  *
  *   stitch_halves MODEL CASES [MAX_BAND_MM]
  *
+ * With STITCH_HALVES_DUMP=DIR set, each case's two halves are written
+ * there (caseN-top.json, caseN-bot.json) to replay with `facet stitch`.
  * Exit 0 when every case gives a valid solid, 1 otherwise, 2 on usage. */
 #include <math.h>
 #include <stdio.h>
@@ -79,6 +81,15 @@ int main(int argc, char **argv)
         double ptop[4] = {-n[0], -n[1], -n[2], -d + band / 2};
         double pbot[4] = {n[0], n[1], n[2], d + band / 2};
         geo_poly *top = open_half(m, ptop), *bot = open_half(m, pbot);
+        /* STITCH_HALVES_DUMP=DIR keeps each case's halves to replay */
+        const char *dump = getenv("STITCH_HALVES_DUMP");
+        if (dump && top && bot) {
+            char path[512];
+            snprintf(path, sizeof path, "%s/case%d-top.json", dump, i);
+            proto_model_write_file(top, path, PROTO_FMT_JSON, &err);
+            snprintf(path, sizeof path, "%s/case%d-bot.json", dump, i);
+            proto_model_write_file(bot, path, PROTO_FMT_JSON, &err);
+        }
         geo_poly *out = geo_poly_new();
         geo_stitch_report rep;
         memset(&rep, 0, sizeof rep);
