@@ -178,6 +178,17 @@ post_json /v1/jobs "$g" -H 'Idempotency-Key: cluster-7'
 expect_eq "an idempotent retry on another node returns the same job" \
     "202 $first true" "$CODE $(jstr id) $(header Idempotent-Replayed)"
 
+wait_job "$first" 30
+curl -s -o "$T/a.obj" "${NURL[1]}/v1/jobs/$first/model?format=obj"
+curl -s -o "$T/b.obj" "${NURL[2]}/v1/jobs/$first/model?format=obj"
+check "every node serves a job's model in another format" \
+    bash -c "[ -s '$T/a.obj' ] && cmp -s '$T/a.obj' '$T/b.obj' && grep -q '^f ' '$T/a.obj'"
+req DELETE "/v1/jobs/$first"
+del=$CODE
+URL=${NURL[1]}
+req GET "/v1/jobs/$first"
+expect_eq "a job deleted on one node is gone on the other" "204 404" "$del $CODE"
+
 # a waiter on node 2 hears a job node 1 queued and node 1 ran
 URL=${NURL[1]}
 submit l-prism.json
