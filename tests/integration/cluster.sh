@@ -225,6 +225,23 @@ expect_eq "both nodes are ready again once the database is back" 1 "$ready"
 submit brilliant.scan-k100.json '"auto"'
 wait_job "$ID" 30
 expect_eq "a job submitted after the outage succeeds" succeeded "$STATE_OF"
+# the queue bound is the cluster's queue; a used key still answers
+printf '[Jobs]\nPaused=yes\nQueueSize=1\n' >"$T/node1.conf"
+kill -HUP "${NPID[1]}"
+setpaused 2 yes
+sleep 0.5
+URL=${NURL[1]}
+post_json /v1/jobs "$g" -H 'Idempotency-Key: cluster-full'
+kept=$(jstr id)
+post_json /v1/jobs "$g"
+full=$CODE
+post_json /v1/jobs "$g" -H 'Idempotency-Key: cluster-full'
+expect_eq "a full shared queue is 503; a retry of a queued key still returns its job" \
+    "503 202 $kept" "$full $CODE $(jstr id)"
+setpaused 1 no
+setpaused 2 no
+wait_job "$kept" 30
+expect_eq "the job kept in the full queue runs once unpaused" succeeded "$STATE_OF"
 # KEEP=1 keeps the database directory with the nodes' logs in it
 [ -n "${KEEP:-}" ] && cp "${NLOG[@]}" "$PGD/"
 finish
