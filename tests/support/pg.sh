@@ -54,7 +54,7 @@ pg_port() {
 pg_start() {
     local try
     for try in 1 2 3 4 5; do
-        : >"$PGD/log"
+        [ -f "$PGD/log" ] && : >"$PGD/log" # keeps its owner
         if as_pg "$PGBIN/pg_ctl" -D "$PGD/data" -l "$PGD/log" -w -t 30 -o \
             "-c listen_addresses=127.0.0.1 -c port=$PGPORT -c unix_socket_directories=$PGD -c fsync=$PG_FSYNC -c max_connections=200" \
             start >/dev/null 2>&1; then
