@@ -250,6 +250,8 @@ static PGconn *conn(pg_store *s, geo_err *err)
     }
     geo_err e;
     pc->pg = pg_connect(s, &e);
+    if (pc->pg)
+        atomic_store(&s->down_until, 0); /* back: nobody fails fast */
     if (!pc->pg) {
         pthread_mutex_lock(&s->conns_lock);
         snprintf(s->down_msg, sizeof s->down_msg, "%s", e.msg);
@@ -1150,6 +1152,7 @@ static void *events_main(void *arg)
                 poll(&w, 1, RETRY_CONNECT_MS);
                 continue;
             }
+            atomic_store(&s->down_until, 0);
             if (down) {
                 log_msg(LOG_NOTICE, NULL, "the database is reachable again");
                 emit(s, STORE_EV_RESYNC, NULL, NULL);
