@@ -175,10 +175,11 @@ static const key keys[] = {
      "empty Scanner= restores it. Add a udev rule for every model "
      "listed (70-facetd-scanners.rules)."},
     {"Scanners", "Pipeline", "scanner-pipeline", K_PIPELINE,
-     F(scanner_pipeline), 0, 0, true, "correct",
+     F(scanner_pipeline), 0, 0, true, "inspect,correct,inspect,report",
      "pipeline of scanner jobs: correct, op names (inspect,triangulate), "
      "inline JSON or a /path/to/pipeline.json",
-     "correct is the post-scan correction; a JSON file is read again "
+     "correct is the post-scan correction; the default adds the stone's "
+     "proportions (report) to every scan; a JSON file is read again "
      "on SIGHUP, as `facet run` takes it. facetd does not start when a "
      "configured pipeline names an unknown operation."},
 };

@@ -26,6 +26,7 @@ static const char *const op_names[PROTO_OP_COUNT] = {
     [PROTO_OP_FILL] = "fill",
     [PROTO_OP_STITCH] = "stitch",
     [PROTO_OP_CORRECT] = "correct",
+    [PROTO_OP_REPORT] = "report",
 };
 
 /* Names of earlier releases, still accepted for one release so that saved
@@ -58,6 +59,7 @@ static const char *const op_keys[PROTO_OP_COUNT][8] = {
                               "refine", "fair", "sharpen"},
     [PROTO_OP_FILL] = {"op", "weight", "refine", "fair"},
     [PROTO_OP_STITCH] = {"op"},
+    [PROTO_OP_REPORT] = {"op", "gear", "axis"},
     [PROTO_OP_CORRECT] = {"op", "radius", "max_angle_deg", "max_deviation",
                        "views"},
 };
@@ -317,6 +319,9 @@ static void set_defaults(proto_op *op)
         op->u.fill.refine = true;
         op->u.fill.fair = true;
         break;
+    case PROTO_OP_REPORT:
+        op->u.report.gear = 96;
+        break;
     default:
         break;
     }
@@ -334,6 +339,19 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
     case PROTO_OP_COLLAPSE:
         return get_number(o, "radius", pl, 0, 1e9, false,
                           &op->u.collapse.radius, err);
+    case PROTO_OP_REPORT: {
+        r = get_u32(o, "gear", pl, 1, 100000, &op->u.report.gear, err);
+        const json_t *a = json_object_get(o, "axis");
+        if (r == 0 && a) {
+            double *v = op->u.report.axis;
+            if ((r = get_vec(a, "axis", pl, 3, v, err)) < 0)
+                return r;
+            if (!(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] > 0))
+                return FAIL(pl, "axis", "must be a non-zero vector");
+            op->u.report.have_axis = true;
+        }
+        return r;
+    }
     case PROTO_OP_CORRECT:
         r = get_number(o, "radius", pl, 0, 1e9, false,
                        &op->u.correct.radius, err);
@@ -699,6 +717,12 @@ static json_t *op_to_json(const proto_op *op)
             o, "fair", json_string(fair_names[op->u.triangulate.fair]));
         e |= json_object_set_new(o, "sharpen",
                                  json_boolean(op->u.triangulate.sharpen));
+        break;
+    case PROTO_OP_REPORT:
+        e |= json_object_set_new(o, "gear",
+                                 json_integer(op->u.report.gear));
+        if (op->u.report.have_axis)
+            e |= json_object_set_new(o, "axis", vec(op->u.report.axis, 3));
         break;
     case PROTO_OP_FILL:
         e |= json_object_set_new(

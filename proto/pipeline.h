@@ -36,6 +36,9 @@
  *                 a frep-object/1
  *   fill {weight "area"|"length" ["area"], refine [true], fair [true]}
  *   stitch
+ *   report {gear 1..100000 [96], axis?: [x, y, z]} — the stone's tiers,
+ *                 proportions and facet table (lib/gem/report.h); reads
+ *                 the model, changes nothing
  * The pipeline "correct" is the post-scan correction: inspect → correct →
  * inspect, with the defaults above; the correct op merges (automatic
  * groups) and collapses clusters, repeating both until nothing changes (in
@@ -69,6 +72,7 @@ typedef enum proto_op_kind {
     PROTO_OP_FILL,
     PROTO_OP_STITCH,
     PROTO_OP_CORRECT,
+    PROTO_OP_REPORT,
     PROTO_OP_COUNT
 } proto_op_kind;
 
@@ -128,6 +132,11 @@ typedef struct proto_op {
             bool refine, sharpen;
             proto_fair fair;
         } triangulate;
+        struct {
+            uint32_t gear;       /* teeth of the index gear */
+            bool have_axis;
+            double axis[3];      /* the main axis, when given */
+        } report;
         struct {
             bool weight_length;  /* weight by edge length (else area) */
             bool refine, fair;

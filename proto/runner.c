@@ -20,6 +20,8 @@
 #include "merge.h"
 #include "replanar.h"
 #include "replanar_json.h"
+#include "report.h"
+#include "report_json.h"
 #include "stats.h"
 #include "stats_json.h"
 #include "stitch.h"
@@ -68,6 +70,49 @@ static int run_inspect(const proto_op *op, geo_poly **model,
         return geo_err_set(err, -ENOMEM, "out of memory");
     }
     *ret_report = rep;
+    return 0;
+}
+
+/* report (lib/gem/report.h): the stone's tiers, proportions and facet
+ * table, model unchanged. A model without a table (a rough) and no axis
+ * is not an error of the job, whose model is still the result: the report
+ * says {"table": false, "reason": ...} and the summary has no
+ * proportions. */
+static int run_report(const proto_op *op, geo_poly **model,
+                      const geo_ctx *ctx, json_t **ret_report,
+                      json_t *summary, geo_err *err)
+{
+    (void)ctx;
+    geo_report rep;
+    geo_err why = {{0}};
+    int r = geo_report_compute(*model, op->u.report.have_axis
+                                           ? op->u.report.axis : NULL,
+                               op->u.report.gear, &rep, &why);
+    if (r == -ENOMEM)
+        return geo_err_set(err, r, "%s", why.msg);
+    json_t *j;
+    int e = 0;
+    if (r < 0) {
+        j = json_pack("{s:b, s:s}", "table", 0, "reason", why.msg);
+    } else {
+        j = proto_report_to_json(&rep);
+        if (rep.has_table) {
+            e |= json_object_set_new(summary, "table_percent",
+                                     json_real(rep.table_percent));
+            e |= json_object_set_new(summary, "crown_angle_deg",
+                                     json_real(rep.crown_angle_deg.mean));
+            e |= json_object_set_new(summary, "pavilion_angle_deg",
+                                     json_real(rep.pavilion_angle_deg.mean));
+            e |= json_object_set_new(summary, "total_depth_percent",
+                                     json_real(rep.total_depth_percent));
+        }
+        geo_report_free(&rep);
+    }
+    if (e || !j) {
+        json_decref(j);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    *ret_report = j;
     return 0;
 }
 
@@ -455,6 +500,7 @@ static const op_entry ops[PROTO_OP_COUNT] = {
     [PROTO_OP_CUT] = {run_cut, true},
     [PROTO_OP_MOVE] = {run_move, true},
     [PROTO_OP_INVERSION_STATS] = {run_inversion_stats, false},
+    [PROTO_OP_REPORT] = {run_report, false},
 };
 
 int runner_check_input(const proto_pipeline *p, bool frep, geo_err *err)

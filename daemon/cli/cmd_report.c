@@ -10,6 +10,7 @@
 #include "cli.h"
 #include "model_io.h"
 #include "report.h"
+#include "report_json.h"
 
 static const char USAGE[] =
     "usage: facet report MODEL [--gear N] [--axis X,Y,Z]\n"
@@ -25,71 +26,6 @@ static const char USAGE[] =
     "\n"
     "exit status: 0 success, 1 bad input (the error names file and place),\n"
     "2 usage error\n";
-
-static json_t *range(const geo_range *r)
-{
-    return json_pack("{s:f, s:f, s:f}", "min", r->min, "max", r->max, "mean",
-                     r->mean);
-}
-
-static json_t *vec3(const double v[3])
-{
-    return json_pack("[f, f, f]", v[0], v[1], v[2]);
-}
-
-json_t *cli_report_json(const geo_report *r);
-
-json_t *cli_report_json(const geo_report *r)
-{
-    json_t *facets = json_array();
-    for (uint32_t f = 0; f < r->nfacets; f++) {
-        const geo_report_facet *F = &r->facets[f];
-        json_array_append_new(
-            facets, json_pack("{s:s, s:f, s:f, s:f, s:f, s:f}", "tier",
-                              geo_tier_name(F->tier), "inclination_deg",
-                              F->inclination_deg, "azimuth_deg",
-                              F->azimuth_deg, "index", F->index,
-                              "distance_mm", F->distance_mm, "area_mm2",
-                              F->area_mm2));
-    }
-    json_t *tiers = json_object();
-    for (int t = 0; t < 5; t++)
-        json_object_set_new(tiers, geo_tier_name((enum geo_tier)t),
-                            json_integer(r->tier_count[t]));
-    json_t *o = json_object();
-    json_object_set_new(o, "table", json_boolean(r->has_table));
-    json_object_set_new(o, "axis", vec3(r->axis));
-    json_object_set_new(o, "axis_point", vec3(r->center));
-    json_object_set_new(o, "table_percent", json_real(r->table_percent));
-    json_object_set_new(o, "diameter_mm", range(&r->diameter_mm));
-    json_object_set_new(o, "length_mm", json_real(r->length_mm));
-    json_object_set_new(o, "width_mm", json_real(r->width_mm));
-    json_object_set_new(o, "length_to_width", json_real(r->length_to_width));
-    json_object_set_new(o, "total_depth_percent",
-                        json_real(r->total_depth_percent));
-    json_object_set_new(o, "crown_height_percent",
-                        json_real(r->crown_height_percent));
-    json_object_set_new(o, "pavilion_depth_percent",
-                        json_real(r->pavilion_depth_percent));
-    json_object_set_new(o, "girdle_thickness_percent",
-                        range(&r->girdle_thickness_percent));
-    json_object_set_new(o, "culet_percent", json_real(r->culet_percent));
-    json_object_set_new(o, "crown_angle_deg", json_real(r->crown_angle_deg.mean));
-    json_object_set_new(o, "crown_angle_spread_deg",
-                        json_pack("{s:f, s:f}", "min", r->crown_angle_deg.min,
-                                  "max", r->crown_angle_deg.max));
-    json_object_set_new(o, "crown_mains", json_integer(r->crown_mains));
-    json_object_set_new(o, "pavilion_angle_deg",
-                        json_real(r->pavilion_angle_deg.mean));
-    json_object_set_new(o, "pavilion_angle_spread_deg",
-                        json_pack("{s:f, s:f}", "min",
-                                  r->pavilion_angle_deg.min, "max",
-                                  r->pavilion_angle_deg.max));
-    json_object_set_new(o, "pavilion_mains", json_integer(r->pavilion_mains));
-    json_object_set_new(o, "tiers", tiers);
-    json_object_set_new(o, "facets", facets);
-    return o;
-}
 
 static int parse_axis(const char *s, double v[3])
 {
@@ -148,7 +84,7 @@ int cmd_report(int argc, char **argv)
     geo_poly_free(p);
     if (e < 0)
         return cli_input_error("report", "%s: %s", path, err.msg);
-    json_t *j = cli_report_json(&r);
+    json_t *j = proto_report_to_json(&r);
     geo_report_free(&r);
     int wr = json_dumpf(j, stdout, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
     json_decref(j);

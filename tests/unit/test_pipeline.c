@@ -107,6 +107,12 @@ static void test_deprecated_names_are_aliases(void **state)
 static void test_errors_name_the_place(void **state)
 {
     (void)state;
+    expect_error("[{\"op\":\"report\",\"gear\":0}]",
+                 "pipeline[0].gear: 0 out of range [1, 100000]");
+    expect_error("[{\"op\":\"report\",\"axis\":[0,0,0]}]",
+                 "pipeline[0].axis: must be a non-zero vector");
+    expect_error("[{\"op\":\"report\",\"scan\":1}]",
+                 "pipeline[0].scan: unknown parameter of report");
     expect_error("[\"inspect\", \"inspect\", {\"op\":\"merge\","
                  "\"max_angle_deg\":\"1\"}]",
                  "pipeline[2].max_angle_deg: expected a number");

@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "model_io.h"
 #include "parallel.h"
 #include "runner.h"
 #include "tu_load.h"
@@ -222,6 +223,53 @@ static void test_changes_model_follows_the_ops(void **state)
     }
 }
 
+/* report reads the stone: the truth brilliant's proportions in the op's
+ * report, the model untouched; a model without a table (the notch cube)
+ * is reported as such without failing the run; with an axis it is
+ * measured along it. */
+static void test_report_gives_the_proportions(void **state)
+{
+    (void)state;
+    geo_poly *m = tu_load_model("brilliant.truth.json");
+    uint32_t nf = m->nfacets;
+    json_t *stats;
+    geo_err err = {{0}};
+    assert_int_equal(run("[{\"op\":\"report\",\"gear\":64}]", &m, NULL,
+                         &stats, &err), 0);
+    json_t *r = report(stats, 0);
+    assert_true(json_is_true(json_object_get(r, "table")));
+    double t = num(r, "table_percent");
+    assert_true(t > 40 && t < 75);
+    double c = num(r, "crown_angle_deg"), pv = num(r, "pavilion_angle_deg");
+    assert_true(c > 20 && c < 45 && pv > 35 && pv < 48);
+    assert_int_equal(json_array_size(json_object_get(r, "facets")), nf);
+    assert_int_equal(m->nfacets, nf);
+    json_decref(stats);
+    geo_poly_free(m);
+
+    /* a tetrahedron standing on a face: no facet faces up */
+    static const char tetra[] =
+        "{\"format\":\"facet-model/1\",\"vertices\":[[1,0,0],"
+        "[-0.5,0.8660254037844386,0],[-0.5,-0.8660254037844386,0],"
+        "[0,0,1.4142135623730951]],\"facets\":[{\"vertices\":[0,2,1]},"
+        "{\"vertices\":[0,1,3]},{\"vertices\":[1,2,3]},"
+        "{\"vertices\":[2,0,3]}]}";
+    m = proto_model_read_mem(tetra, sizeof tetra - 1, PROTO_FMT_JSON, NULL,
+                             &err);
+    assert_non_null(m);
+    assert_int_equal(run("[\"report\"]", &m, NULL, &stats, &err), 0);
+    r = report(stats, 0);
+    assert_true(json_is_false(json_object_get(r, "table")));
+    assert_non_null(strstr(json_string_value(json_object_get(r, "reason")),
+                           "table"));
+    json_decref(stats);
+    assert_int_equal(run("[{\"op\":\"report\",\"axis\":[0,0,1]}]", &m,
+                         NULL, &stats, &err), 0);
+    assert_non_null(json_object_get(report(stats, 0), "facets"));
+    json_decref(stats);
+    geo_poly_free(m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -231,6 +279,7 @@ int main(void)
         cmocka_unit_test(test_move_vertex_errors_name_the_op),
         cmocka_unit_test(test_inversion_stats_reads_only_and_ignores_threads),
         cmocka_unit_test(test_changes_model_follows_the_ops),
+        cmocka_unit_test(test_report_gives_the_proportions),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
