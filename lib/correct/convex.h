@@ -14,7 +14,8 @@
  *     the scan's own error (its surface noise and the roof its view step
  *     leaves) of the group's plane — the criterion of the merge's
  *     automatic groups (merge_groups.c), applied once to the raw scan;
- *  2. planes: each group's plane is fitted to the group's boundary — the
+ *  2. planes: each group's plane is its surface's least-squares plane
+ *     (the default, GEO_CONVEX_FIT_AREA), or fitted to the group's boundary — the
  *     edges it shares with other groups, where the slivers hinge on the
  *     true edges — by least squares over the boundary segments (each
  *     weighted by its length), with the segments that lie more than a few
@@ -40,6 +41,13 @@ typedef struct geo_convex_planes {
     uint32_t nplanes;     /* kept planes */
     double (*planes)[4];  /* nplanes unit outward planes */
     double *area;         /* nplanes: area of the scan facets of each */
+    double *allow;        /* nplanes: how far the scan may lie outside the
+                             plane over its group: the noise bound plus the
+                             roof the view step leaves over a group that
+                             wide and inclined, mm */
+    double dev0;          /* the noise bound alone, mm */
+    double hinge_noise;   /* the hinges' scatter about their planes, mm */
+    double cut_min;       /* the deepest cut a dropped group made, mm */
     uint32_t ngroups;     /* groups found (kept or not) */
     uint32_t *group;      /* p->nfacets: group of each scan facet */
     uint32_t *kept;       /* ngroups: index into planes, or GEO_NONE */
@@ -49,6 +57,17 @@ typedef struct geo_convex_planes {
 /* Releases the arrays and zeroes r; accepts NULL. */
 void geo_convex_planes_clear(geo_convex_planes *r);
 
+/* The plane each group gets (step 2). */
+enum geo_convex_fit {
+    /* the least-squares plane of the group's surface (seed 000 §2.5.2,
+     * the area and inertia ways), over the slivers of the whole true
+     * facet: measured the better one with 0–3 µm of noise (docs) */
+    GEO_CONVEX_FIT_AREA = 0,
+    /* the trimmed fit of the group's boundary (step 2 above): better
+     * noise-free, worse once the noise is a micrometre */
+    GEO_CONVEX_FIT_HINGE = 1,
+};
+
 /* Steps 1–3 above on p, which must be a closed, outward, manifold model
  * (a raw convex scan; other models give planes too, meaningless ones).
  * views: the scanner's views over 180° (geo_merge_view_grid), 0 when not
@@ -57,6 +76,35 @@ void geo_convex_planes_clear(geo_convex_planes *r);
  * free with geo_convex_planes_clear). Returns 0, -EINVAL (p not closed
  * and manifold; err says so), -ENOMEM (ret zeroed). */
 int geo_convex_planes_find(const geo_poly *p, uint32_t views, double noise,
-                           geo_convex_planes *ret, geo_err *err);
+                           enum geo_convex_fit fit, geo_convex_planes *ret,
+                           geo_err *err);
+
+/* What geo_correct_convex did. */
+typedef struct geo_convex_report {
+    uint32_t groups, planes, dropped; /* see geo_convex_planes */
+    uint32_t redundant;  /* kept planes that bound no facet of the result */
+    double concavity;  /* the scan's deepest local concavity, mm */
+    double bound;      /* the deviation the result may have from the
+                          scan, mm */
+    double deviation;  /* the result's Hausdorff distance to the scan, mm */
+    char reason[200];  /* why the convex path was not taken ("" if it was) */
+} geo_convex_report;
+
+/* The convex path of the correction: when p (closed, outward, manifold)
+ * is convex to within the scan's deviation bound max_dev (mm; every edge's
+ * dihedral convex or concave by no more than that), its true planes are
+ * found (geo_convex_planes_find with views, noise) and *ret becomes their
+ * exact intersection (lib/core/halfspace.h: closed, outward, convex, no
+ * self-intersection by construction), provided it lies within the bound
+ * the scan's noise and view step allow (rep->bound) of p: no result
+ * vertex farther outside p than the hinges' noise moves them, no vertex
+ * of p farther outside the result than its group's roof allows. Returns 0 (*ret a new
+ * model, the caller frees it), 1 when the path does not apply or a check
+ * fails (*ret NULL, rep->reason says which), -ENOMEM or -ECANCELED (err
+ * set). p is never modified. rep may be NULL. */
+int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
+                       double max_dev, enum geo_convex_fit fit,
+                       const geo_ctx *ctx, geo_poly **ret,
+                       geo_convex_report *rep, geo_err *err);
 
 #endif

@@ -42,6 +42,10 @@
 #define CUT_NOISE 4.0
 #define CUT_REL 2e-4
 
+/* Groups with at least this many boundary segments measure the hinges'
+ * scatter. */
+#define HINGE_SEGMENTS 8
+
 typedef struct mom {
     double a, s[3], ss[3][3]; /* weight, first and second moments */
 } mom;
@@ -434,8 +438,9 @@ static int cmp_u64(const void *a, const void *b)
 static void hinge_fit(const geo_poly *p, const seg *sg, uint32_t n,
                       const double o[3], double scale_floor,
                       const double fallback[4], double *res, bool *use,
-                      double ret[4])
+                      double ret[4], double *ret_scale)
 {
+    *ret_scale = 0;
     memcpy(ret, fallback, 4 * sizeof *ret);
     for (uint32_t i = 0; i < n; i++)
         use[i] = true;
@@ -464,7 +469,8 @@ static void hinge_fit(const geo_poly *p, const seg *sg, uint32_t n,
         for (uint32_t i = 0; i < n; i++)
             tmp[i] = fabs(res[i]);
         qsort(tmp, n, sizeof *tmp, cmp_double);
-        double scale = fmax(1.4826 * tmp[n / 2], scale_floor);
+        *ret_scale = 1.4826 * tmp[n / 2];
+        double scale = fmax(*ret_scale, scale_floor);
         bool changed = false;
         uint32_t kept = 0;
         for (uint32_t i = 0; i < n; i++) {
@@ -510,6 +516,7 @@ void geo_convex_planes_clear(geo_convex_planes *r)
         return;
     free(r->planes);
     free(r->area);
+    free(r->allow);
     free(r->group);
     free(r->kept);
     memset(r, 0, sizeof *r);
@@ -605,7 +612,8 @@ static int support(const geo_convex_planes *r, const double (*gpl)[4],
 }
 
 int geo_convex_planes_find(const geo_poly *p, uint32_t views, double noise,
-                           geo_convex_planes *ret, geo_err *err)
+                           enum geo_convex_fit fit, geo_convex_planes *ret,
+                           geo_err *err)
 {
     memset(ret, 0, sizeof *ret);
     geo_topo *t = geo_topo_build(p, err);
@@ -692,27 +700,50 @@ int geo_convex_planes_find(const geo_poly *p, uint32_t views, double noise,
     qsort(sg, ns, sizeof *sg, cmp_seg_group);
     for (uint32_t g = 0; g < ng; g++)
         memcpy(gpl[g], apl[g], sizeof gpl[0]);
+    /* the hinges' own scatter: the median residual scale over the groups
+     * with enough boundary to tell (HINGE_SEGMENTS), a better noise
+     * measure than the slivers' (whose fans hide most of it) */
+    double *scales = malloc(((size_t)ng + 1) * sizeof *scales);
+    if (!scales) {
+        free(apl);
+        goto done;
+    }
+    uint32_t nsc = 0;
     for (uint32_t i = 0, j; i < ns; i = j) {
         for (j = i; j < ns && sg[j].g == sg[i].g; j++)
             ;
         uint32_t g = sg[i].g;
+        double sc;
         hinge_fit(p, sg + i, j - i, f.o, fmax(f.noise, 1e-6 * size), apl[g],
-                  res, use, gpl[g]);
+                  res, use, gpl[g], &sc);
+        if (j - i >= HINGE_SEGMENTS)
+            scales[nsc++] = sc;
+        if (fit == GEO_CONVEX_FIT_AREA)
+            memcpy(gpl[g], apl[g], sizeof gpl[0]);
     }
+    if (nsc) {
+        qsort(scales, nsc, sizeof *scales, cmp_double);
+        ret->hinge_noise = scales[nsc / 2];
+    }
+    free(scales);
     free(apl);
     /* step 3 */
     ret->group = f.group;
     f.group = NULL;
     if (group_neighbours(p, t, ret->group, ng, &nstart, &nlist) < 0)
         goto done;
-    double cut_min = f.noise > 0 ? CUT_NOISE * f.noise : CUT_REL * size;
+    double nz = fmax(f.noise, ret->hinge_noise);
+    double cut_min = nz > 0 ? CUT_NOISE * nz : CUT_REL * size;
+    ret->cut_min = cut_min;
     if (support(ret, (const double(*)[4])gpl, garea, nstart, nlist, cut_min,
                 geo_poly_eps(p), drop) < 0)
         goto done;
     ret->planes = malloc(((size_t)ng + 1) * sizeof *ret->planes);
     ret->area = malloc(((size_t)ng + 1) * sizeof *ret->area);
-    if (!ret->planes || !ret->area)
+    ret->allow = malloc(((size_t)ng + 1) * sizeof *ret->allow);
+    if (!ret->planes || !ret->area || !ret->allow)
         goto done;
+    ret->dev0 = f.dev0;
     for (uint32_t g = 0; g < ng; g++) {
         if (drop[g]) {
             ret->kept[g] = GEO_NONE;
@@ -721,6 +752,11 @@ int geo_convex_planes_find(const geo_poly *p, uint32_t views, double noise,
         }
         ret->kept[g] = ret->nplanes;
         memcpy(ret->planes[ret->nplanes], gpl[g], sizeof gpl[0]);
+        double q[4], width = 0;
+        if (!mom_plane(&gm[g], f.o, gpl[g], q, &width))
+            width = 0;
+        ret->allow[ret->nplanes] = f.dev0 + ROOF * width * f.step *
+                                   hypot(gpl[g][0], gpl[g][1]);
         ret->area[ret->nplanes++] = garea[g];
     }
     r = 0;

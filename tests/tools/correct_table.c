@@ -7,15 +7,16 @@
  *   correct_table [--cuts brilliant,princess,...] [--seeds 1,2,3]
  *                 [--ks 100,400,800] [--noise 1,...]  (µm)
  *                 [--suite N [--first I]] [--method auto|merge|planes]
- *                 [--rows] [--models DIR]
+ *                 [--fit area|hinge] [--rows] [--models DIR]
  *
  * Without --suite: every cut × seed × K × noise, views at phase 0 and
  * the stone as drawn. With --suite N: the fixed suite of N scans, scan i
  * drawn from seed i: a cut (in turn), K in {100, 200, 400, 800}, noise
  * uniform in 0–3 µm, a random view phase and stone azimuth. --method:
- * auto = geo_correct_auto (default), merge = the same with the convex
- * path off (the seed 000 merge only), planes = geo_convex_planes_find
- * intersected by the simulator (the planes alone, no checks).
+ * auto = geo_correct_auto with the convex path on (default), merge =
+ * its defaults (the convex path off: the seed 000 merge only), planes = geo_convex_planes_find
+ * intersected by the simulator (the planes alone, no checks); --fit
+ * the convex path's plane fit (convex.h).
  *
  * One Markdown row per scan (--rows; always without --suite): cut, seed,
  * K, noise, facets truth / scan / corrected, recovered % (normal within
@@ -88,6 +89,8 @@ static void note_worst(totals *t, const char *name, double rec)
 }
 
 /* The correction by the chosen method; a new model or NULL (msg set). */
+static enum geo_convex_fit fit = GEO_CONVEX_FIT_AREA;
+
 static geo_poly *correct(const geo_poly *scan, enum method m, bool *valid,
                          char *msg, size_t len)
 {
@@ -102,7 +105,7 @@ static geo_poly *correct(const geo_poly *scan, enum method m, bool *valid,
         geo_convex_planes cp;
         if (geo_merge_view_grid(scan, &views, NULL) < 0 ||
             geo_merge_surface_noise(scan, &mo, &noise, &err) < 0 ||
-            geo_convex_planes_find(scan, views, noise, &cp, &err) < 0) {
+            geo_convex_planes_find(scan, views, noise, fit, &cp, &err) < 0) {
             snprintf(msg, len, "%s", err.msg);
             return geo_poly_free(p);
         }
@@ -121,13 +124,16 @@ static geo_poly *correct(const geo_poly *scan, enum method m, bool *valid,
     }
     geo_correct_opts o;
     geo_correct_opts_default(&o);
-    (void)m;
+    o.convex = m != M_MERGE;
+    o.convex_fit = fit;
     geo_correct_report rep;
     if (!p || geo_correct_auto(p, &o, NULL, &rep, &err) < 0) {
         snprintf(msg, len, "%s", p ? err.msg : "out of memory");
         return geo_poly_free(p);
     }
     *valid = rep.after.valid;
+    if (o.convex && !rep.convex)
+        fprintf(stderr, "merge fallback: %s\n", rep.convex_report.reason);
     geo_correct_report_clear(&rep);
     return p;
 }
@@ -245,6 +251,8 @@ int main(int argc, char **argv)
             first = (unsigned)strtoul(v, NULL, 10);
         else if (strcmp(a, "--method") == 0)
             m = strcmp(v, "merge") == 0 ? M_MERGE : strcmp(v, "planes") == 0 ? M_PLANES : M_AUTO;
+        else if (strcmp(a, "--fit") == 0)
+            fit = strcmp(v, "hinge") == 0 ? GEO_CONVEX_FIT_HINGE : GEO_CONVEX_FIT_AREA;
         else if (strcmp(a, "--models") == 0)
             models = v;
         else {
