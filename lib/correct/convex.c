@@ -14,14 +14,16 @@
 #include "topo.h"
 #include "vec.h"
 
-/* A result vertex may lie outside the scan by this many noise bounds:
- * the recovered planes pass through the hinges, which the noise moves
- * either way. */
+/* The checks catch gross failures (a true facet lost, a plane fitted to
+ * something else), not the scan's error: a result vertex may lie outside
+ * the scan by this many noise bounds (the planes pass through the
+ * hinges, which the noise moves either way) or half the largest roof or
+ * deviation bound, whichever is more. */
 #define OUTSIDE_FACTOR 3.0
 
 /* A scan vertex may lie outside the result by its group's allowance
  * (the noise bound and the roof) times this. */
-#define ROOF_FACTOR 1.5
+#define ROOF_FACTOR 3.0
 
 /* The deepest local concavity of p: over every edge, how far the
  * neighbour facet's vertices rise above this facet's plane. */
@@ -114,7 +116,15 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
     /* within the scan's bound: every result vertex no farther outside the
      * scan than the noise moves a hinge, every scan vertex no farther
      * outside the result than its group's roof allows */
-    double out = 0, allow = OUTSIDE_FACTOR * fmax(cp.dev0, cp.hinge_noise);
+    /* where many facets meet at shallow angles (a pavilion point, a
+     * girdle corner) a plane's error of a noise moves the vertex by many:
+     * the bound there is the merge's own deviation bound or the largest
+     * roof, whichever is more */
+    double roof_max = 0;
+    for (uint32_t i = 0; i < cp.nplanes; i++)
+        roof_max = fmax(roof_max, cp.allow[i]);
+    double out = 0, allow = OUTSIDE_FACTOR * fmax(fmax(cp.dev0, cp.hinge_noise),
+                                                  fmax(max_dev, roof_max) / 2);
     for (uint32_t v = 0; v < q->nverts; v++)
         for (uint32_t f = 0; f < p->nfacets; f++) {
             double d = geo_plane_eval(p->planes[f], q->verts[v]);

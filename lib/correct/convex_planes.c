@@ -36,6 +36,10 @@
 #define TRIM 2.5
 #define TRIM_ROUNDS 4
 
+/* A boundary segment counts as a hinge when it lies in the lowest
+ * HINGE_LOW of its sliver's height range above the group's plane. */
+#define HINGE_LOW 0.25
+
 /* The support test: a group is dropped when its plane cuts the polytope
  * of its neighbours' planes by at most CUT_NOISE noise units (or
  * CUT_REL × size when there is no noise). */
@@ -410,6 +414,7 @@ done:
 typedef struct seg {
     uint32_t a, b; /* vertices */
     uint32_t g;    /* group */
+    uint32_t f;    /* the group's facet it bounds */
 } seg;
 
 static int cmp_seg_group(const void *x, const void *y)
@@ -442,45 +447,58 @@ static void hinge_fit(const geo_poly *p, const seg *sg, uint32_t n,
 {
     *ret_scale = 0;
     memcpy(ret, fallback, 4 * sizeof *ret);
-    for (uint32_t i = 0; i < n; i++)
-        use[i] = true;
+    double ref[4];
+    memcpy(ref, fallback, sizeof ref);
     for (int round = 0; round <= TRIM_ROUNDS; round++) {
+        /* residual of a segment: its end farther from the plane */
+        for (uint32_t i = 0; i < n; i++) {
+            double ra = geo_plane_eval(ref, p->verts[sg[i].a]);
+            double rb = geo_plane_eval(ref, p->verts[sg[i].b]);
+            res[i] = fabs(ra) > fabs(rb) ? ra : rb;
+        }
+        double scale = 0;
+        if (round > 0) {
+            double *tmp = res + n;
+            uint32_t k = 0;
+            for (uint32_t i = 0; i < n; i++)
+                if (use[i])
+                    tmp[k++] = fabs(res[i]);
+            qsort(tmp, k, sizeof *tmp, cmp_double);
+            *ret_scale = k ? 1.4826 * tmp[k / 2] : 0;
+            scale = fmax(*ret_scale, scale_floor);
+        }
+        uint32_t kept = 0;
+        for (uint32_t i = 0; i < n; i++) {
+            /* a hinge is the low side of its sliver: the sliver rises
+             * from it by its tilt */
+            uint32_t nv = geo_poly_facet_size(p, sg[i].f);
+            const uint32_t *fv = geo_poly_facet(p, sg[i].f);
+            double lo = INFINITY, hi = -INFINITY;
+            for (uint32_t j = 0; j < nv; j++) {
+                double d = geo_plane_eval(ref, p->verts[fv[j]]);
+                lo = fmin(lo, d), hi = fmax(hi, d);
+            }
+            double ra = geo_plane_eval(ref, p->verts[sg[i].a]);
+            double rb = geo_plane_eval(ref, p->verts[sg[i].b]);
+            bool low = fmax(ra, rb) <= lo + HINGE_LOW * (hi - lo) + scale_floor;
+            use[i] = low && (round == 0 || fabs(res[i]) <= TRIM * scale);
+            kept += use[i];
+        }
+        if (kept < 3)
+            return;
         mom m = {0};
         for (uint32_t i = 0; i < n; i++) {
             if (!use[i])
                 continue;
-            mom s;
-            segment_mom(p->verts[sg[i].a], p->verts[sg[i].b], o, &s);
-            mom_add(&m, &s);
+            mom sm;
+            segment_mom(p->verts[sg[i].a], p->verts[sg[i].b], o, &sm);
+            mom_add(&m, &sm);
         }
         double q[4];
         if (!mom_plane(&m, o, fallback, q, NULL))
             return;
         memcpy(ret, q, sizeof q);
-        if (round == TRIM_ROUNDS)
-            return;
-        /* residual of a segment: its end farther from the plane */
-        for (uint32_t i = 0; i < n; i++) {
-            double ra = geo_plane_eval(q, p->verts[sg[i].a]);
-            double rb = geo_plane_eval(q, p->verts[sg[i].b]);
-            res[i] = fabs(ra) > fabs(rb) ? ra : rb;
-        }
-        double *tmp = res + n;
-        for (uint32_t i = 0; i < n; i++)
-            tmp[i] = fabs(res[i]);
-        qsort(tmp, n, sizeof *tmp, cmp_double);
-        *ret_scale = 1.4826 * tmp[n / 2];
-        double scale = fmax(*ret_scale, scale_floor);
-        bool changed = false;
-        uint32_t kept = 0;
-        for (uint32_t i = 0; i < n; i++) {
-            bool u = fabs(res[i]) <= TRIM * scale;
-            kept += u;
-            changed |= u != use[i];
-            use[i] = u;
-        }
-        if (!changed || kept < 3)
-            return;
+        memcpy(ref, q, sizeof q);
     }
 }
 
@@ -695,6 +713,7 @@ int geo_convex_planes_find(const geo_poly *p, uint32_t views, double noise,
             continue;
         sg[ns].a = p->fidx[c];
         sg[ns].b = p->fidx[geo_topo_next(p, t, c)];
+        sg[ns].f = fc;
         sg[ns++].g = f.group[fc];
     }
     qsort(sg, ns, sizeof *sg, cmp_seg_group);
@@ -726,6 +745,29 @@ int geo_convex_planes_find(const geo_poly *p, uint32_t views, double noise,
         ret->hinge_noise = scales[nsc / 2];
     }
     free(scales);
+    /* the scan contains the stone: a hinge plane with the group's own
+     * vertices deep inside it (farther than the hinges scatter) or far
+     * outside it (beyond the roof) fitted something else; such a group
+     * keeps its area plane */
+    if (fit == GEO_CONVEX_FIT_HINGE) {
+        double nzh = fmax(fmax(f.noise, ret->hinge_noise), 1e-6 * size);
+        for (uint32_t h = 0; h < nf; h++) {
+            uint32_t g = f.group[h];
+            double width = 0, q[4];
+            if (!mom_plane(&gm[g], f.o, gpl[g], q, &width))
+                width = 0;
+            double roof = f.dev0 + ROOF * width * f.step * hypot(gpl[g][0], gpl[g][1]);
+            uint32_t n = geo_poly_facet_size(p, h);
+            const uint32_t *fv = geo_poly_facet(p, h);
+            for (uint32_t i = 0; i < n; i++) {
+                double d = geo_plane_eval(gpl[g], p->verts[fv[i]]);
+                if (d < -TRIM * 2 * nzh || d > 2 * roof) {
+                    memcpy(gpl[g], apl[g], sizeof gpl[0]);
+                    break;
+                }
+            }
+        }
+    }
     free(apl);
     /* step 3 */
     ret->group = f.group;
