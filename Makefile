@@ -32,7 +32,7 @@ endif
 # works on a machine that does not have them yet.
 PKG_PROTO   := jansson
 PKG_SCANNER := libusb-1.0 hidapi-hidraw libudev
-PKG_DAEMON  := libmicrohttpd sqlite3 libsystemd
+PKG_DAEMON  := libmicrohttpd sqlite3 libsystemd libpq
 PKG_TEST    := cmocka
 PKG_MOCK    := umockdev-1.0 glib-2.0 gobject-2.0
 pkg_cflags = $(shell pkg-config --cflags $(1) 2>/dev/null)
@@ -146,7 +146,7 @@ $(B)/tools/%: $(B)/obj/tests/tools/%.o $(call obj,$(TESTLIB_SRCS)) $(ALL_LIBS)
 DEB_PKGS := build-essential pkg-config libjansson-dev libmicrohttpd-dev \
     libsqlite3-dev libsystemd-dev libusb-1.0-0-dev libhidapi-dev libudev-dev \
     libcmocka-dev umockdev libumockdev-dev libglib2.0-dev curl systemd \
-    clang libclang-rt-14-dev wrk jq
+    clang libclang-rt-14-dev wrk jq libpq-dev postgresql-15
 deps:
 	@sh tests/tools/install-deps.sh $(DEB_PKGS)
 

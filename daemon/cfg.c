@@ -62,6 +62,14 @@ static const key keys[] = {
     {"Server", "ConnectionMemory", "connection-memory", K_SIZE,
      F(connection_memory), 8 * KiB, 16 * MiB, false, "64K",
      "memory per connection for headers"},
+    {"Server", "HeaderTimeout", "header-timeout", K_DURATION,
+     F(header_timeout_ms), 100, 3600 * SEC, false, "10s",
+     "time a client has to send a request's headers (closed after)"},
+    {"Server", "PerClientConnections", "per-client-connections", K_UINT,
+     F(per_client_connections), 0, 1000000, false, "64",
+     "concurrent connections from one address (0: no limit)"},
+    {"Server", "MaxQueryArgs", "max-query-args", K_UINT, F(max_query_args),
+     1, 100000, true, "100", "query arguments per request (400 above)"},
     {"Server", "MaxWaiters", "max-waiters", K_UINT, F(max_waiters), 1,
      1000000, true, "4096", "clients waiting on ?wait= or events (429 above)"},
     {"Server", "MaxWait", "max-wait", K_DURATION, F(max_wait_ms), 0,
@@ -82,6 +90,16 @@ static const key keys[] = {
      "time running jobs get to finish on SIGTERM"},
     {"Jobs", "Paused", "paused", K_BOOL, F(paused), 0, 1, true, "no",
      "accept and keep jobs but start none (maintenance)"},
+    {"Jobs", "Lease", "job-lease", K_DURATION, F(job_lease_ms), SEC,
+     3600 * SEC, false, "30s", "with a shared store: how long a node's "
+     "claim on a job lasts unless renewed (a dead node's jobs run again "
+     "after it)"},
+    {"Store", "URL", "store-url", K_STR, F(store_url), 0, 0, false, "",
+     "job store shared by a cluster: postgresql://HOST[:PORT]/DB (no "
+     "password in it); empty: SQLite in StateDirectory"},
+    {"Store", "PasswordFile", "store-password-file", K_STR,
+     F(store_password_file), 0, 0, false, "", "libpq password file for "
+     "URL (default: PGPASSFILE or ~/.pgpass)"},
     {"Store", "StateDirectory", "state-dir", K_STR, F(state_dir), 0, 0, false,
      "/var/lib/facetd", "directory of the job store"},
     {"Store", "RetentionAge", "retention-age", K_DURATION,
@@ -90,6 +108,8 @@ static const key keys[] = {
     {"Store", "RetentionBytes", "retention-bytes", K_SIZE,
      F(retention_bytes), MiB, 1ull << 50, true, "1G",
      "finished jobs beyond this total size are deleted, oldest first"},
+    {"Cluster", "NodeName", "node-name", K_STR, F(node_name), 0, 0, false,
+     "", "this node's name in the cluster (default: HOST:PORT)"},
     {"Log", "LogLevel", "log-level", K_LEVEL, F(log_level), 0, 0, true,
      "info", "err, warning, notice, info or debug"},
     {"Scanners", "Enabled", "scanners", K_BOOL, F(scanners), 0, 1, false,
@@ -98,8 +118,8 @@ static const key keys[] = {
      SCAN_DEFAULT_DEVICES, "VID:PID:bulk|hid [PIPELINE]: a scanner model "
      "(repeatable; the first replaces the default list)"},
     {"Scanners", "Pipeline", "scanner-pipeline", K_PIPELINE,
-     F(scanner_pipeline), 0, 0, true, "auto",
-     "pipeline of scanner jobs: auto, op names (inspect,triangulate), "
+     F(scanner_pipeline), 0, 0, true, "correct",
+     "pipeline of scanner jobs: correct, op names (inspect,triangulate), "
      "inline JSON or a /path/to/pipeline.json"},
 };
 enum { NKEYS = sizeof keys / sizeof keys[0] };
@@ -656,8 +676,8 @@ json_t *cfg_pipeline_json(const char *spec, geo_err *err)
                         je.column, je.text);
             return NULL;
         }
-    } else if (strcmp(spec, "auto") == 0) {
-        pj = json_string("auto");
+    } else if (strcmp(spec, "correct") == 0 || strcmp(spec, "auto") == 0) {
+        pj = json_string(spec);
     } else {
         pj = json_array();
         char buf[CFG_PIPELINE_LEN];

@@ -52,6 +52,10 @@ typedef struct cfg {
     uint64_t max_body;            /* request body bytes, ≥ 1 KiB */
     uint64_t connection_timeout_ms; /* idle connection timeout, ≥ 1 s */
     uint64_t connection_memory;   /* per-connection header memory, ≥ 8 KiB */
+    uint64_t header_timeout_ms;   /* connect (or previous answer) to complete
+                                     request headers */
+    unsigned per_client_connections; /* from one address; 0 = no limit */
+    unsigned max_query_args;      /* query arguments per request */
     unsigned max_waiters;         /* suspended ?wait= and SSE clients */
     uint64_t max_wait_ms;         /* cap on ?wait= */
     uint64_t keepalive_ms;        /* SSE keep-alive comment interval */
@@ -63,10 +67,16 @@ typedef struct cfg {
     uint64_t shutdown_timeout_ms; /* SIGTERM: how long running jobs may
                                      finish before they are requeued */
     bool paused;                  /* accept and keep jobs, start none */
+    uint64_t job_lease_ms;        /* shared store: a claim's lease */
     /* [Store] */
     char state_dir[512];          /* directory of the job store */
+    char store_url[1024];         /* PostgreSQL URI shared by a cluster;
+                                     empty: SQLite in state_dir */
+    char store_password_file[512]; /* libpq passfile for store_url */
     uint64_t retention_age_ms;    /* finished jobs older than this go */
     uint64_t retention_bytes;     /* finished jobs' total size cap */
+    /* [Cluster] */
+    char node_name[64];           /* empty: host name and port */
     /* [Log] */
     int log_level;                /* syslog level, LOG_INFO by default */
     /* [Scanners] */

@@ -43,6 +43,7 @@
  * the workers start. */
 typedef struct app {
     _Atomic(http_server *) hs;
+    _Atomic(job_pool *) pool;
     metrics *m;
     scanners *sc;
 } app;
@@ -53,6 +54,56 @@ static void on_job_changed(void *user, const char *id, bool progress_only)
     http_server *hs = atomic_load(&a->hs);
     if (hs)
         http_server_job_changed(hs, id, progress_only);
+}
+
+/* A change anywhere in the cluster (a shared store's own thread): wakes
+ * this node's workers, waiting clients and owed scanner RESULTs. */
+static void on_store_event(void *user, store_event ev, const char *id,
+                           const char *source)
+{
+    app *a = user;
+    job_pool *pool = atomic_load(&a->pool);
+    if (pool && (ev == STORE_EV_QUEUED || ev == STORE_EV_RESYNC))
+        job_pool_wake(pool);
+    if (!id)
+        return;
+    http_server *hs = atomic_load(&a->hs);
+    if (hs)
+        http_server_job_changed(hs, id, ev == STORE_EV_PROGRESS);
+    if (ev == STORE_EV_ENDED || ev == STORE_EV_DELETED) {
+        job_rec j = {.state = JOB_SUCCEEDED};
+        snprintf(j.id, sizeof j.id, "%s", id);
+        snprintf(j.source, sizeof j.source, "%s", source ? source : "");
+        scanners_job_done(a->sc, &j);
+    }
+}
+
+/* [Store] URL= names a PostgreSQL database shared by the cluster; else
+ * the embedded SQLite store. The node is named HOST:PORT by default. */
+static store *open_store(const cfg *c, const char *where, geo_err *err)
+{
+    if (!c->store_url[0])
+        return store_sqlite_open(c->state_dir, err);
+    char node[64];
+    if (c->node_name[0]) {
+        snprintf(node, sizeof node, "%s", c->node_name);
+    } else {
+        char host[48] = "localhost";
+        gethostname(host, sizeof host - 1);
+        const char *port = strrchr(where, ':');
+        snprintf(node, sizeof node, "%s:%s", host, port ? port + 1 : "0");
+    }
+    store_pg_config pc = {
+        .url = c->store_url,
+        .password_file = c->store_password_file,
+        .node = node,
+        .lease_ms = c->job_lease_ms,
+    };
+    store *s = store_pg_open(&pc, err);
+    if (s)
+        log_msg(LOG_NOTICE, NULL, "cluster node %s on a shared PostgreSQL "
+                "store (lease %.3g s)", node, (double)c->job_lease_ms / 1000);
+    return s;
 }
 
 static void on_job_done(void *user, const job_rec *job, job_state st,
@@ -78,6 +129,7 @@ static void apply_http_settings(http_env *env, const cfg *c)
     atomic_store(&env->max_waiters, c->max_waiters);
     atomic_store(&env->queue_size, c->queue_size);
     atomic_store(&env->inspect_max_facets, c->inspect_max_facets);
+    atomic_store(&env->max_query_args, c->max_query_args);
     http_env_set_token(env, c->api_token);
 }
 
@@ -113,10 +165,17 @@ static void reload(cfg *cur, int argc, char **argv, http_env *env,
         /* Restart-only keys keep their running values. */
         snprintf(next.listen, sizeof next.listen, "%s", cur->listen);
         snprintf(next.state_dir, sizeof next.state_dir, "%s", cur->state_dir);
+        snprintf(next.store_url, sizeof next.store_url, "%s", cur->store_url);
+        snprintf(next.store_password_file, sizeof next.store_password_file,
+                 "%s", cur->store_password_file);
+        snprintf(next.node_name, sizeof next.node_name, "%s", cur->node_name);
+        next.job_lease_ms = cur->job_lease_ms;
         next.http_threads = cur->http_threads;
         next.max_connections = cur->max_connections;
         next.connection_timeout_ms = cur->connection_timeout_ms;
         next.connection_memory = cur->connection_memory;
+        next.header_timeout_ms = cur->header_timeout_ms;
+        next.per_client_connections = cur->per_client_connections;
         next.workers = cur->workers;
         next.scanners = cur->scanners;
         memcpy(next.scanner, cur->scanner, sizeof next.scanner);
@@ -206,7 +265,7 @@ int main(int argc, char **argv)
     scanners *sc = NULL;
     http_env env;
     http_env_init(&env);
-    app a = {NULL, NULL, NULL};
+    app a = {NULL, NULL, NULL, NULL};
 
     /* A scanner pipeline this build cannot run is a configuration error:
      * scans would be taken only to be refused. */
@@ -260,7 +319,7 @@ int main(int argc, char **argv)
         rc = 2;
         goto out;
     }
-    s = store_sqlite_open(c.state_dir, &err);
+    s = open_store(&c, where, &err);
     if (!s) {
         log_msg(LOG_ERR, NULL, "%s", err.msg);
         goto out;
@@ -300,6 +359,8 @@ int main(int argc, char **argv)
         log_msg(LOG_ERR, NULL, "%s", err.msg);
         goto out;
     }
+    atomic_store(&a.pool, pool);
+    store_set_events(s, &(store_events){on_store_event, &a});
     if (scanners_start(sc, s, pool, m, &err) < 0) {
         log_msg(LOG_ERR, NULL, "%s", err.msg);
         goto out;
@@ -317,6 +378,8 @@ int main(int argc, char **argv)
         .max_connections = c.max_connections,
         .timeout_s = (unsigned)((c.connection_timeout_ms + 999) / 1000),
         .connection_memory = (size_t)c.connection_memory,
+        .header_timeout_ms = c.header_timeout_ms,
+        .per_client_connections = c.per_client_connections,
     };
     hs = http_server_start(&env, &hc, &err);
     if (!hs) {
@@ -327,8 +390,8 @@ int main(int argc, char **argv)
     atomic_store(&env.ready, 1);
     log_msg(LOG_NOTICE, NULL, "facetd %s listening on http://%s (store %s, "
             "%u workers%s, %u HTTP threads%s)", FACET_VERSION, where,
-            c.state_dir, workers, c.paused ? " paused" : "", threads,
-            env.token[0] ? ", API token required" : "");
+            c.store_url[0] ? "PostgreSQL" : c.state_dir, workers,
+            c.paused ? " paused" : "", threads, env.token[0] ? ", API token required" : "");
     sd_notifyf(0, "READY=1\nSTATUS=listening on %s", where);
 
     uint64_t wd_usec = 0;
@@ -374,6 +437,10 @@ int main(int argc, char **argv)
                "running jobs", (double)c.shutdown_timeout_ms / 1000);
     http_server_quiesce(hs);
 out:
+    /* no more cluster events: what they reach is going away */
+    if (s)
+        store_set_events(s, &(store_events){NULL, NULL});
+    atomic_store(&a.pool, NULL);
     /* scans still arriving are stored for the next start */
     scanners_detach_pool(sc);
     if (pool) {

@@ -77,6 +77,8 @@ typedef struct http_req {
     bool has_body;           /* Content-Length > 0 or chunked */
     uint64_t content_length; /* as announced; 0 when unknown */
     bool admitted;           /* routed, authorised, preconditions met */
+    bool started;            /* the first access callback happened */
+    unsigned query_args;     /* counted in the raw request line */
     /* body */
     char *body;
     size_t len, cap;
@@ -87,13 +89,45 @@ typedef struct http_req {
     int64_t seen_version;
 } http_req;
 
+/* A TCP connection, from MHD's connection notification to its close:
+ * what the header deadline needs (http_server.c). */
+typedef struct http_conn {
+    int fd;
+    int64_t since_ms;        /* connect, or the end of the last request */
+    bool in_headers;         /* no request's headers complete since then */
+    bool cut;                /* shut down by the deadline */
+    struct http_conn *next, *prev;
+} http_conn;
+
 struct http_server {
     struct MHD_Daemon *d;
     http_env *env;
     http_hub *hub;
     bool quiesced;
     atomic_int active;       /* requests begun and not completed */
+    /* the header deadline: every open connection, a reaper thread */
+    pthread_mutex_t conn_lock;
+    pthread_cond_t conn_tick;
+    http_conn *conns;        /* under conn_lock */
+    uint64_t header_timeout_ms;
+    bool reaper_started, reaper_stop;
+    pthread_t reaper;
+    atomic_uint_fast64_t header_cuts;
 };
+
+/* ---- the header deadline (http_deadline.c) ---- */
+void http_conn_notify(void *cls, struct MHD_Connection *c,
+                      void **socket_context,
+                      enum MHD_ConnectionNotificationCode toe);
+/* A request's headers are complete / a request ended (the next one's
+ * headers are awaited). */
+void http_conn_headers_done(http_server *h, struct MHD_Connection *c);
+void http_conn_request_done(http_server *h, struct MHD_Connection *c);
+/* Before MHD starts (locks; the reaper when timeout_ms > 0); -EAGAIN. */
+int http_deadline_start(http_server *h, uint64_t timeout_ms);
+/* Stops the reaper (before MHD stops); fini after MHD stopped. */
+void http_deadline_stop(http_server *h);
+void http_deadline_fini(http_server *h);
 
 /* ---- replies (http_reply.c); each returns MHD's result ----
  * headers: NULL or a NULL-terminated list of name, value pairs (copied).
@@ -111,6 +145,10 @@ enum MHD_Result http_problem(http_req *r, unsigned status, const char *slug,
                              const char *title, json_t *errors,
                              const char *const *headers, const char *fmt, ...)
     __attribute__((format(printf, 7, 8)));
+/* Copies src into dst (size bytes, NUL-terminated), every byte that is
+ * not part of well-formed UTF-8 written as the four characters \\xHH, so
+ * the result always serialises as a JSON string. */
+void http_utf8_scrub(char *dst, size_t size, const char *src);
 /* One {"path", "message"} entry split from a geo_err message of the form
  * "a.b[3].c: what" (path "" when the message names no place). */
 json_t *http_error_entry(const char *msg);

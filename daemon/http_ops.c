@@ -77,8 +77,7 @@ enum MHD_Result http_version(http_req *r)
 {
     json_t *ops = json_array(), *fmts = json_array();
     for (int k = 0; k < PROTO_OP_COUNT; k++)
-        if (runner_op_available((proto_op_kind)k))
-            json_array_append_new(ops,
+        json_array_append_new(ops,
                                   json_string(proto_op_name((proto_op_kind)k)));
     static const char *const formats[] = {"json", "poly", "obj", "stl",
                                           "stl-ascii", "ply", "ply-ascii",
@@ -140,12 +139,6 @@ enum MHD_Result http_post_inspect(http_req *r)
         return http_problem(r, 413, "model-too-large", "Content Too Large",
                             NULL, NULL, "%u facets; synchronous inspection "
                             "takes at most %u (submit a job instead)", n, cap);
-    }
-    if (!runner_op_available(PROTO_OP_INSPECT)) {
-        geo_poly_free(p);
-        return http_problem(r, 501, "not-available", "Not Implemented", NULL,
-                            NULL, "op 'inspect' is not available in this "
-                            "build");
     }
     proto_op op = {.kind = PROTO_OP_INSPECT};
     proto_pipeline pl = {1, &op};

@@ -53,15 +53,73 @@ enum MHD_Result http_reply_json(http_req *r, unsigned status, json_t *body,
     return http_reply(r, status, "application/json", text, n, true, headers);
 }
 
+/* Length of the well-formed UTF-8 sequence at s (RFC 3629: no overlong
+ * forms, no surrogates, nothing above U+10FFFF), 0 when there is none. */
+static size_t utf8_seq(const unsigned char *s)
+{
+    unsigned c = s[0];
+    if (c < 0x80)
+        return 1;
+    size_t n = c >= 0xc2 && c <= 0xdf ? 2 : c >= 0xe0 && c <= 0xef ? 3
+             : c >= 0xf0 && c <= 0xf4 ? 4 : 0;
+    if (!n)
+        return 0;
+    unsigned lo = 0x80, hi = 0xbf;
+    if (c == 0xe0)
+        lo = 0xa0;
+    else if (c == 0xed)
+        hi = 0x9f;
+    else if (c == 0xf0)
+        lo = 0x90;
+    else if (c == 0xf4)
+        hi = 0x8f;
+    if (s[1] < lo || s[1] > hi)
+        return 0;
+    for (size_t i = 2; i < n; i++)
+        if (s[i] < 0x80 || s[i] > 0xbf)
+            return 0;
+    return n;
+}
+
+void http_utf8_scrub(char *dst, size_t size, const char *src)
+{
+    static const char hex[] = "0123456789ABCDEF";
+    const unsigned char *s = (const unsigned char *)src;
+    size_t o = 0;
+    while (*s && size) {
+        size_t n = utf8_seq(s);
+        if (n) {
+            if (o + n >= size)
+                break;
+            memcpy(dst + o, s, n);
+            o += n;
+            s += n;
+        } else {
+            if (o + 4 >= size)
+                break;
+            dst[o++] = '\\';
+            dst[o++] = 'x';
+            dst[o++] = hex[*s >> 4];
+            dst[o++] = hex[*s & 15];
+            s++;
+        }
+    }
+    if (size)
+        dst[o] = '\0';
+}
+
 enum MHD_Result http_problem(http_req *r, unsigned status, const char *slug,
                              const char *title, json_t *errors,
                              const char *const *headers, const char *fmt, ...)
 {
-    char detail[1024];
+    char raw[1024], detail[4096];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(detail, sizeof detail, fmt, ap);
+    vsnprintf(raw, sizeof raw, fmt, ap);
     va_end(ap);
+    /* the detail quotes what the client sent (a URL, a header), which
+     * need not be UTF-8, or may have been cut mid-character */
+    http_utf8_scrub(detail, sizeof detail, raw);
     char type[96];
     snprintf(type, sizeof type, "urn:facetd:problem:%s", slug);
     json_t *o = json_pack("{s:s, s:s, s:i, s:s}", "type", type, "title", title,
@@ -106,8 +164,10 @@ json_t *http_error_entry(const char *msg)
             }
         }
     }
+    char clean[2048];
+    http_utf8_scrub(clean, sizeof clean, plen ? sep + 2 : msg);
     json_t *path = json_stringn(msg, plen);
-    json_t *m = json_string(plen ? sep + 2 : msg);
+    json_t *m = json_string(clean);
     json_t *o = json_object();
     if (!o || !path || !m || json_object_set_new(o, "path", path) < 0 ||
         json_object_set_new(o, "message", m) < 0) {

@@ -211,6 +211,62 @@ static enum MHD_Result admit(http_req *r, const char *url, bool *answered)
     return MHD_YES;
 }
 
+typedef struct framing {
+    unsigned content_lengths;
+    bool lengths_differ;
+    const char *first_length;
+} framing;
+
+static enum MHD_Result count_lengths(void *cls, enum MHD_ValueKind kind,
+                                     const char *key, const char *value)
+{
+    (void)kind;
+    framing *f = cls;
+    if (strcasecmp(key, MHD_HTTP_HEADER_CONTENT_LENGTH) != 0)
+        return MHD_YES;
+    if (f->content_lengths++ == 0)
+        f->first_length = value ? value : "";
+    else if (strcmp(f->first_length, value ? value : "") != 0)
+        f->lengths_differ = true;
+    return MHD_YES;
+}
+
+/* Framing a request cannot be read by (RFC 9112 §6.3) and query strings
+ * no route needs: answered 400 at once, and the connection closed, rather
+ * than guessing where the body ends and waiting for bytes that never
+ * come. */
+static enum MHD_Result framing_problem(http_req *r, bool *answered)
+{
+    static const char *const close_hdr[] = {"Connection", "close", NULL};
+    *answered = true;
+    framing f = {0};
+    MHD_get_connection_values(r->conn, MHD_HEADER_KIND, count_lengths, &f);
+    const char *te = http_header(r, MHD_HTTP_HEADER_TRANSFER_ENCODING);
+    if (f.lengths_differ)
+        return http_problem(r, 400, "bad-framing", "Bad Request", NULL,
+                            close_hdr, "Content-Length is given %u times "
+                            "with different values", f.content_lengths);
+    if (te && strcasecmp(te, "chunked") != 0)
+        return http_problem(r, 400, "bad-framing", "Bad Request", NULL,
+                            close_hdr, "Transfer-Encoding '%.100s': only "
+                            "chunked is understood", te);
+    if (te && f.content_lengths)
+        return http_problem(r, 400, "bad-framing", "Bad Request", NULL,
+                            close_hdr, "both Transfer-Encoding and "
+                            "Content-Length: the body's end is ambiguous");
+    int nargs = MHD_get_connection_values(r->conn, MHD_GET_ARGUMENT_KIND,
+                                          NULL, NULL);
+    unsigned max_args = atomic_load(&r->env->max_query_args);
+    if (r->query_args > max_args || (nargs > 0 && (unsigned)nargs > max_args))
+        return http_problem(r, 400, "bad-request", "Bad Request", NULL,
+                            close_hdr, "%u query arguments; the limit is %u",
+                            r->query_args > (unsigned)nargs ? r->query_args
+                                                            : (unsigned)nargs,
+                            max_args);
+    *answered = false;
+    return MHD_YES;
+}
+
 static void append_body(http_req *r, const char *data, size_t n)
 {
     r->bytes_in += n;
@@ -252,6 +308,36 @@ static void append_body(http_req *r, const char *data, size_t n)
     r->body[r->len] = '\0';
 }
 
+/* Called with the request line, before MHD parses the query: a query of
+ * more arguments than any route takes is emptied here (and refused at the
+ * first callback), because MHD 0.9.75 parsing one that overflows the
+ * connection's memory queues a 431 it never sends and holds the
+ * connection. The request state is born here (MHD hands the returned
+ * pointer to every later callback). */
+static void *uri_log(void *cls, const char *uri, struct MHD_Connection *conn)
+{
+    http_server *srv = cls;
+    http_req *r = calloc(1, sizeof *r);
+    if (!r)
+        return NULL;
+    atomic_fetch_add(&srv->active, 1);
+    r->srv = srv;
+    r->env = srv->env;
+    r->conn = conn;
+    r->route = -1;
+    char *q = strchr(uri, '?');
+    if (q) {
+        unsigned n = 0;
+        for (const char *c = q + 1; *c; c++)
+            n += *c != '&' && (c == q + 1 || c[-1] == '&');
+        r->query_args = n;
+        /* the buffer is MHD's own, writable copy of the request line */
+        if (n > atomic_load(&srv->env->max_query_args))
+            q[1] = '\0';
+    }
+    return r;
+}
+
 static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
                                   const char *url, const char *method,
                                   const char *version, const char *upload,
@@ -259,18 +345,18 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
 {
     http_server *srv = cls;
     http_req *r = *con_cls;
-    if (!r) {
-        r = calloc(1, sizeof *r);
-        if (!r)
-            return MHD_NO;
-        *con_cls = r;
-        atomic_fetch_add(&srv->active, 1);
-        r->srv = srv;
-        r->env = srv->env;
+    if (!r)
+        return MHD_NO; /* uri_log could not allocate it */
+    if (!r->started) {
+        r->started = true;
         r->conn = conn;
-        r->route = -1;
         r->t0_us = mono_us();
         r->method = method_of(method);
+        http_conn_headers_done(srv, conn);
+        bool answered;
+        enum MHD_Result res = framing_problem(r, &answered);
+        if (answered)
+            return res;
         /* A request with a body is judged before its body is read (a
          * refusal then closes the connection instead of reading it); one
          * without is answered at the next callback, which keeps the
@@ -285,8 +371,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
         }
         if (!r->has_body)
             return MHD_YES;
-        bool answered;
-        enum MHD_Result res = admit(r, url, &answered);
+        res = admit(r, url, &answered);
         if (answered || res != MHD_YES)
             return res;
         r->admitted = true;
@@ -318,6 +403,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
 static void on_completed(void *cls, struct MHD_Connection *conn,
                          void **con_cls, enum MHD_RequestTerminationCode toe)
 {
+    (void)toe;
     http_server *srv = cls;
     http_req *r = *con_cls;
     if (!r)
@@ -334,6 +420,7 @@ static void on_completed(void *cls, struct MHD_Connection *conn,
     free(r->body);
     free(r);
     *con_cls = NULL;
+    http_conn_request_done(srv, conn);
     atomic_fetch_sub(&srv->active, 1);
 }
 
@@ -364,7 +451,14 @@ http_server *http_server_start(http_env *env, const http_config *c,
     }
     unsigned flags = MHD_USE_EPOLL_INTERNAL_THREAD | MHD_ALLOW_SUSPEND_RESUME |
                      MHD_USE_ERROR_LOG;
-    struct MHD_OptionItem opts[8];
+    if (http_deadline_start(h, c->header_timeout_ms) < 0) {
+        geo_err_set(err, -EAGAIN, "cannot start the header deadline thread");
+        http_deadline_fini(h);
+        http_hub_free(h->hub);
+        free(h);
+        return NULL;
+    }
+    struct MHD_OptionItem opts[12];
     int n = 0;
     opts[n++] = (struct MHD_OptionItem){MHD_OPTION_EXTERNAL_LOGGER,
                                         (intptr_t)mhd_log, NULL};
@@ -381,12 +475,21 @@ http_server *http_server_start(http_env *env, const http_config *c,
                                         c->timeout_s, NULL};
     opts[n++] = (struct MHD_OptionItem){MHD_OPTION_NOTIFY_COMPLETED,
                                         (intptr_t)on_completed, h};
+    opts[n++] = (struct MHD_OptionItem){MHD_OPTION_URI_LOG_CALLBACK,
+                                        (intptr_t)uri_log, h};
+    opts[n++] = (struct MHD_OptionItem){MHD_OPTION_NOTIFY_CONNECTION,
+                                        (intptr_t)http_conn_notify, h};
+    if (c->per_client_connections)
+        opts[n++] = (struct MHD_OptionItem){MHD_OPTION_PER_IP_CONNECTION_LIMIT,
+                                            c->per_client_connections, NULL};
     opts[n++] = (struct MHD_OptionItem){MHD_OPTION_END, 0, NULL};
     h->d = MHD_start_daemon(flags, 0, NULL, NULL, on_request, h,
                             MHD_OPTION_ARRAY, opts, MHD_OPTION_END);
     if (!h->d) {
         geo_err_set(err, -EIO, "cannot start the HTTP server (see the "
                     "messages above)");
+        http_deadline_stop(h);
+        http_deadline_fini(h);
         http_hub_free(h->hub);
         free(h);
         return NULL;
@@ -427,7 +530,9 @@ http_server *http_server_stop(http_server *h)
         struct timespec ts = {0, 10 * 1000 * 1000};
         nanosleep(&ts, NULL);
     }
+    http_deadline_stop(h);
     MHD_stop_daemon(h->d);
+    http_deadline_fini(h);
     http_hub_free(h->hub);
     free(h);
     return NULL;

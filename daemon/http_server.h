@@ -46,6 +46,7 @@ typedef struct http_env {
     atomic_uint max_waiters;
     atomic_uint queue_size;
     atomic_uint inspect_max_facets;
+    atomic_uint max_query_args;
     atomic_int ready;               /* 1 between start-up and shutdown */
     pthread_mutex_t token_lock;     /* guards token */
     char token[256];                /* "" = no authentication */
@@ -57,6 +58,8 @@ typedef struct http_config {
     unsigned max_connections;
     unsigned timeout_s;             /* idle connection timeout */
     size_t connection_memory;       /* bytes per connection */
+    uint64_t header_timeout_ms;     /* connect to complete headers */
+    unsigned per_client_connections; /* 0 = no limit */
 } http_config;
 
 typedef struct http_server http_server;

@@ -1,5 +1,5 @@
 /* model_ase.c — ASE (3ds Max ASCII Scene Export), write only: the export
- * format of seed 001's triangulation program. One GEOMOBJECT holds the
+ * format of Vyatkin's triangulation program. One GEOMOBJECT holds the
  * model as a triangle mesh: *MESH_VERTEX_LIST with every vertex,
  * *MESH_FACE_LIST with every facet split into triangles
  * (lib/core/polygon_triangulate.h), AB/BC/CA marking which triangle edges are

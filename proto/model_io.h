@@ -1,5 +1,5 @@
 /* model_io.h — reading and writing polyhedra in every supported format:
- * facet-model/1 JSON, the paper's text format (seed 000 §1.3, ".poly"),
+ * facet-model/1 JSON, the paper's text format (Palachev 2012, §1.3, ".poly"),
  * OBJ, STL (ASCII and binary), PLY (ASCII and binary little- and
  * big-endian on reading, binary little-endian and ASCII on writing), ASE
  * (write only) and FMB1 (the scanner's binary model). Coordinates are

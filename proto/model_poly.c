@@ -1,4 +1,4 @@
-/* model_poly.c — the paper's text format of a polyhedron (seed 000 §1.3,
+/* model_poly.c — the paper's text format of a polyhedron (Palachev 2012, §1.3,
  * ".poly"): the number of vertices and the number of facets; x y z of
  * every vertex; then per facet its vertex count, its plane a b c d
  * (a·x+b·y+c·z+d = 0, normal outward) and its vertex indices (0-based,

@@ -19,7 +19,7 @@ static const char USAGE[] =
     "usage: facet correct MODEL -o OUT [--report FILE] [options]\n"
     "\n"
     "Corrects a scanned model: merges the groups of nearly coplanar facets\n"
-    "a shadow-profile scanner makes of each true facet (seed 000 §2) and\n"
+    "a shadow-profile scanner makes of each true facet (Palachev 2012, §2) and\n"
     "collapses the clusters of vertices joined by very short edges (§4.1),\n"
     "repeating both until nothing changes; every step is checked and\n"
     "nothing invalid is written. Same as the daemon's \"auto\" pipeline.\n"
@@ -36,6 +36,8 @@ static const char USAGE[] =
     "                       measured on the scan\n"
     "  --radius R           clusters: mm; default 2e-4 of the model's size\n"
     "  --no-collapse        do not collapse clusters\n"
+    "  --convex             a convex scan: intersect its recovered facet planes\n"
+    "                       (the merge stays the fallback)\n"
     "\n"
     "Prints one line of JSON: vertices and facets before and after,\n"
     "groups_merged, groups_failed, clusters_collapsed, views and noise (mm)\n"
@@ -68,6 +70,8 @@ int cmd_correct(int argc, char **argv)
         const char *a = argv[i];
         if (strcmp(a, "--no-collapse") == 0) {
             o.collapse_clusters = false;
+        } else if (strcmp(a, "--convex") == 0) {
+            o.convex = true;
         } else if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0 ||
                    strcmp(a, "--report") == 0 || strcmp(a, "--max-angle") == 0 ||
                    strcmp(a, "--max-deviation") == 0 ||
@@ -125,7 +129,7 @@ int cmd_correct(int argc, char **argv)
     if (!p)
         return cli_input_error("correct", "%s", err.msg);
     geo_correct_report rep;
-    int r = geo_correct_auto(p, &o, NULL, &rep, &err);
+    int r = geo_correct(p, &o, NULL, &rep, &err);
     if (r < 0) {
         geo_poly_free(p);
         return cli_input_error("correct", "%s: %s", in, err.msg);

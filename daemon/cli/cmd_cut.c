@@ -24,7 +24,7 @@ static const char USAGE[] =
     "\n"
     "  --plane A,B,C,D  the plane; (A,B,C) need not be unit\n"
     "  -o, --output OUT the result\n"
-    "  --main-facet N   seed 000 §3.4 (facet merging): facet N, which may be\n"
+    "  --main-facet N   Palachev 2012, §3.4 (facet merging): facet N, which may be\n"
     "                   non-planar and must lie on or above the plane, is\n"
     "                   replaced by the one new facet\n"
     "\n"

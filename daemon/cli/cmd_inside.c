@@ -1,5 +1,6 @@
 /* cmd_inside.c — `facet inside MODEL POINTS.json`: classifies points
- * against a polyhedron (seed 003's point-in-polyhedron tests, lib/inspect/inside.h)
+ * against a polyhedron (the point-in-polyhedron tests of
+ * "Tests of graphic elements", lib/inspect/inside.h)
  * and prints a JSON array of "inside" / "outside" / "boundary", one per
  * point, in order. */
 #include <errno.h>

@@ -1,6 +1,6 @@
 /* cmd_inversion_stats.c — `facet inversion-stats`: the probability that
  * re-planarisation after a random vertex move breaks the model, per move
- * magnitude (seed 000 §4.3.4, lib/replanar/inversion.h), as JSON on stdout. Runs
+ * magnitude (Palachev 2012, §4.3.4, lib/replanar/inversion.h), as JSON on stdout. Runs
  * on a thread pool (proto/parallel.h); the table is the same for any
  * --threads. */
 #include <errno.h>

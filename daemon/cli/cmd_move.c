@@ -1,5 +1,5 @@
 /* cmd_move.c — `facet move`: move one vertex, fix it there and restore the
- * planarity of the facets (seed 000 §4, lib/replanar/replanar.h). Prints the result
+ * planarity of the facets (Palachev 2012, §4, lib/replanar/replanar.h). Prints the result
  * summary as JSON; writes the model only when the result is valid
  * (converged, no self-intersection, no inverted facet), or with --force. */
 #include <errno.h>
@@ -28,7 +28,7 @@ static void usage(FILE *out)
             "\n"
             "Moves vertex I (0-based) to X,Y,Z (or by DX,DY,DZ, mm), keeps it\n"
             "there, and moves the other vertices and the planes until every\n"
-            "vertex lies in its facets again (seed 000 section 4.2.3).\n"
+            "vertex lies in its facets again (Palachev 2012, section 4.2.3).\n"
             "Schedules (default local-exp): local-exp minimises each step,\n"
             "K=100 doubling over 10 rounds of bounds 1e-7 halving; scaled sets\n"
             "K = S1/S2sum every step; global-exp minimises the total\n"
@@ -195,7 +195,7 @@ int cmd_move(int argc, char **argv)
 
     geo_replanar_log log = {0};
     geo_replanar_result res;
-    int rc = geo_move_vertex(p, vertex, to, rp.schedule, &o, NULL,
+    int rc = geo_move(p, vertex, to, rp.schedule, &o, NULL,
                              log_path ? &log : NULL, &res, &err);
     int status = CLI_OK;
     if (rc < 0) {

@@ -1,5 +1,5 @@
 /* cmd_stitch.c — `facet stitch A B -o OUT [--report FILE]`: joins two
- * open meshes into one closed mesh (lib/mesh/stitch.h, seed 004), writes it,
+ * open meshes into one closed mesh (lib/mesh/stitch.h, Nesterenko), writes it,
  * prints a one-line JSON summary and, with --report, the whole report
  * (the loops and vertices chosen, the bridge, the openings closed, the
  * validity of the result with the reasons when it is not valid, the
@@ -18,7 +18,7 @@
 static const char USAGE[] =
     "usage: facet stitch A B -o OUT [--report FILE]\n"
     "\n"
-    "Joins the open meshes A and B (seed 004): the free-edge loops of the\n"
+    "Joins the open meshes A and B (Nesterenko): the free-edge loops of the\n"
     "two with the closest centres are bridged by a mesh of meridians between\n"
     "the vertices facing each other, divided to the meshes' edge length;\n"
     "B is turned over when its orientation disagrees with A's; openings left\n"

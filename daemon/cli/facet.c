@@ -18,7 +18,7 @@ static const cli_command commands[] = {
     {"version", "print the version", cmd_version},
     {"inside", "classify points as inside, outside or on a model", cmd_inside},
     {"convert", "convert a model between file formats", cmd_convert},
-    {"cut", "cut a model by a plane (seed 000 §3)", cmd_cut},
+    {"cut", "cut a model by a plane (Palachev 2012, §3)", cmd_cut},
     {"inspect", "print a model's statistics and defects as JSON", cmd_inspect},
     {"orient", "make a model's facets consistent and outward", cmd_orient},
     {"triangulate", "triangulate a functionally defined object",
@@ -27,11 +27,11 @@ static const cli_command commands[] = {
     {"move", "move a vertex and re-planarise the facets", cmd_move},
     {"inversion-stats", "how often vertex moves break the model",
      cmd_inversion_stats},
-    {"merge", "merge groups of nearly coplanar facets (seed 000 §2)",
+    {"merge", "merge groups of nearly coplanar facets (Palachev 2012, §2)",
      cmd_merge},
     {"correct", "the automatic post-scan correction", cmd_correct},
-    {"fill", "close the holes of a mesh (seeds 001, 004)", cmd_fill},
-    {"stitch", "join two open meshes into one closed mesh (seed 004)",
+    {"fill", "close the holes of a mesh (Vyatkin; Nesterenko)", cmd_fill},
+    {"stitch", "join two open meshes into one closed mesh (Nesterenko)",
      cmd_stitch},
 };
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };

@@ -1,4 +1,4 @@
-/* plane.c — plane fitting and intersection (seed 000 §2.5, §2.6.3). */
+/* plane.c — plane fitting and intersection (Palachev 2012, §2.5, §2.6.3). */
 #include "plane.h"
 
 #include <errno.h>

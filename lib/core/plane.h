@@ -1,5 +1,5 @@
 /* plane.h — planes a·x+b·y+c·z+d = 0 with (a,b,c) a unit normal: least
- * squares fits (seed 000 §2.5), three-plane intersection, and the
+ * squares fits (Palachev 2012, §2.5), three-plane intersection, and the
  * symmetric 3×3 eigen-solver behind the fit. Pure functions, thread-safe. */
 #ifndef GEO_PLANE_H
 #define GEO_PLANE_H
@@ -7,7 +7,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 
-/* Least-squares plane of n points (pts: 3·n doubles x,y,z,…) (seed 000 §2.5.1): minimises
+/* Least-squares plane of n points (pts: 3·n doubles x,y,z,…) (Palachev 2012, §2.5.1): minimises
  * Σ wᵢ (a·xᵢ+b·yᵢ+c·zᵢ+d)² with |(a,b,c)| = 1, i.e. the eigenvector of the
  * smallest eigenvalue of the weighted covariance, through the weighted
  * centroid. w may be NULL (all weights 1). If orient is non-NULL the

@@ -1,4 +1,4 @@
-/* poly.h — the polyhedron model H = {P, G} (seed 003; seed 000 §1.3).
+/* poly.h — the polyhedron model H = {P, G} ("Tests of graphic elements"; Palachev 2012, §1.3).
  *
  * Vertices are double x,y,z (millimetres). Facets are index cycles stored
  * compactly (CSR): facet f's vertex indices are
@@ -112,9 +112,9 @@ void geo_poly_facet_center(const geo_poly *p, uint32_t f, double ret[3]);
 
 /* Plane-fitting options for geo_poly_compute_planes. */
 enum geo_plane_weight {
-    GEO_PLANE_UNWEIGHTED = 0, /* plain least squares (seed 000 §2.5.1) */
+    GEO_PLANE_UNWEIGHTED = 0, /* plain least squares (Palachev 2012, §2.5.1) */
     GEO_PLANE_EDGE_WEIGHTED,  /* weight each vertex by half the length of its
-                                 two facet edges (000 §2.5.2): clusters of
+                                 two facet edges (Palachev 2012, §2.5.2): clusters of
                                  close points do not pull the plane */
 };
 

@@ -25,7 +25,7 @@
 /* Sign of (d − a) · ((b − a) × (c − a)): +1 when d lies on the side the
  * right-hand normal of the triangle a, b, c points to (for a facet listed
  * counter-clockwise seen from outside: d is outside), −1 on the other side,
- * 0 when the four points are exactly coplanar. This is seed 003's nf3. */
+ * 0 when the four points are exactly coplanar. This is nf3 of "Tests of graphic elements". */
 int geo_orient3d(const double a[3], const double b[3], const double c[3],
                  const double d[3]);
 
@@ -154,8 +154,8 @@ int geo_plane_crossing_cmp(const double plane[4], const double x0[3],
                            const double x1[3], const double y0[3],
                            const double y1[3], int k);
 
-/* Exact sign of n · (p − p0) for the given doubles (seed 003's point +
- * normal form nfN): the differences p − p0 are formed exactly (two-term
+/* Exact sign of n · (p − p0) for the given doubles (the point + normal
+ * form nfN of "Tests of graphic elements"): the differences p − p0 are formed exactly (two-term
  * expansions), so no rounding of an offset d = −n·p0 enters the answer.
  * +1 when p lies on the side n points to, −1 on the other side, 0 exactly
  * on the plane through p0 perpendicular to n. n = 0 gives 0. */

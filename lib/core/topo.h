@@ -1,6 +1,6 @@
 /* topo.h — the adjacency of a geo_poly, built once in O(n) with a hash of
- * edges (seed 000 §3.2.2 "preprocessing"; a corner-based half-edge
- * structure, equivalent to Baumgart's winged edge of seed 004).
+ * edges (Palachev 2012, §3.2.2 "preprocessing"; a corner-based half-edge
+ * structure, equivalent to Baumgart's winged edge in Nesterenko).
  *
  * Corner c (a position in poly->fidx) stands for the directed edge from
  * its vertex to the next vertex of its facet. For each corner the topology

@@ -25,6 +25,11 @@
  * (the noise bound and the roof) times this. */
 #define ROOF_FACTOR 3.0
 
+/* Facets narrower (twice the area over the perimeter) than NARROW noise
+ * bounds are not resolved by the scan; up to NARROW_ROUNDS rounds. */
+#define NARROW 20.0
+#define NARROW_ROUNDS 3
+
 /* The deepest local concavity of p: over every edge, how far the
  * neighbour facet's vertices rise above this facet's plane. */
 static double concavity(const geo_poly *p, const geo_topo *t)
@@ -101,6 +106,78 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
                  perr.msg);
         r = 1;
         goto done;
+    }
+    /* a facet narrower than the scan can resolve (NARROW noise bounds)
+     * is a bevel the support test let through at a corner where many
+     * planes meet: its plane goes and the rest are intersected again */
+    for (int round = 0; round < NARROW_ROUNDS; round++) {
+        double wmin = NARROW * fmax(cp.dev0, cp.hinge_noise);
+        uint32_t gone = 0;
+        for (uint32_t f = 0; f < q->nfacets; f++) {
+            uint32_t n = geo_poly_facet_size(q, f);
+            const uint32_t *fv = geo_poly_facet(q, f);
+            double per = 0;
+            for (uint32_t i = 0; i < n; i++)
+                per += geo_vdist(q->verts[fv[i]], q->verts[fv[(i + 1) % n]]);
+            if (per > 0 && 2 * geo_poly_facet_area(q, f) / per < wmin) {
+                cp.planes[src[f]][3] = NAN; /* marked */
+                gone++;
+            }
+        }
+        if (gone == 0)
+            break;
+        uint32_t m = 0;
+        for (uint32_t i = 0; i < cp.nplanes; i++)
+            if (!isnan(cp.planes[i][3]))
+                memmove(cp.planes[m++], cp.planes[i], sizeof cp.planes[0]);
+        cp.nplanes = m;
+        rep->narrow += gone;
+        geo_poly *q2 = NULL;
+        uint32_t *src2 = NULL;
+        r = geo_halfspace_intersect(&cp.planes[0][0], cp.nplanes, &q2, &src2,
+                                    &st, &perr);
+        if (r == -ENOMEM) {
+            r = geo_err_set(err, r, "out of memory");
+            goto done;
+        }
+        if (r < 0) {
+            snprintf(rep->reason, sizeof rep->reason, "the recovered planes "
+                     "without the narrow ones: %.150s", perr.msg);
+            r = 1;
+            goto done;
+        }
+        geo_poly_free(q);
+        free(src);
+        q = q2;
+        src = src2;
+    }
+    if (fit == GEO_CONVEX_FIT_SILHOUETTE) {
+        double sc;
+        r = geo_convex_refine(p, q, src, cp.planes, cp.nplanes, &sc);
+        if (r == -ENOMEM) {
+            r = geo_err_set(err, r, "out of memory");
+            goto done;
+        }
+        if (r == 0) {
+            geo_poly *q2 = NULL;
+            uint32_t *src2 = NULL;
+            r = geo_halfspace_intersect(&cp.planes[0][0], cp.nplanes, &q2,
+                                        &src2, &st, &perr);
+            if (r == -ENOMEM) {
+                r = geo_err_set(err, r, "out of memory");
+                goto done;
+            }
+            if (r < 0) {
+                snprintf(rep->reason, sizeof rep->reason, "the adjusted "
+                         "planes: %.170s", perr.msg);
+                r = 1;
+                goto done;
+            }
+            geo_poly_free(q);
+            free(src);
+            q = q2;
+            src = src2;
+        }
     }
     uint8_t *seen = calloc((size_t)cp.nplanes + 1, 1);
     if (!seen) {

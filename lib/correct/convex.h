@@ -1,12 +1,12 @@
 /* convex.h — correction of a convex scan by recovering the true facet
  * planes (docs/kernels/correct-convex.md).
  *
- * A shadow-profile scan (seed 000 §1.2) of a convex stone is the
+ * A shadow-profile scan (Palachev 2012, §1.2) of a convex stone is the
  * intersection of silhouette half-spaces: each plane contains its view's
  * direction and, to the silhouette noise, one true edge of the stone, so a
  * true facet comes out as a fan of slivers hinged on its own edges and
  * tilted by up to about a view step. Averaging the slivers (the merge of
- * seed 000 §2.5) gives a plane tilted by a fraction of that step; the
+ * Palachev 2012, §2.5) gives a plane tilted by a fraction of that step; the
  * hinges themselves lie on the true plane. So:
  *
  *  1. groups: the scan's facets are grouped into true facets, grown from
@@ -59,13 +59,16 @@ void geo_convex_planes_clear(geo_convex_planes *r);
 
 /* The plane each group gets (step 2). */
 enum geo_convex_fit {
-    /* the least-squares plane of the group's surface (seed 000 §2.5.2,
+    /* the least-squares plane of the group's surface (Palachev 2012, §2.5.2,
      * the area and inertia ways), over the slivers of the whole true
      * facet: measured the better one with 0–3 µm of noise (docs) */
     GEO_CONVEX_FIT_AREA = 0,
     /* the trimmed fit of the group's boundary (step 2 above): better
      * noise-free, worse once the noise is a micrometre */
     GEO_CONVEX_FIT_HINGE = 1,
+    /* the area planes, then adjusted to every silhouette plane of the
+     * scan (geo_convex_refine) */
+    GEO_CONVEX_FIT_SILHOUETTE = 2,
 };
 
 /* Steps 1–3 above on p, which must be a closed, outward, manifold model
@@ -79,10 +82,24 @@ int geo_convex_planes_find(const geo_poly *p, uint32_t views, double noise,
                            enum geo_convex_fit fit, geo_convex_planes *ret,
                            geo_err *err);
 
+/* Adjusts planes[0..nplanes) (unit outward, in place) so that the
+ * support of their intersection in the direction of every facet of scan
+ * matches that facet's offset (convex_refine.c says how and why). est is
+ * their intersection (geo_halfspace_intersect) and src its facets'
+ * planes. *ret_scale gets the robust scale of the supports' residuals
+ * before the adjustment, mm. Returns 0, -EINVAL (a vertex of est whose
+ * planes do not meet, or normal equations not positive definite: planes
+ * unchanged), -E2BIG (too many planes for the dense solve), -ENOMEM. */
+int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
+                      const uint32_t *src, double (*planes)[4],
+                      uint32_t nplanes, double *ret_scale);
+
 /* What geo_correct_convex did. */
 typedef struct geo_convex_report {
     uint32_t groups, planes, dropped; /* see geo_convex_planes */
     uint32_t redundant;  /* kept planes that bound no facet of the result */
+    uint32_t narrow;     /* planes removed for a facet narrower than the
+                            scan resolves */
     double concavity;  /* the scan's deepest local concavity, mm */
     double bound;      /* the deviation the result may have from the
                           scan, mm */

@@ -582,9 +582,9 @@ static int group_neighbours(const geo_poly *p, const geo_topo *t,
  * against the planes of its neighbours still kept (a dropped neighbour
  * stands for its own neighbours). */
 static int support(const geo_convex_planes *r, const double (*gpl)[4],
-                   const double *garea, const uint32_t *nstart,
-                   const uint32_t *nlist, double cut_min, double tol,
-                   uint8_t *drop)
+                   const double *garea, const double *groof,
+                   const uint32_t *nstart, const uint32_t *nlist,
+                   double cut_min, double tol, uint8_t *drop)
 {
     uint32_t ng = r->ngroups;
     uint32_t *order = malloc(((size_t)ng + 1) * sizeof *order);
@@ -601,6 +601,7 @@ static int support(const geo_convex_planes *r, const double (*gpl)[4],
     for (uint32_t i = ng; i-- > 0;) {
         uint32_t g = order[i];
         k = 0;
+        double roof = groof[g];
         for (uint32_t a = nstart[g]; a < nstart[g + 1]; a++) {
             uint32_t h = nlist[a];
             uint32_t from = h, to = h + 1;
@@ -619,10 +620,11 @@ static int support(const geo_convex_planes *r, const double (*gpl)[4],
                 if (have || k == cap)
                     continue;
                 ids[k] = x;
+                roof = fmax(roof, groof[x]);
                 memcpy(nb[k++], gpl[x], sizeof nb[0]);
             }
         }
-        if (cut_depth(gpl[g], (const double(*)[4])nb, k, tol) <= cut_min)
+        if (cut_depth(gpl[g], (const double(*)[4])nb, k, tol) <= cut_min + roof)
             drop[g] = 1;
     }
     free(order), free(nb), free(ids);
@@ -737,7 +739,7 @@ int geo_convex_planes_find(const geo_poly *p, uint32_t views, double noise,
                   res, use, gpl[g], &sc);
         if (j - i >= HINGE_SEGMENTS)
             scales[nsc++] = sc;
-        if (fit == GEO_CONVEX_FIT_AREA)
+        if (fit != GEO_CONVEX_FIT_HINGE)
             memcpy(gpl[g], apl[g], sizeof gpl[0]);
     }
     if (nsc) {
@@ -777,9 +779,25 @@ int geo_convex_planes_find(const geo_poly *p, uint32_t views, double noise,
     double nz = fmax(f.noise, ret->hinge_noise);
     double cut_min = nz > 0 ? CUT_NOISE * nz : CUT_REL * size;
     ret->cut_min = cut_min;
-    if (support(ret, (const double(*)[4])gpl, garea, nstart, nlist, cut_min,
-                geo_poly_eps(p), drop) < 0)
+    /* a plane fitted to a group's surface lies up to its roof above the
+     * true plane, so a cut no deeper than the roofs around it cannot be
+     * told from them */
+    double *groof = malloc(((size_t)ng + 1) * sizeof *groof);
+    if (!groof)
         goto done;
+    for (uint32_t g = 0; g < ng; g++) {
+        double q[4], width = 0;
+        if (!mom_plane(&gm[g], f.o, gpl[g], q, &width))
+            width = 0;
+        groof[g] = fit == GEO_CONVEX_FIT_HINGE ? 0
+                   : ROOF * width * f.step * hypot(gpl[g][0], gpl[g][1]);
+    }
+    r = support(ret, (const double(*)[4])gpl, garea, groof, nstart, nlist,
+                cut_min, geo_poly_eps(p), drop);
+    free(groof);
+    if (r < 0)
+        goto done;
+    r = -ENOMEM;
     ret->planes = malloc(((size_t)ng + 1) * sizeof *ret->planes);
     ret->area = malloc(((size_t)ng + 1) * sizeof *ret->area);
     ret->allow = malloc(((size_t)ng + 1) * sizeof *ret->allow);

@@ -1,4 +1,4 @@
-/* correct.h — the automatic post-scan correction (seed 000 §2, §4.1): the
+/* correct.h — the automatic post-scan correction (Palachev 2012, §2, §4.1): the
  * correction every scan gets before anything else is done with it.
  *
  *   inspect → re-orient if needed → repeat { merge the groups of nearly
@@ -83,7 +83,7 @@ void geo_correct_report_clear(geo_correct_report *r);
  * be NULL. Returns 0, -EINVAL (p not a closed manifold, not orientable,
  * or invalid indices; err says which), -ENOMEM, -ECANCELED (p unchanged
  * on error). */
-int geo_correct_auto(geo_poly *p, const geo_correct_opts *opts,
+int geo_correct(geo_poly *p, const geo_correct_opts *opts,
                      const geo_ctx *ctx, geo_correct_report *report,
                      geo_err *err);
 

@@ -1,4 +1,4 @@
-/* merge_contour.c — the contour enclosing a group of facets (seed 000 §2.4)
+/* merge_contour.c — the contour enclosing a group of facets (Palachev 2012, §2.4)
  * and the least-squares plane of that contour (§2.5).
  *
  * The walk follows the boundary edges of the group counter-clockwise seen

@@ -1,5 +1,5 @@
 /* merge_cut.c — the last step of a merge: the cut of the model by the
- * merged facet's plane in the form of seed 000 §3.4, done locally.
+ * merged facet's plane in the form of Palachev 2012, §3.4, done locally.
  *
  * What it computes is what geo_cut (lib/cut/cut.c) computes with
  * opts.main_facet: everything on the outer side of the plane π goes, the

@@ -1,5 +1,5 @@
 /* merge_lift.c — lifting the contour points that lie below the merged
- * facet's plane (seed 000 §2.6), so that the §3.4 cut can replace the
+ * facet's plane (Palachev 2012, §2.6), so that the §3.4 cut can replace the
  * facet by its section.
  *
  * Notation of the paper (fig. 6): the main facet f has plane π (unit

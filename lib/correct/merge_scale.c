@@ -3,7 +3,7 @@
  * normals, and the surface noise, measured on the groups of nearly
  * coplanar facets.
  *
- * The view step. A shadow-profile scanner (seed 000 §1.2) turns the stone
+ * The view step. A shadow-profile scanner (Palachev 2012, §1.2) turns the stone
  * about the holder axis z in K equal steps over 180°; every silhouette
  * plane of view k contains that view's direction d_k = (cos θ_k, sin θ_k,
  * 0), so the normal n of every facet it leaves satisfies n·d_k = 0: the

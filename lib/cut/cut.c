@@ -1,4 +1,4 @@
-/* cut.c — plane cut of an arbitrary polyhedron (seed 000 §3).
+/* cut.c — plane cut of an arbitrary polyhedron (Palachev 2012, §3).
  *
  * Stages (the paper's, with the topology of lib/core/topo.h as preprocessing):
  *  1. the side of every vertex, decided once: on the plane when

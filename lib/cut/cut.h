@@ -1,4 +1,4 @@
-/* cut.h — cutting a polyhedron by a plane (seed 000 §3): keep the part
+/* cut.h — cutting a polyhedron by a plane (Palachev 2012, §3): keep the part
  * where plane(p) = a·x+b·y+c·z+d ≤ 0, close it with new facets lying on
  * the plane whose outward normal is the plane's normal.
  *
@@ -49,7 +49,7 @@
 #include "topo.h"
 
 typedef struct geo_cut_opts {
-    /* seed 000 §3.4 (facet merging): index of the "main" facet, which may
+    /* Palachev 2012, §3.4 (facet merging): index of the "main" facet, which may
      * be non-planar; all its vertices must lie on the plane or on the
      * removed side (≥ 0), it is removed and replaced by the new facet,
      * and the section must have exactly one component. GEO_NONE (the

@@ -1,4 +1,4 @@
-/* cut_facet.c — the per-facet stages of the plane cut (seed 000 §3), the
+/* cut_facet.c — the per-facet stages of the plane cut (Palachev 2012, §3), the
  * one implementation behind geo_cut (lib/cut/cut.c) and the merge's local
  * §3.4 cut (lib/correct/merge_cut.c).
  *

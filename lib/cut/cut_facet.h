@@ -1,4 +1,4 @@
-/* cut_facet.h — the per-facet stages of the plane cut (seed 000 §3),
+/* cut_facet.h — the per-facet stages of the plane cut (Palachev 2012, §3),
  * shared by geo_cut (lib/cut/cut.c) and the merge's local cut
  * (lib/correct/merge_cut.c, the §3.4 variant); not part of the library's
  * interface.

@@ -1,4 +1,4 @@
-/* frep.h — functionally defined objects (seed 001; formats.md
+/* frep.h — functionally defined objects (Vyatkin, F-rep discretization; formats.md
  * frep-object/1): a tree of quadrics combined by perturbation sums and
  * min/max, compiled into a postfix program that is evaluated for values,
  * gradients and interval bounds over boxes.
@@ -32,7 +32,7 @@
  * a program to a box drops the perturbation terms that are identically
  * zero there and the min/max branches that cannot win there: inside the
  * box the short program computes the same F (up to rounding). This is
- * what makes the surface search fast (seed 001: "empty regions of space
+ * what makes the surface search fast (Vyatkin: "empty regions of space
  * are discarded at once").
  *
  * Ownership: geo_frep_new allocates, geo_frep_free releases. A finished

@@ -1,4 +1,4 @@
-/* frep_connect.h — connectivity of the surface points (seed 001, second
+/* frep_connect.h — connectivity of the surface points (Vyatkin, second
  * stage): neighbours along the vertical and horizontal section contours,
  * and the quads A→B→C→D they close, two triangles each.
  *

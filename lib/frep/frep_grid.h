@@ -1,4 +1,4 @@
-/* frep_grid.h — the surface points of an F-rep object (seed 001, first
+/* frep_grid.h — the surface points of an F-rep object (Vyatkin, first
  * stage of the triangulation): a quadtree over the projection plane (x, y)
  * and, through every cell it keeps, a ray along z split by binary
  * subdivision that finds every crossing.

@@ -1,5 +1,5 @@
 /* frep_metrics.h — how well a triangle mesh approximates an F-rep surface
- * (seed 001's two metrics plus uniformity) and whether it is a valid
+ * (Vyatkin's two metrics plus uniformity) and whether it is a valid
  * closed surface.
  *
  *  - Vertex deviation: |F(v)| / |∇F(v)| at every vertex, the first-order

@@ -6,7 +6,7 @@
  * mesh whose vertices all lie on the surface but never on a crease cuts
  * every crease off with a chamfer about one edge wide. Here every edge
  * whose two ends lie on different pieces G₁, G₂ (a hard edge of the
- * mesh in seed 001's sense: it spans a crease) gets a point X on the
+ * mesh in Vyatkin's sense: it spans a crease) gets a point X on the
  * crease {G₁ = 0, G₂ = 0} — the least-norm Gauss–Newton solution from the
  * point S = (s(P)·Q + s(Q)·P)/(s(P)+s(Q)) of the paper, s being the mean
  * length of the edges at P and Q — which must also lie on the surface
@@ -18,7 +18,7 @@
  * piece the rays never hit, as a wall parallel to the rays does over a
  * vertical facet — S is moved onto F = 0 along ∇F instead; landing on a
  * piece neither end lies on, it splits the edge into two that each span a
- * real crease, recovered in the next round (seed 001's faces
+ * real crease, recovered in the next round (Vyatkin's faces
  * perpendicular to the camera plane: without this they stay chamfered,
  * and refining them folds the mesh).
  * A triangle whose corners lie on three pieces pairwise sharing a crease

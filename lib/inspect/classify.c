@@ -1,4 +1,4 @@
-/* classify.c — point vs plane in the four forms of seed 003, cross3, conv3
+/* classify.c — point vs plane in the four forms of "Tests of graphic elements", cross3, conv3
  * and facet convexity. Every decision is an exact sign from
  * lib/core/predicates.h; the value functions only measure. */
 #include "classify.h"

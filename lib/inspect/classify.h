@@ -1,9 +1,9 @@
-/* classify.h — seed 003's tests of graphic elements in space: the side of
+/* classify.h — the tests of graphic elements in space ("Tests of graphic elements"): the side of
  * a point relative to a plane in the paper's four forms, the plane ×
  * polyhedron test cross3, and the convexity tests conv3 (polyhedron) and
  * of each facet polygon.
  *
- * Sign convention (seed 003, "positive half-space"): every form is > 0 on
+ * Sign convention ("Tests of graphic elements", "positive half-space"): every form is > 0 on
  * the side the plane's normal points to — outside, for a facet listed
  * counter-clockwise seen from outside — < 0 on the other side, 0 on the
  * plane.
@@ -119,7 +119,7 @@ typedef struct geo_conv3_result {
                            nfacets when inverted */
 } geo_conv3_result;
 
-/* conv3(P, G) (seed 003): for each facet, the exact side (geo_nf_facet_
+/* conv3(P, G) ("Tests of graphic elements"): for each facet, the exact side (geo_nf_facet_
  * sign) of every vertex not in that facet, with the paper's two flags
  * (l: some vertex below, r: some vertex above); the facet is settled as
  * soon as both are raised and the test stops at the first such facet.

@@ -1,4 +1,4 @@
-/* inside.h — point in polyhedron (seed 003): the bounding-box test gab3,
+/* inside.h — point in polyhedron ("Tests of graphic elements"): the bounding-box test gab3,
  * the convex test conv3_test, the random-ray parity test with the paper's
  * three rules, the generalized winding number, and batch classification.
  *
@@ -19,13 +19,13 @@
  * Degeneracies. A ray that passes exactly through an edge or a vertex of a
  * fan triangle, or that runs inside a triangle's plane, is detected exactly
  * (an orient3d of zero) and shot again in another seeded random direction
- * (seed 003's ray test: "re-shoot"); a point on a facet's plane but off the
+ * (the ray test of "Tests of graphic elements": "re-shoot"); a point on a facet's plane but off the
  * facet is not a degeneracy. The first ray a batch casts runs along +x
  * through a 2D grid of the fan triangles' yz boxes; only when that ray
  * is degenerate is the point handed to the random-ray test.
  *
- * What the methods need. The ray tests decide by parity (seed 003 rules
- * 1–2) and are right for closed surfaces, whatever the facet orientation.
+ * What the methods need. The ray tests decide by parity ("Tests of graphic elements",
+ * ray test, rules 1–2) and are right for closed surfaces, whatever the facet orientation.
  * For open or dirty models (holes, gaps) parity depends on the ray; the
  * generalized winding number (sum of the fan triangles' solid angles over
  * 4π) degrades gracefully there: inside when it is ≥ 1/2 (Jacobson et
@@ -57,7 +57,7 @@ enum geo_loc {
  * any polyhedron inside the box). A NaN coordinate counts as outside. */
 bool geo_gab3_test(const geo_bbox *box, const double q[3]);
 
-/* conv3_test (seed 003) for a convex model listed outward: GEO_LOC_INSIDE
+/* conv3_test ("Tests of graphic elements") for a convex model listed outward: GEO_LOC_INSIDE
  * when q is strictly below every facet's plane, GEO_LOC_OUTSIDE when it is
  * strictly above some facet's plane, else GEO_LOC_BOUNDARY. The planes are
  * the facets' reference corners (classify.h: geo_nf_facet_sign); exact.
@@ -99,7 +99,7 @@ const geo_bbox *geo_inside_bbox(const geo_inside *ix);
  * degeneracy is a set of directions of measure zero). */
 #define GEO_INSIDE_MAX_SHOTS 64
 
-/* Seed 003's ray test: gab3 first; then a segment from q in direction V =
+/* The ray test of "Tests of graphic elements": gab3 first; then a segment from q in direction V =
  * (sin φ sin ψ, cos ψ, cos φ sin ψ), φ = rnd(2π), ψ = rnd(π), to beyond
  * the box, against every fan triangle whose facet box it meets (BVH).
  * Rule 3: q on a facet → GEO_LOC_BOUNDARY; rules 1–2: an odd number of

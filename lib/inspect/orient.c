@@ -89,7 +89,7 @@ static int cmp_u32(const void *x, const void *y)
 }
 
 /* depth[s]: how many other closed shells enclose shell s, by the parity
- * of a ray from one of its vertices (seed 003's test: exact crossings,
+ * of a ray from one of its vertices (the ray test of "Tests of graphic elements": exact crossings,
  * a new direction or vertex whenever a ray touches a facet other than
  * by crossing its interior). Shells whose rays all degenerate keep depth
  * 0 (judged by their own sign). */

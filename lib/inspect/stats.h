@@ -13,7 +13,7 @@
  * - inverted facet: its polygon winds against its own stored plane (the
  *   Newell normal of its vertex cycle and the plane's normal have a
  *   negative dot product) — a facet turned over, e.g. by a vertex moved
- *   across it during re-planarization (seed 000 §4.3.4–4.3.5), or a model
+ *   across it during re-planarization (Palachev 2012, §4.3.4–4.3.5), or a model
  *   whose planes were not negated with their facets.
  * - degenerate facet: fewer than three distinct points, or all its points
  *   on one line (exact); zero area follows. Degenerate edge: its two
@@ -29,7 +29,7 @@
  *   edge one normal is negated first): a scanner's split facets.
  * - vertex degree: the number of distinct edges at the vertex.
  * - short-edge cluster: a connected group of ≥ 2 vertices joined by edges
- *   shorter than the radius — the "heaps" of seed 000 §4.1, where a
+ *   shorter than the radius — the "heaps" of Palachev 2012, §4.1, where a
  *   scanner splits one true vertex of degree > 3. Default radius 1e-3 of
  *   the model's bounding-box diagonal (10 µm on a 10 mm stone): ten times
  *   a scanner's silhouette noise, far below a cut's ordinary edges, and

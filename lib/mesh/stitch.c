@@ -1,4 +1,4 @@
-/* stitch.c — seed 004's stitching of two open meshes (see stitch.h).
+/* stitch.c — Nesterenko's stitching of two open meshes (see stitch.h).
  *
  * Invariants: a loop is kept as its vertex cycle in the direction of its
  * corners (its mesh's facets on the left seen from outside); the two
@@ -603,7 +603,7 @@ openings:
         goto oom;
     R.welded = nw;
     /* the openings left: the loop vertices not bridged, other loops */
-    if ((rc = geo_fill_mesh(out, &o.fill, NULL, &R.fill, err)) < 0) {
+    if ((rc = geo_fill(out, &o.fill, NULL, &R.fill, err)) < 0) {
         geo_err_prefix(err, "closing the openings");
         goto fail;
     }

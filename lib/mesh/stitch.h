@@ -1,6 +1,6 @@
 /* stitch.h — joining two open meshes into one closed one by a bridging
- * mesh (seed 004, Nesterenko, "Algorithm for stitching polygonal
- * meshes"; spec algorithms.md §7).
+ * mesh (Nesterenko, "The algorithm for polygonal networks of
+ * cross-linking", i.e. stitching polygonal meshes).
  *
  * 1. Free edges (algorithm 1). An edge with a facet on one side only
  *    (condition (3)) is a free edge; the free-edge polylines are the

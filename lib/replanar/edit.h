@@ -1,5 +1,5 @@
-/* edit.h — an editable polyhedron for local surgery (facet merging, seed
- * 000 §2; vertex-cluster collapse, §4.1): facets whose vertex cycles can
+/* edit.h — an editable polyhedron for local surgery (facet merging,
+ * Palachev 2012, §2; vertex-cluster collapse, §4.1): facets whose vertex cycles can
  * grow and shrink one vertex at a time, the facets of every vertex kept up
  * to date, and transactions that undo a failed edit exactly.
  *
@@ -123,7 +123,7 @@ static inline uint32_t *geo_edit_vf(const geo_edit *e, uint32_t v)
 {
     return e->arena + e->vf[v].off;
 }
-/* The number of facets containing v (its degree in seed 000 §2.6.4). */
+/* The number of facets containing v (its degree in Palachev 2012, §2.6.4). */
 static inline uint32_t geo_edit_vn(const geo_edit *e, uint32_t v)
 {
     return e->vf[v].n;

@@ -1,4 +1,4 @@
-/* inversion.c — the inversion statistics of seed 000 §4.3.4: random
+/* inversion.c — the inversion statistics of Palachev 2012, §4.3.4: random
  * vertex moves by fractions of the nearest-vertex distance, re-planarised
  * in parallel, tabulated per magnitude with Wilson intervals.
  *

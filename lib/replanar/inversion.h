@@ -1,4 +1,4 @@
-/* inversion.h — inversion statistics of the vertex move (seed 000 §4.3.4,
+/* inversion.h — inversion statistics of the vertex move (Palachev 2012, §4.3.4,
  * §4.3.5): how often re-planarisation after moving one vertex by a
  * fraction m of the distance to its nearest vertex breaks the polyhedron.
  *

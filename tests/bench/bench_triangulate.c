@@ -1,4 +1,4 @@
-/* bench_triangulate.c — the F-rep triangulation at seed 001's levels
+/* bench_triangulate.c — the F-rep triangulation at Vyatkin's levels
  * (Q_LEV = 9, B_LEV = 10): the 83-perturbation blob of fig. 14 (triangles,
  * vertices, deviations, time per stage, 1 and 2 threads, best of 3), the
  * other test objects, the cut gem at Q_LEV 7, 8 and 9 and gems of random
@@ -41,7 +41,7 @@ static geo_poly *best_run_at(const geo_frep *f, int threads, int runs,
         geo_tri_report rep;
         geo_poly *m = NULL;
         geo_err err = {{0}};
-        if (geo_frep_triangulate(f, &o, &ctx, &m, &rep, &err) < 0) {
+        if (geo_triangulate(f, &o, &ctx, &m, &rep, &err) < 0) {
             fprintf(stderr, "triangulate: %s\n", err.msg);
             break;
         }
@@ -60,7 +60,7 @@ static geo_poly *best_run_at(const geo_frep *f, int threads, int runs,
     return keep;
 }
 
-/* Best of three at seed 001's levels. */
+/* Best of three at Vyatkin's levels. */
 static geo_poly *best_run(const geo_frep *f, int threads, geo_tri_report *best)
 {
     return best_run_at(f, threads, 3, 9, best);
@@ -140,7 +140,7 @@ int main(void)
         geo_tri_report_clear(&rep);
         geo_poly_free(m);
     }
-    /* every test object at seed 001's levels, 2 threads */
+    /* every test object at Vyatkin's levels, 2 threads */
     static const char *const others[] = {"sphere", "ellipsoid", "torus",
                                          "two-spheres"};
     for (size_t i = 0; i < sizeof others / sizeof others[0]; i++) {

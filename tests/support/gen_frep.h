@@ -14,7 +14,7 @@
 json_t *gf_sphere(void);
 json_t *gf_ellipsoid(void);
 /* An ellipsoid with n seeded random sphere perturbations (bumps and
- * dents), like seed 001's fig. 14 (n = 83). */
+ * dents), like Vyatkin's fig. 14 (n = 83). */
 json_t *gf_blob(uint64_t seed, int n);
 /* A flattened ellipsoid with a hole punched along z by a negative
  * cylinder perturbation, plus a few bumps: genus one. */

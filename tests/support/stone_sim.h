@@ -3,7 +3,7 @@
  *
  * A stone is the intersection of the half-spaces of its facet planes
  * (brilliant, princess and emerald cuts with seeded random proportions).
- * A scan is what a shadow-profile scanner (seed 000 §1.2) reconstructs:
+ * A scan is what a shadow-profile scanner (Palachev 2012, §1.2) reconstructs:
  * for K views over 180° about the holder axis (z), the silhouette — the
  * convex hull of the stone's vertices projected along the view direction,
  * with optional noise — gives one half-space per silhouette edge, its plane

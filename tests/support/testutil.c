@@ -44,7 +44,7 @@ geo_poly *tu_box(const double lo[3], const double hi[3])
 
 geo_poly *tu_seed003_example(void)
 {
-    /* P as printed in seed 003 (columns x, y, z); G uses 1-based indices
+    /* P as printed in "Tests of graphic elements" (columns x, y, z); G uses 1-based indices
      * there, 0-based here; the seven facets as listed (the y = 0 side is
      * not among them, so the example is open). */
     static const double v[11][3] = {

@@ -21,7 +21,7 @@ const char *tu_model_path(const char *name);
 /* An axis-aligned box [lo, hi] as 6 quads, counter-clockwise outward. */
 geo_poly *tu_box(const double lo[3], const double hi[3]);
 
-/* seed 003's example polyhedron H = {P, G} (11 vertices, 7 facets). */
+/* The example polyhedron of "Tests of graphic elements", H = {P, G} (11 vertices, 7 facets). */
 geo_poly *tu_seed003_example(void);
 
 /* The sample models' notch cube (volume 936) built in code. */

@@ -7,14 +7,14 @@
  *   correct_table [--cuts brilliant,princess,...] [--seeds 1,2,3]
  *                 [--ks 100,400,800] [--noise 1,...]  (µm)
  *                 [--suite N [--first I]] [--method auto|merge|planes]
- *                 [--fit area|hinge] [--rows] [--models DIR]
+ *                 [--fit area|hinge|silhouette] [--rows] [--models DIR]
  *
  * Without --suite: every cut × seed × K × noise, views at phase 0 and
  * the stone as drawn. With --suite N: the fixed suite of N scans, scan i
  * drawn from seed i: a cut (in turn), K in {100, 200, 400, 800}, noise
  * uniform in 0–3 µm, a random view phase and stone azimuth. --method:
- * auto = geo_correct_auto with the convex path on (default), merge =
- * its defaults (the convex path off: the seed 000 merge only), planes = geo_convex_planes_find
+ * auto = geo_correct with the convex path on (default), merge =
+ * its defaults (the convex path off: the Palachev 2012 merge only), planes = geo_convex_planes_find
  * intersected by the simulator (the planes alone, no checks); --fit
  * the convex path's plane fit (convex.h).
  *
@@ -127,7 +127,7 @@ static geo_poly *correct(const geo_poly *scan, enum method m, bool *valid,
     o.convex = m != M_MERGE;
     o.convex_fit = fit;
     geo_correct_report rep;
-    if (!p || geo_correct_auto(p, &o, NULL, &rep, &err) < 0) {
+    if (!p || geo_correct(p, &o, NULL, &rep, &err) < 0) {
         snprintf(msg, len, "%s", p ? err.msg : "out of memory");
         return geo_poly_free(p);
     }
@@ -252,7 +252,9 @@ int main(int argc, char **argv)
         else if (strcmp(a, "--method") == 0)
             m = strcmp(v, "merge") == 0 ? M_MERGE : strcmp(v, "planes") == 0 ? M_PLANES : M_AUTO;
         else if (strcmp(a, "--fit") == 0)
-            fit = strcmp(v, "hinge") == 0 ? GEO_CONVEX_FIT_HINGE : GEO_CONVEX_FIT_AREA;
+            fit = strcmp(v, "hinge") == 0        ? GEO_CONVEX_FIT_HINGE
+                  : strcmp(v, "silhouette") == 0 ? GEO_CONVEX_FIT_SILHOUETTE
+                                                 : GEO_CONVEX_FIT_AREA;
         else if (strcmp(a, "--models") == 0)
             models = v;
         else {

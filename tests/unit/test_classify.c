@@ -1,4 +1,5 @@
-/* test_classify.c — seed 003's point-vs-plane forms agree with each other
+/* test_classify.c — the point-vs-plane forms of
+ * "Tests of graphic elements", agree with each other
  * and with exact integer arithmetic, cross3 tells crossing / touching /
  * missing exactly, conv3 and the facet convexity test find convex and
  * non-convex models and polygons. */

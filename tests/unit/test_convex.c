@@ -1,7 +1,7 @@
 /* test_convex.c — the convex path of the correction (lib/correct/
  * convex.h): true planes recovered from a simulated scan facet by facet,
  * the result valid and convex, a non-convex model declined untouched, and
- * geo_correct_auto taking the path when asked. Princess and brilliant
+ * geo_correct taking the path when asked. Princess and brilliant
  * scans at K = 100 and 400 keep it to a second. */
 #include "testutil.h"
 
@@ -20,7 +20,7 @@
 #include "stone_sim.h"
 #include "tu_load.h"
 
-/* The scan's view count and noise as geo_correct_auto reads them. */
+/* The scan's view count and noise as geo_correct reads them. */
 static void scan_scale(const geo_poly *scan, uint32_t *views, double *noise)
 {
     geo_merge_opts mo;
@@ -57,14 +57,15 @@ static void assert_valid_convex(const geo_poly *p)
     assert_true(cv.convex);
 }
 
-static void test_noise_free_scan_gives_back_every_facet(void **state)
+/* Noise-free, the hinges and the silhouettes both give the stone back:
+ * every facet one to one within 0.1° and 5 µm. */
+static void check_noise_free(enum geo_convex_fit fit)
 {
-    (void)state;
     geo_poly *stone = sim_stone(SIM_PRINCESS, 2);
     geo_poly *scan = sim_scan_phase(stone, 400, 1e-6, 0.37, 2);
     assert_non_null(scan);
     geo_convex_report rep;
-    geo_poly *q = convex_correct(scan, GEO_CONVEX_FIT_HINGE, &rep);
+    geo_poly *q = convex_correct(scan, fit, &rep);
     assert_valid_convex(q);
     sim_fidelity fd;
     assert_int_equal(sim_fidelity_measure(stone, q, 0.1, 0.005, &fd), 0);
@@ -75,6 +76,13 @@ static void test_noise_free_scan_gives_back_every_facet(void **state)
     geo_poly_free(q);
     geo_poly_free(scan);
     geo_poly_free(stone);
+}
+
+static void test_noise_free_scan_gives_back_every_facet(void **state)
+{
+    (void)state;
+    check_noise_free(GEO_CONVEX_FIT_HINGE);
+    check_noise_free(GEO_CONVEX_FIT_SILHOUETTE);
 }
 
 static void test_noisy_scan_comes_out_valid_and_nearer_the_stone(void **state)
@@ -129,7 +137,7 @@ static void test_correct_auto_takes_the_convex_path_when_asked(void **state)
     o.convex = true;
     geo_correct_report rep;
     geo_err err;
-    assert_int_equal(geo_correct_auto(scan, &o, NULL, &rep, &err), 0);
+    assert_int_equal(geo_correct(scan, &o, NULL, &rep, &err), 0);
     if (!rep.convex)
         fail_msg("fell back to the merge: %s", rep.convex_report.reason);
     assert_true(rep.after.valid);

@@ -1,4 +1,4 @@
-/* test_cut.c — the plane cut (lib/cut/cut.h, seed 000 §3): every case of the
+/* test_cut.c — the plane cut (lib/cut/cut.h, Palachev 2012, §3): every case of the
  * paper on hand-built models, exact ordering of crossings, the §3.4
  * variant, refusals, and random planes on non-convex and convex models
  * (validity of every result, volumes of the two halves adding up, convex

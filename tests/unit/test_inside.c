@@ -40,7 +40,7 @@ static int classify_all(const geo_poly *p, const geo_inside *ix,
     return ray;
 }
 
-/* seed 003's example closed: as printed, G2, G4 and G7 are listed
+/* The example of "Tests of graphic elements" closed: as printed, G2, G4 and G7 are listed
  * clockwise seen from outside (G1, G3, G5, G6 counter-clockwise) and the
  * side y = 0 (vertices 6, 7, 8, 11 in the paper's numbering) is missing.
  * Flipping the three and adding that side gives a closed, outward,
@@ -304,7 +304,7 @@ static void test_winding_number_on_open_box(void **state)
     geo_poly_free(p);
 }
 
-/* seed 003's example as printed but with its facets turned outward: open
+/* The example of "Tests of graphic elements" as printed but with its facets turned outward: open
  * at y = 0; deep points are still classified right by the winding
  * number. */
 static void test_winding_number_on_open_seed003_example(void **state)

@@ -1,4 +1,4 @@
-/* test_inversion.c — inversion statistics (seed 000 §4.3.4): the Wilson
+/* test_inversion.c — inversion statistics (Palachev 2012, §4.3.4): the Wilson
  * interval, identical results for any thread count, the paper's
  * conclusion on a sample scan (the probability falls with m and is 0 at
  * the smallest m), per-run detail, bad options and cancellation. */

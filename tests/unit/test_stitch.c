@@ -1,4 +1,4 @@
-/* test_stitch.c — seed 004's stitching (lib/mesh/stitch.h): two halves of a
+/* test_stitch.c — Nesterenko's stitching (lib/mesh/stitch.h): two halves of a
  * body with a band of facets removed come back as one valid closed solid
  * close to the original, whichever way the second half is oriented,
  * however differently the halves are sampled and wherever their loops
