@@ -117,6 +117,26 @@ bool cfg_wants_help(int argc, char **argv);
 /* Prints the usage with every flag, its section/key, default and meaning. */
 void cfg_print_help(FILE *out, const char *prog);
 
+/* One key of the configuration table as the documentation generated from
+ * it shows it (cfg_doc.h): facetd.conf(5) and the example file. */
+typedef struct cfg_key_doc {
+    const char *section, *name, *flag;
+    const char *form;        /* the value's form: "SIZE", "DURATION", ... */
+    const char *def;         /* default as text, "" for none; a list's
+                                entries separated by commas */
+    const char *help;        /* one line, as --help prints it */
+    const char *doc;         /* the rest, sentences */
+    const char *section_doc; /* what the key's section is for */
+    bool reloadable;         /* SIGHUP applies it */
+    bool boolean;            /* also --no-FLAG */
+    bool repeatable;         /* one entry per line */
+} cfg_key_doc;
+
+/* The number of keys, and key i (0 ≤ i < count) in table order, sections
+ * grouped. */
+int cfg_key_count(void);
+void cfg_key_describe(int i, cfg_key_doc *d);
+
 /* The pipeline a Pipeline= value (or the PIPELINE of a Scanner= line)
  * names, as the JSON value of the Job API's "pipeline" member: "auto";
  * op names separated by commas ("inspect" or "inspect,triangulate",

@@ -28,6 +28,7 @@
 #include <systemd/sd-daemon.h>
 
 #include "cfg.h"
+#include "cfg_doc.h"
 #include "version.h"
 #include "http_listen.h"
 #include "http_server.h"
@@ -228,11 +229,22 @@ int main(int argc, char **argv)
         cfg_print_help(stdout, "facetd");
         return 0;
     }
-    for (int i = 1; i < argc; i++)
+    for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--version") == 0) {
             printf("facetd %s\n", FACET_VERSION);
             return 0;
         }
+        /* hidden: the build writes facetd.conf(5) and the example file
+         * from the key table with these (cfg_doc.h) */
+        if (strcmp(argv[i], "--dump-config-man") == 0) {
+            cfg_doc_man(stdout);
+            return fflush(stdout) == 0 ? 0 : 1;
+        }
+        if (strcmp(argv[i], "--dump-config-example") == 0) {
+            cfg_doc_example(stdout);
+            return fflush(stdout) == 0 ? 0 : 1;
+        }
+    }
     cfg c;
     geo_err err = {{0}};
     if (cfg_load(&c, argc - 1, argv + 1, &err) < 0) {
