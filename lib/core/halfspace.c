@@ -348,52 +348,49 @@ static double meet(const double a[4], const double b[4], const double c[4],
     return (double)fabsl(det);
 }
 
-/* The output model: live faces in plane order, vertices numbered by first
- * use, each placed from the best conditioned triple of its faces. */
-static int build(hs *h, uint32_t n, geo_poly **ret, uint32_t **ret_source)
+/* The output in plain arrays: faces in plane order as CSR cycles of
+ * dense vertex numbers. */
+typedef struct hs_out {
+    uint32_t nf, nv;
+    uint32_t *src;    /* nf: input plane of each face */
+    uint32_t *start;  /* nf + 1 */
+    uint32_t *idx;    /* start[nf] vertex numbers */
+    double (*x)[3];   /* nv positions */
+} hs_out;
+
+static void out_free(hs_out *o)
 {
-    int rc = -ENOMEM;
-    uint32_t nf = 0, nc = 0;
-    for (uint32_t f = 0; f < n; f++)
-        if (h->face[f].alive)
-            nf++, nc += h->face[f].n;
-    uint32_t *map = malloc((size_t)h->nv * sizeof *map);
-    uint32_t *deg = calloc((size_t)h->nv + 1, sizeof *deg);
-    uint32_t *inc = malloc((size_t)nc * sizeof *inc);
-    uint32_t *src = malloc((size_t)(nf ? nf : 1) * sizeof *src);
-    double (*unit)[4] = malloc((size_t)n * sizeof *unit);
-    geo_poly *p = geo_poly_new();
-    if (!map || !deg || !inc || !src || !unit || !p ||
-        geo_poly_reserve(p, h->nv, nf, nc) < 0)
-        goto out;
-    for (uint32_t f = 0; f < n; f++)
-        unit_plane(h->pl[f], unit[f]);
-    uint32_t nv = 0;
-    for (uint32_t i = 0; i < h->nv; i++)
-        map[i] = UINT32_MAX;
-    for (uint32_t f = 0; f < n; f++) {
-        const hs_face *F = &h->face[f];
-        for (uint32_t k = 0; F->alive && k < F->n; k++) {
-            if (map[F->v[k]] == UINT32_MAX)
-                map[F->v[k]] = nv++;
-            deg[map[F->v[k]] + 1]++;
-        }
+    free(o->src);
+    free(o->start);
+    free(o->idx);
+    free(o->x);
+    memset(o, 0, sizeof *o);
+}
+
+/* Places every vertex of o from the best conditioned triple of the unit
+ * planes of the faces through it. */
+static int place(hs_out *o, const double (*unit)[4])
+{
+    uint32_t nc = o->start[o->nf];
+    uint32_t *deg = calloc((size_t)o->nv + 1, sizeof *deg);
+    uint32_t *inc = malloc((size_t)(nc ? nc : 1) * sizeof *inc);
+    double (*x)[3] = malloc((size_t)(o->nv ? o->nv : 1) * sizeof *x);
+    if (!deg || !inc || !x) {
+        free(deg), free(inc), free(x);
+        return -ENOMEM;
     }
-    for (uint32_t v = 0; v < nv; v++)
+    for (uint32_t c = 0; c < nc; c++)
+        deg[o->idx[c] + 1]++;
+    for (uint32_t v = 0; v < o->nv; v++)
         deg[v + 1] += deg[v];
-    uint32_t fi = 0;
-    for (uint32_t f = 0; f < n; f++) {
-        const hs_face *F = &h->face[f];
-        if (!F->alive)
-            continue;
-        for (uint32_t k = 0; k < F->n; k++)
-            inc[deg[map[F->v[k]]]++] = f;
-        src[fi++] = f;
-    }
+    for (uint32_t f = 0; f < o->nf; f++)
+        for (uint32_t c = o->start[f]; c < o->start[f + 1]; c++)
+            inc[deg[o->idx[c]]++] = o->src[f];
     /* deg[v] now ends v's incidences; they start at deg[v − 1] */
-    for (uint32_t v = 0; v < nv; v++) {
+    for (uint32_t v = 0; v < o->nv; v++) {
         uint32_t lo = v ? deg[v - 1] : 0, hi = deg[v];
-        double best = -1.0, x[3] = {0, 0, 0};
+        double best = -1.0;
+        x[v][0] = x[v][1] = x[v][2] = 0.0;
         for (uint32_t i = lo; i < hi; i++)
             for (uint32_t j = i + 1; j < hi; j++)
                 for (uint32_t k = j + 1; k < hi; k++) {
@@ -401,40 +398,194 @@ static int build(hs *h, uint32_t n, geo_poly **ret, uint32_t **ret_source)
                     double d = meet(unit[inc[i]], unit[inc[j]], unit[inc[k]],
                                     y);
                     if (d > best)
-                        best = d, x[0] = y[0], x[1] = y[1], x[2] = y[2];
+                        best = d, x[v][0] = y[0], x[v][1] = y[1],
+                        x[v][2] = y[2];
                 }
-        if (geo_poly_add_vertex(p, x) < 0)
-            goto out;
     }
-    for (uint32_t i = 0; i < nf; i++) {
-        const hs_face *F = &h->face[src[i]];
-        for (uint32_t k = 0; k < F->n; k++)
-            inc[k] = map[F->v[k]];
-        int64_t id = geo_poly_add_facet(p, inc, F->n);
+    free(deg);
+    free(inc);
+    free(o->x);
+    o->x = x;
+    return 0;
+}
+
+static uint32_t find(uint32_t *up, uint32_t v)
+{
+    while (up[v] != v)
+        v = up[v] = up[up[v]];
+    return v;
+}
+
+/* Contracts the edges of o shorter than tol: the rounding of the input
+ * planes (trigonometric normals of a symmetric design) turns a point where
+ * four planes meet in exact geometry into two vertices some 1e-16 mm
+ * apart, and those are one vertex to every user. Faces left with fewer
+ * than three vertices vanish. When a contraction would make a face pass
+ * twice through one vertex, nothing is merged. 1 when it merged, 0 when
+ * not, or -ENOMEM. */
+static int contract(hs_out *o, double tol)
+{
+    uint32_t nc = o->start[o->nf];
+    uint32_t *up = malloc((size_t)(o->nv ? o->nv : 1) * sizeof *up);
+    uint32_t *idx = malloc((size_t)(nc ? nc : 1) * sizeof *idx);
+    uint32_t *start = malloc(((size_t)o->nf + 1) * sizeof *start);
+    uint32_t *src = malloc((size_t)(o->nf ? o->nf : 1) * sizeof *src);
+    uint32_t *seen = calloc((size_t)o->nv + 1, sizeof *seen);
+    int rc = -ENOMEM;
+    if (!up || !idx || !start || !src || !seen)
+        goto out;
+    bool any = false;
+    for (uint32_t v = 0; v < o->nv; v++)
+        up[v] = v;
+    for (uint32_t f = 0; f < o->nf; f++) {
+        uint32_t a0 = o->start[f], n = o->start[f + 1] - a0;
+        for (uint32_t k = 0; k < n; k++) {
+            uint32_t a = o->idx[a0 + k], b = o->idx[a0 + (k + 1) % n];
+            double d2 = 0;
+            for (int q = 0; q < 3; q++)
+                d2 += (o->x[a][q] - o->x[b][q]) * (o->x[a][q] - o->x[b][q]);
+            if (d2 <= tol * tol) {
+                uint32_t ra = find(up, a), rb = find(up, b);
+                if (ra != rb)
+                    up[ra < rb ? rb : ra] = ra < rb ? ra : rb, any = true;
+            }
+        }
+    }
+    rc = 0;
+    if (!any)
+        goto out;
+    uint32_t nf = 0, m = 0;
+    start[0] = 0;
+    for (uint32_t f = 0; f < o->nf; f++) {
+        uint32_t a0 = o->start[f], n = o->start[f + 1] - a0, first = m;
+        for (uint32_t k = 0; k < n; k++) {
+            uint32_t r = find(up, o->idx[a0 + k]);
+            if (m > first && idx[m - 1] == r)
+                continue;
+            idx[m++] = r;
+        }
+        while (m - first > 1 && idx[m - 1] == idx[first])
+            m--;
+        if (m - first < 3) {
+            m = first;
+            continue;
+        }
+        for (uint32_t c = first; c < m; c++) {
+            if (seen[idx[c]] == f + 1)
+                goto out; /* a face through one vertex twice: keep all */
+            seen[idx[c]] = f + 1;
+        }
+        src[nf] = o->src[f];
+        start[++nf] = m;
+    }
+    /* renumber the surviving roots densely by first use */
+    for (uint32_t v = 0; v < o->nv; v++)
+        seen[v] = UINT32_MAX;
+    uint32_t nv = 0;
+    for (uint32_t c = 0; c < m; c++) {
+        if (seen[idx[c]] == UINT32_MAX)
+            seen[idx[c]] = nv++;
+        idx[c] = seen[idx[c]];
+    }
+    free(o->idx), free(o->start), free(o->src);
+    o->idx = idx, o->start = start, o->src = src;
+    idx = start = src = NULL;
+    o->nf = nf, o->nv = nv;
+    rc = 1;
+out:
+    free(up);
+    free(idx);
+    free(start);
+    free(src);
+    free(seen);
+    return rc;
+}
+
+/* The output model: live faces in plane order, vertices numbered by first
+ * use, each placed from the best conditioned triple of its faces; edges
+ * shorter than merge_tol contracted. */
+static int build(hs *h, uint32_t n, double merge_tol, geo_poly **ret,
+                 uint32_t **ret_source)
+{
+    int rc = -ENOMEM;
+    hs_out o = {0};
+    uint32_t nc = 0;
+    for (uint32_t f = 0; f < n; f++)
+        if (h->face[f].alive)
+            o.nf++, nc += h->face[f].n;
+    uint32_t *map = malloc((size_t)h->nv * sizeof *map);
+    double (*unit)[4] = malloc((size_t)(n ? n : 1) * sizeof *unit);
+    o.src = malloc((size_t)(o.nf ? o.nf : 1) * sizeof *o.src);
+    o.start = malloc(((size_t)o.nf + 1) * sizeof *o.start);
+    o.idx = malloc((size_t)(nc ? nc : 1) * sizeof *o.idx);
+    geo_poly *p = NULL;
+    if (!map || !unit || !o.src || !o.start || !o.idx)
+        goto out;
+    for (uint32_t f = 0; f < n; f++)
+        unit_plane(h->pl[f], unit[f]);
+    for (uint32_t i = 0; i < h->nv; i++)
+        map[i] = UINT32_MAX;
+    uint32_t fi = 0, c = 0;
+    o.start[0] = 0;
+    for (uint32_t f = 0; f < n; f++) {
+        const hs_face *F = &h->face[f];
+        if (!F->alive)
+            continue;
+        for (uint32_t k = 0; k < F->n; k++) {
+            if (map[F->v[k]] == UINT32_MAX)
+                map[F->v[k]] = o.nv++;
+            o.idx[c++] = map[F->v[k]];
+        }
+        o.src[fi] = f;
+        o.start[++fi] = c;
+    }
+    if (place(&o, (const double (*)[4])unit) < 0)
+        goto out;
+    double lo[3] = {INFINITY, INFINITY, INFINITY};
+    double hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t v = 0; v < o.nv; v++)
+        for (int k = 0; k < 3; k++)
+            lo[k] = fmin(lo[k], o.x[v][k]), hi[k] = fmax(hi[k], o.x[v][k]);
+    double size = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) +
+                       (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                       (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    double tol = merge_tol < 0 ? GEO_HALFSPACE_MERGE * (1.0 + size)
+                               : merge_tol;
+    int merged = tol > 0 ? contract(&o, tol) : 0;
+    if (merged < 0 || (merged && place(&o, (const double (*)[4])unit) < 0))
+        goto out;
+    p = geo_poly_new();
+    if (!p || geo_poly_reserve(p, o.nv, o.nf, o.start[o.nf]) < 0)
+        goto out;
+    for (uint32_t v = 0; v < o.nv; v++)
+        if (geo_poly_add_vertex(p, o.x[v]) < 0)
+            goto out;
+    for (uint32_t f = 0; f < o.nf; f++) {
+        int64_t id = geo_poly_add_facet(p, o.idx + o.start[f],
+                                        o.start[f + 1] - o.start[f]);
         if (id < 0)
             goto out;
-        memcpy(p->planes[id], unit[src[i]], sizeof p->planes[id]);
+        memcpy(p->planes[id], unit[o.src[f]], sizeof p->planes[id]);
     }
     *ret = p;
     p = NULL;
     if (ret_source) {
-        *ret_source = src;
-        src = NULL;
+        *ret_source = o.src;
+        o.src = NULL;
     }
     rc = 0;
 out:
     geo_poly_free(p);
+    out_free(&o);
     free(map);
-    free(deg);
-    free(inc);
-    free(src);
     free(unit);
     return rc;
 }
 
 static const char *const BOX_SIDE[6] = {"+x", "-x", "+y", "-y", "+z", "-z"};
 
-int geo_halfspace_intersect(const double *planes, uint32_t n, geo_poly **ret,
+int geo_halfspace_intersect(const double *planes, uint32_t n,
+                            double merge_tol, geo_poly **ret,
                             uint32_t **ret_source,
                             enum geo_halfspace_status *ret_status,
                             geo_err *err)
@@ -496,7 +647,7 @@ int geo_halfspace_intersect(const double *planes, uint32_t n, geo_poly **ret,
                              BOX_SIDE[k]);
             goto out;
         }
-    rc = build(&h, n, ret, ret_source);
+    rc = build(&h, n, merge_tol, ret, ret_source);
 out:
     if (rc == -ENOMEM)
         geo_err_set(err, rc, "out of memory");

@@ -29,6 +29,10 @@
 #include "ctx.h"
 #include "poly.h"
 
+/* The default contraction length, relative (see above): far above the
+ * rounding of coordinates, far below any edge a cutter or scanner makes. */
+#define GEO_HALFSPACE_MERGE 1e-9
+
 /* Why an intersection failed (besides -ENOMEM). */
 enum geo_halfspace_status {
     GEO_HALFSPACE_OK = 0,
@@ -40,7 +44,8 @@ enum geo_halfspace_status {
                                 than 1e6 × the largest plane offset) */
 };
 
-/* Intersects the half-spaces planes[4i..4i+3] (x) ≤ 0, i < n.
+/* Intersects the half-spaces planes[4i..4i+3] (x) ≤ 0, i < n, with
+ * edges shorter than merge_tol mm contracted (see above).
  * On success returns 0, *ret the new polyhedron (the caller frees it with
  * geo_poly_free) and, when ret_source is non-NULL, *ret_source a malloc'd
  * array of (*ret)->nfacets input plane indices (the caller frees it).
@@ -48,7 +53,8 @@ enum geo_halfspace_status {
  * naming the plane ("planes[7]: ...") or the reason ("the planes bound
  * nothing", "the planes do not bound the region: it is unbounded towards
  * +x"), or -ENOMEM; ret and ret_source are left untouched. */
-int geo_halfspace_intersect(const double *planes, uint32_t n, geo_poly **ret,
+int geo_halfspace_intersect(const double *planes, uint32_t n,
+                            double merge_tol, geo_poly **ret,
                             uint32_t **ret_source,
                             enum geo_halfspace_status *ret_status,
                             geo_err *err);

@@ -46,7 +46,7 @@ static geo_poly *must_intersect(const double *planes, uint32_t n,
 {
     geo_poly *p = NULL;
     geo_err err = {{0}};
-    int r = geo_halfspace_intersect(planes, n, &p, ret_src, NULL, &err);
+    int r = geo_halfspace_intersect(planes, n, -1, &p, ret_src, NULL, &err);
     if (r < 0)
         fail_msg("%s", err.msg);
     assert_valid_convex(p);
@@ -136,7 +136,7 @@ static void expect_failure(const double *pl, uint32_t n,
     geo_poly *p = NULL;
     geo_err err = {{0}};
     enum geo_halfspace_status st = GEO_HALFSPACE_OK;
-    assert_int_equal(geo_halfspace_intersect(pl, n, &p, NULL, &st, &err),
+    assert_int_equal(geo_halfspace_intersect(pl, n, -1, &p, NULL, &st, &err),
                      -EINVAL);
     assert_null(p);
     assert_int_equal(st, want);
