@@ -95,7 +95,8 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
     geo_poly *q = NULL;
     uint32_t *src = NULL;
     enum geo_halfspace_status st;
-    r = geo_halfspace_intersect(&cp.planes[0][0], cp.nplanes, &q, &src, &st,
+    double merge_tol = GEO_HALFSPACE_MERGE * geo_poly_size(p);
+    r = geo_halfspace_intersect(&cp.planes[0][0], cp.nplanes, merge_tol, &q, &src, &st,
                                 &perr);
     if (r == -ENOMEM) {
         r = geo_err_set(err, r, "out of memory");
@@ -134,7 +135,7 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
         rep->narrow += gone;
         geo_poly *q2 = NULL;
         uint32_t *src2 = NULL;
-        r = geo_halfspace_intersect(&cp.planes[0][0], cp.nplanes, &q2, &src2,
+        r = geo_halfspace_intersect(&cp.planes[0][0], cp.nplanes, merge_tol, &q2, &src2,
                                     &st, &perr);
         if (r == -ENOMEM) {
             r = geo_err_set(err, r, "out of memory");
@@ -161,7 +162,7 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
         if (r == 0) {
             geo_poly *q2 = NULL;
             uint32_t *src2 = NULL;
-            r = geo_halfspace_intersect(&cp.planes[0][0], cp.nplanes, &q2,
+            r = geo_halfspace_intersect(&cp.planes[0][0], cp.nplanes, merge_tol, &q2,
                                         &src2, &st, &perr);
             if (r == -ENOMEM) {
                 r = geo_err_set(err, r, "out of memory");
