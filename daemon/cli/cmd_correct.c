@@ -36,6 +36,8 @@ static const char USAGE[] =
     "                       measured on the scan\n"
     "  --radius R           clusters: mm; default 2e-4 of the model's size\n"
     "  --no-collapse        do not collapse clusters\n"
+    "  --convex             a convex scan: intersect its recovered facet planes\n"
+    "                       (the merge stays the fallback)\n"
     "\n"
     "Prints one line of JSON: vertices and facets before and after,\n"
     "groups_merged, groups_failed, clusters_collapsed, views and noise (mm)\n"
@@ -68,6 +70,8 @@ int cmd_correct(int argc, char **argv)
         const char *a = argv[i];
         if (strcmp(a, "--no-collapse") == 0) {
             o.collapse_clusters = false;
+        } else if (strcmp(a, "--convex") == 0) {
+            o.convex = true;
         } else if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0 ||
                    strcmp(a, "--report") == 0 || strcmp(a, "--max-angle") == 0 ||
                    strcmp(a, "--max-deviation") == 0 ||

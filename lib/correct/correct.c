@@ -20,6 +20,8 @@ void geo_correct_opts_default(geo_correct_opts *o)
     geo_collapse_opts_default(&o->collapse);
     o->collapse_clusters = true;
     o->max_rounds = 4;
+    o->convex = false;
+    o->convex_fit = GEO_CONVEX_FIT_AREA;
 }
 
 void geo_correct_report_clear(geo_correct_report *r)
@@ -143,6 +145,24 @@ int geo_correct(geo_poly *p, const geo_correct_opts *opts,
     rep->views = o.merge.views;
     rep->noise = o.merge.noise > 0 ? o.merge.noise : 0;
     uint32_t rounds = o.max_rounds ? o.max_rounds : 1;
+    if (o.convex) {
+        geo_poly *c = NULL;
+        r = geo_correct_convex(q, o.merge.views, rep->noise,
+                               geo_merge_max_deviation(&o.merge, q),
+                               o.convex_fit, &sub, &c,
+                               &rep->convex_report, err);
+        if (r < 0)
+            goto done;
+        if (r == 0) {
+            /* a new model: no input vertex survives as such */
+            geo_poly_free(q);
+            q = c;
+            for (uint32_t v = 0; v < nin; v++)
+                cur[v] = GEO_NONE;
+            rep->convex = true;
+            rounds = 0;
+        }
+    }
     for (uint32_t k = 0; k < rounds; k++) {
         if (geo_ctx_progress(ctx, 0.1 + 0.7 * k / rounds) < 0) {
             r = geo_err_set(err, -ECANCELED, "correction canceled");

@@ -27,6 +27,7 @@
 #include <stdint.h>
 
 #include "clusters.h"
+#include "convex.h"
 #include "ctx.h"
 #include "merge.h"
 #include "poly.h"
@@ -36,6 +37,13 @@ typedef struct geo_correct_opts {
     geo_merge_opts merge;       /* geo_merge_opts_default */
     geo_collapse_opts collapse; /* geo_collapse_opts_default */
     bool collapse_clusters;     /* run the collapse [true] */
+    bool convex;                /* a convex scan: its recovered planes
+                                   intersected (convex.h) instead of the
+                                   merge rounds, which stay the fallback
+                                   [false: on the fixed suite it does not
+                                   yet beat the merge, see
+                                   docs/kernels/correct-convex.md] */
+    enum geo_convex_fit convex_fit; /* its planes [GEO_CONVEX_FIT_AREA] */
     uint32_t max_rounds;        /* merge + collapse rounds [4] */
 } geo_correct_opts;
 
@@ -57,6 +65,8 @@ typedef struct geo_correct_report {
     double noise;               /* the scan's surface noise they used, mm
                                    (0: no noise test) */
     uint32_t rounds;
+    bool convex;                /* the convex path gave the result */
+    geo_convex_report convex_report; /* what it did, or why not */
     uint32_t vertices_before, facets_before, vertices_after, facets_after;
     double volume_before, volume_after; /* mm³ */
     double hausdorff;           /* estimate between input and result, mm */

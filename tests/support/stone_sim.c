@@ -404,10 +404,31 @@ static void add_silhouette(plane_list *l, const geo_poly *stone,
 geo_poly *sim_scan(const geo_poly *stone, uint32_t k, double noise,
                    uint64_t seed)
 {
+    return sim_scan_phase(stone, k, noise, 0, seed);
+}
+
+void sim_rotate_z(geo_poly *p, double angle)
+{
+    double c = cos(angle), s = sin(angle);
+    for (uint32_t i = 0; i < p->nverts; i++) {
+        double x = p->verts[i][0], y = p->verts[i][1];
+        p->verts[i][0] = c * x - s * y;
+        p->verts[i][1] = s * x + c * y;
+    }
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        double x = p->planes[f][0], y = p->planes[f][1];
+        p->planes[f][0] = c * x - s * y;
+        p->planes[f][1] = s * x + c * y;
+    }
+}
+
+geo_poly *sim_scan_phase(const geo_poly *stone, uint32_t k, double noise,
+                         double phase, uint64_t seed)
+{
     uint64_t rng = seed * 0xd1b54a32d192ed03ULL + 7;
     plane_list l = {0};
     for (uint32_t i = 0; i < k; i++) {
-        double th = M_PI * i / k;
+        double th = phase + M_PI * i / k;
         double d[3] = {cos(th), sin(th), 0};
         double e1[3] = {-sin(th), cos(th), 0}, e2[3] = {0, 0, 1};
         add_silhouette(&l, stone, d, e1, e2, noise, &rng);
@@ -436,7 +457,7 @@ static double seg_dist2(const double p[3], const double a[3], const double b[3])
 }
 
 /* Squared distance from p to facet f (a planar polygon). */
-static double facet_dist2(const geo_poly *g, uint32_t f, const double p[3])
+double sim_facet_dist2(const geo_poly *g, uint32_t f, const double p[3])
 {
     uint32_t n = geo_poly_facet_size(g, f);
     const uint32_t *v = geo_poly_facet(g, f);
@@ -482,7 +503,7 @@ static void nearest(const geo_poly *g, const geo_bvh *h, uint32_t node,
         return;
     if (n->count) {
         for (uint32_t i = n->child; i < n->child + n->count; i++) {
-            double d2 = facet_dist2(g, h->items[i], p);
+            double d2 = sim_facet_dist2(g, h->items[i], p);
             if (d2 < *best)
                 *best = d2;
         }

@@ -52,6 +52,17 @@ geo_poly *sim_clip_convex(const geo_poly *p, const double plane[4], double tol,
 geo_poly *sim_scan(const geo_poly *stone, uint32_t k, double noise,
                    uint64_t seed);
 
+/* The same with the views turned by phase (radians): view i looks along
+ * azimuth phase + 180° · i / k. */
+geo_poly *sim_scan_phase(const geo_poly *stone, uint32_t k, double noise,
+                         double phase, uint64_t seed);
+
+/* Turns p about z by angle (radians), vertices and planes. */
+void sim_rotate_z(geo_poly *p, double angle);
+
+/* Squared distance from point x to facet f of g (a planar polygon). */
+double sim_facet_dist2(const geo_poly *g, uint32_t f, const double x[3]);
+
 /* Symmetric Hausdorff distance estimate between two closed polyhedra:
  * the largest distance from sample points of either surface (every
  * vertex, facet centroids and samples per facet proportional to area) to

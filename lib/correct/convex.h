@@ -1,0 +1,127 @@
+/* convex.h — correction of a convex scan by recovering the true facet
+ * planes (docs/kernels/correct-convex.md).
+ *
+ * A shadow-profile scan (Palachev 2012, §1.2) of a convex stone is the
+ * intersection of silhouette half-spaces: each plane contains its view's
+ * direction and, to the silhouette noise, one true edge of the stone, so a
+ * true facet comes out as a fan of slivers hinged on its own edges and
+ * tilted by up to about a view step. Averaging the slivers (the merge of
+ * Palachev 2012, §2.5) gives a plane tilted by a fraction of that step; the
+ * hinges themselves lie on the true plane. So:
+ *
+ *  1. groups: the scan's facets are grouped into true facets, grown from
+ *     the largest facet not yet in a group, each joining neighbour within
+ *     the scan's own error (its surface noise and the roof its view step
+ *     leaves) of the group's plane — the criterion of the merge's
+ *     automatic groups (merge_groups.c), applied once to the raw scan;
+ *  2. planes: each group's plane is its surface's least-squares plane
+ *     (the default, GEO_CONVEX_FIT_AREA), or fitted to the group's boundary — the
+ *     edges it shares with other groups, where the slivers hinge on the
+ *     true edges — by least squares over the boundary segments (each
+ *     weighted by its length), with the segments that lie more than a few
+ *     residual scales off rejected and the fit repeated (a boundary stretch
+ *     no sliver hinges on lies outside the true plane);
+ *  3. support: a group whose plane cuts the polytope of its neighbours'
+ *     planes by no more than the scan's noise allows (a bevel strip along
+ *     a true edge) is dropped;
+ *  4. the result is the intersection of the kept half-spaces.
+ *
+ * Steps 1–3 are geo_convex_planes; geo_correct_convex runs them and step
+ * 4 and checks the result (see there). Conventions of lib/core/poly.h; mm.
+ * Reentrant; thread-safe on distinct models. */
+#ifndef GEO_CONVEX_H
+#define GEO_CONVEX_H
+
+#include <stdint.h>
+
+#include "ctx.h"
+#include "poly.h"
+
+typedef struct geo_convex_planes {
+    uint32_t nplanes;     /* kept planes */
+    double (*planes)[4];  /* nplanes unit outward planes */
+    double *area;         /* nplanes: area of the scan facets of each */
+    double *allow;        /* nplanes: how far the scan may lie outside the
+                             plane over its group: the noise bound plus the
+                             roof the view step leaves over a group that
+                             wide and inclined, mm */
+    double dev0;          /* the noise bound alone, mm */
+    double hinge_noise;   /* the hinges' scatter about their planes, mm */
+    double cut_min;       /* the deepest cut a dropped group made, mm */
+    uint32_t ngroups;     /* groups found (kept or not) */
+    uint32_t *group;      /* p->nfacets: group of each scan facet */
+    uint32_t *kept;       /* ngroups: index into planes, or GEO_NONE */
+    uint32_t dropped;     /* groups dropped as unsupported (step 3) */
+} geo_convex_planes;
+
+/* Releases the arrays and zeroes r; accepts NULL. */
+void geo_convex_planes_clear(geo_convex_planes *r);
+
+/* The plane each group gets (step 2). */
+enum geo_convex_fit {
+    /* the least-squares plane of the group's surface (Palachev 2012, §2.5.2,
+     * the area and inertia ways), over the slivers of the whole true
+     * facet: measured the better one with 0–3 µm of noise (docs) */
+    GEO_CONVEX_FIT_AREA = 0,
+    /* the trimmed fit of the group's boundary (step 2 above): better
+     * noise-free, worse once the noise is a micrometre */
+    GEO_CONVEX_FIT_HINGE = 1,
+    /* the area planes, then adjusted to every silhouette plane of the
+     * scan (geo_convex_refine) */
+    GEO_CONVEX_FIT_SILHOUETTE = 2,
+};
+
+/* Steps 1–3 above on p, which must be a closed, outward, manifold model
+ * (a raw convex scan; other models give planes too, meaningless ones).
+ * views: the scanner's views over 180° (geo_merge_view_grid), 0 when not
+ * known (no roof term); noise: the scan's surface noise in mm
+ * (geo_merge_surface_noise), 0 for none. ret is filled (arrays malloc'd,
+ * free with geo_convex_planes_clear). Returns 0, -EINVAL (p not closed
+ * and manifold; err says so), -ENOMEM (ret zeroed). */
+int geo_convex_planes_find(const geo_poly *p, uint32_t views, double noise,
+                           enum geo_convex_fit fit, geo_convex_planes *ret,
+                           geo_err *err);
+
+/* Adjusts planes[0..nplanes) (unit outward, in place) so that the
+ * support of their intersection in the direction of every facet of scan
+ * matches that facet's offset (convex_refine.c says how and why). est is
+ * their intersection (geo_halfspace_intersect) and src its facets'
+ * planes. *ret_scale gets the robust scale of the supports' residuals
+ * before the adjustment, mm. Returns 0, -EINVAL (a vertex of est whose
+ * planes do not meet, or normal equations not positive definite: planes
+ * unchanged), -E2BIG (too many planes for the dense solve), -ENOMEM. */
+int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
+                      const uint32_t *src, double (*planes)[4],
+                      uint32_t nplanes, double *ret_scale);
+
+/* What geo_correct_convex did. */
+typedef struct geo_convex_report {
+    uint32_t groups, planes, dropped; /* see geo_convex_planes */
+    uint32_t redundant;  /* kept planes that bound no facet of the result */
+    uint32_t narrow;     /* planes removed for a facet narrower than the
+                            scan resolves */
+    double concavity;  /* the scan's deepest local concavity, mm */
+    double bound;      /* the deviation the result may have from the
+                          scan, mm */
+    double deviation;  /* the result's Hausdorff distance to the scan, mm */
+    char reason[200];  /* why the convex path was not taken ("" if it was) */
+} geo_convex_report;
+
+/* The convex path of the correction: when p (closed, outward, manifold)
+ * is convex to within the scan's deviation bound max_dev (mm; every edge's
+ * dihedral convex or concave by no more than that), its true planes are
+ * found (geo_convex_planes_find with views, noise) and *ret becomes their
+ * exact intersection (lib/core/halfspace.h: closed, outward, convex, no
+ * self-intersection by construction), provided it lies within the bound
+ * the scan's noise and view step allow (rep->bound) of p: no result
+ * vertex farther outside p than the hinges' noise moves them, no vertex
+ * of p farther outside the result than its group's roof allows. Returns 0 (*ret a new
+ * model, the caller frees it), 1 when the path does not apply or a check
+ * fails (*ret NULL, rep->reason says which), -ENOMEM or -ECANCELED (err
+ * set). p is never modified. rep may be NULL. */
+int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
+                       double max_dev, enum geo_convex_fit fit,
+                       const geo_ctx *ctx, geo_poly **ret,
+                       geo_convex_report *rep, geo_err *err);
+
+#endif

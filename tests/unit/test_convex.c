@@ -1,0 +1,165 @@
+/* test_convex.c — the convex path of the correction (lib/correct/
+ * convex.h): true planes recovered from a simulated scan facet by facet,
+ * the result valid and convex, a non-convex model declined untouched, and
+ * geo_correct taking the path when asked. Princess and brilliant
+ * scans at K = 100 and 400 keep it to a second. */
+#include "testutil.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "classify.h"
+#include "convex.h"
+#include "correct.h"
+#include "fidelity.h"
+#include "merge.h"
+#include "merge_shapes.h"
+#include "model_cmp.h"
+#include "stone_sim.h"
+#include "tu_load.h"
+
+/* The scan's view count and noise as geo_correct reads them. */
+static void scan_scale(const geo_poly *scan, uint32_t *views, double *noise)
+{
+    geo_merge_opts mo;
+    geo_merge_opts_default(&mo);
+    geo_err err;
+    assert_int_equal(geo_merge_view_grid(scan, views, NULL), 0);
+    assert_int_equal(geo_merge_surface_noise(scan, &mo, noise, &err), 0);
+}
+
+static geo_poly *convex_correct(const geo_poly *scan, enum geo_convex_fit fit,
+                                geo_convex_report *rep)
+{
+    uint32_t views;
+    double noise;
+    scan_scale(scan, &views, &noise);
+    geo_poly *q = NULL;
+    geo_err err;
+    geo_merge_opts mo;
+    geo_merge_opts_default(&mo);
+    int r = geo_correct_convex(scan, views, noise, geo_merge_max_deviation(&mo, scan),
+                               fit, NULL, &q, rep, &err);
+    if (r != 0)
+        fail_msg("convex path declined: %s", r == 1 ? rep->reason : err.msg);
+    return q;
+}
+
+static void assert_valid_convex(const geo_poly *p)
+{
+    const char *bad = ms_invalid(p);
+    if (bad)
+        fail_msg("result not valid: %s", bad);
+    geo_conv3_result cv;
+    assert_int_equal(geo_conv3(p, NULL, &cv), 0);
+    assert_true(cv.convex);
+}
+
+/* Noise-free, the hinges and the silhouettes both give the stone back:
+ * every facet one to one within 0.1° and 5 µm. */
+static void check_noise_free(enum geo_convex_fit fit)
+{
+    geo_poly *stone = sim_stone(SIM_PRINCESS, 2);
+    geo_poly *scan = sim_scan_phase(stone, 400, 1e-6, 0.37, 2);
+    assert_non_null(scan);
+    geo_convex_report rep;
+    geo_poly *q = convex_correct(scan, fit, &rep);
+    assert_valid_convex(q);
+    sim_fidelity fd;
+    assert_int_equal(sim_fidelity_measure(stone, q, 0.1, 0.005, &fd), 0);
+    if (fd.recovered != fd.truth)
+        fail_msg("%u of %u true facets recovered (worst %u, %.3f°)",
+                 fd.recovered, fd.truth, fd.worst_facet, fd.angle_max);
+    assert_int_equal(q->nfacets, stone->nfacets);
+    geo_poly_free(q);
+    geo_poly_free(scan);
+    geo_poly_free(stone);
+}
+
+static void test_noise_free_scan_gives_back_every_facet(void **state)
+{
+    (void)state;
+    check_noise_free(GEO_CONVEX_FIT_HINGE);
+    check_noise_free(GEO_CONVEX_FIT_SILHOUETTE);
+}
+
+static void test_noisy_scan_comes_out_valid_and_nearer_the_stone(void **state)
+{
+    (void)state;
+    geo_poly *stone = sim_stone(SIM_BRILLIANT, 3);
+    geo_poly *scan = sim_scan_phase(stone, 100, 0.001, 1.1, 3);
+    assert_non_null(scan);
+    geo_poly *copy = geo_poly_copy(scan);
+    geo_convex_report rep;
+    geo_poly *q = convex_correct(scan, GEO_CONVEX_FIT_AREA, &rep);
+    assert_true(tu_poly_same(scan, copy, 0, 0, NULL, 0)); /* the input is only read */
+    assert_valid_convex(q);
+    double hs = sim_hausdorff(scan, stone, 2000), hq = sim_hausdorff(q, stone, 2000);
+    if (hq > hs)
+        fail_msg("Hausdorff to the stone %.2f µm, the scan's %.2f µm", hq * 1e3,
+                 hs * 1e3);
+    assert_true(rep.deviation <= rep.bound);
+    geo_poly_free(q);
+    geo_poly_free(copy);
+    geo_poly_free(scan);
+    geo_poly_free(stone);
+}
+
+static void test_non_convex_model_is_declined_untouched(void **state)
+{
+    (void)state;
+    geo_poly *p = tu_load_model("notch-cube.json");
+    assert_non_null(p);
+    geo_poly *copy = geo_poly_copy(p);
+    geo_poly *q = (geo_poly *)1;
+    geo_convex_report rep;
+    geo_err err;
+    assert_int_equal(geo_correct_convex(p, 0, 0, 1e-3, GEO_CONVEX_FIT_AREA, NULL,
+                                        &q, &rep, &err), 1);
+    assert_null(q);
+    assert_non_null(strstr(rep.reason, "not convex"));
+    assert_true(tu_poly_same(p, copy, 0, 0, NULL, 0));
+    geo_poly_free(copy);
+    geo_poly_free(p);
+}
+
+static void test_correct_auto_takes_the_convex_path_when_asked(void **state)
+{
+    (void)state;
+    geo_poly *stone = sim_stone(SIM_PRINCESS, 4);
+    geo_poly *scan = sim_scan_phase(stone, 100, 0.001, 0.2, 4);
+    geo_poly *raw = geo_poly_copy(scan);
+    geo_correct_opts o;
+    geo_correct_opts_default(&o);
+    assert_false(o.convex);
+    o.convex = true;
+    geo_correct_report rep;
+    geo_err err;
+    assert_int_equal(geo_correct(scan, &o, NULL, &rep, &err), 0);
+    if (!rep.convex)
+        fail_msg("fell back to the merge: %s", rep.convex_report.reason);
+    assert_true(rep.after.valid);
+    assert_int_equal(rep.nmoved, 0); /* a new model: no input vertex kept */
+    /* the result (in scan) is nearer the stone than the raw scan */
+    double hs = sim_hausdorff(raw, stone, 2000), hq = sim_hausdorff(scan, stone, 2000);
+    if (hq > hs)
+        fail_msg("Hausdorff to the stone %.2f µm, the scan's %.2f µm", hq * 1e3,
+                 hs * 1e3);
+    geo_correct_report_clear(&rep);
+    geo_poly_free(raw);
+    geo_poly_free(scan);
+    geo_poly_free(stone);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_noise_free_scan_gives_back_every_facet),
+        cmocka_unit_test(test_noisy_scan_comes_out_valid_and_nearer_the_stone),
+        cmocka_unit_test(test_non_convex_model_is_declined_untouched),
+        cmocka_unit_test(test_correct_auto_takes_the_convex_path_when_asked),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
