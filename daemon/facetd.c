@@ -79,6 +79,7 @@ static void apply_http_settings(http_env *env, const cfg *c)
     atomic_store(&env->queue_size, c->queue_size);
     atomic_store(&env->inspect_max_facets, c->inspect_max_facets);
     atomic_store(&env->max_query_args, c->max_query_args);
+    atomic_store(&env->inspect_timeout_ms, c->inspect_timeout_ms);
     http_env_set_token(env, c->api_token);
 }
 

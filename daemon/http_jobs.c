@@ -327,6 +327,19 @@ enum MHD_Result http_post_job(http_req *r)
         add_geo_error(errors, &jb.model_err);
     else if (meshes && json_array_size(meshes) == 2)
         poly = meshes_union(meshes, &rep, errors);
+    if (poly) {
+        /* what the store cannot hold, and arguments that name a vertex or
+         * facet the model lacks, are the client's error, named now rather
+         * than a 500 or a failed job later */
+        const char *where = meshes ? "meshes" : "model";
+        if (proto_fmb1_check(poly, &err) < 0) {
+            char msg[600];
+            snprintf(msg, sizeof msg, "%s.%s", where, err.msg);
+            json_array_append_new(errors, http_error_entry(msg));
+        }
+        if (have_pipeline && runner_check_model(&pl, poly, &err) < 0)
+            add_geo_error(errors, &err);
+    }
     enum MHD_Result res;
     if (json_array_size(errors) > 0) {
         const json_t *first = json_array_get(errors, 0);
@@ -359,6 +372,11 @@ enum MHD_Result http_post_job(http_req *r)
     } else if (rc == -EEXIST) {
         res = http_problem(r, 422, "idempotency-key-reused",
                            "Unprocessable Content", NULL, NULL, "%s", err.msg);
+    } else if (rc == -ERANGE || rc == -EINVAL) {
+        /* a limit of the stored form the checks above did not foresee */
+        res = http_problem(r, 422, "invalid-job", "Unprocessable Content",
+                           json_pack("[o]", http_error_entry(err.msg)), NULL,
+                           "%s", err.msg);
     } else if (rc < 0) {
         log_msg(LOG_ERR, NULL, "submit: %s", err.msg);
         res = http_problem(r, 500, "submit-failed", "Internal Server Error",

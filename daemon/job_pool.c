@@ -127,6 +127,9 @@ static void run_job(slot *sl, job_rec *job)
             .progress = on_progress,
             .user = sl,
             .cancel = &sl->cancel,
+            /* the kernels stop at the time limit by themselves, without
+             * waiting for the monitor's next tick */
+            .deadline_ns = (t0 + (int64_t)limit) * 1000000,
             .seed = 1,
             .parallel_for = p->c.parallel_for,
             .pf_user = p->c.pf_user,
@@ -137,6 +140,10 @@ static void run_job(slot *sl, job_rec *job)
         out.error = strdup(err.msg);
     }
     double secs = (double)(job_mono_ms() - t0) / 1000.0;
+    if (r == -ECANCELED && job_mono_ms() >= t0 + (int64_t)limit) {
+        int none = R_NONE;
+        atomic_compare_exchange_strong(&sl->reason, &none, R_TIMEOUT);
+    }
     int why = atomic_load(&sl->reason);
     job_state final;
     const char *error = out.error;

@@ -8,7 +8,8 @@
  * Errors name the place: `pipeline[2].max_angle_deg: expected a number`.
  *
  * Operations and parameters (lengths in the model's units, mm):
- *   inspect
+ *   inspect {keep_invalid [false]} — after an op that changed the model,
+ *                 an invalid model fails the job unless keep_invalid
  *   collapse_clusters {radius ≥ 0 [0: 2e-4 × the model's size]}
  *   merge_facets {max_angle_deg in (0, 90) [60], max_deviation ≥ 0
  *                 [0: 5e-4 × the model's size], views ≥ 0 (the scanner's
@@ -86,6 +87,11 @@ enum { PROTO_PIPELINE_MAX_OPS = 64, PROTO_MAX_MAGNITUDES = 64,
 typedef struct proto_op {
     proto_op_kind kind;
     union {
+        struct {
+            /* an inspect after an op that changed the model fails the job
+             * when the model is not valid, unless this is set */
+            bool keep_invalid;
+        } inspect;
         struct {
             double radius;
         } collapse;

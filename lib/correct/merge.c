@@ -552,7 +552,7 @@ static int check_auto_opts(const geo_merge_opts *o, geo_err *err)
 }
 
 int geo_merge_surface_noise(const geo_poly *p, const geo_merge_opts *opts,
-                            double *ret, geo_err *err)
+                            const geo_ctx *ctx, double *ret, geo_err *err)
 {
     geo_merge_opts o;
     if (opts)
@@ -568,9 +568,9 @@ int geo_merge_surface_noise(const geo_poly *p, const geo_merge_opts *opts,
         return r;
     geo_group_crit c = {cos(o.max_angle_deg * M_PI / 180.0),
                         geo_merge_max_deviation(&o, p), 0, 0};
-    r = geo_mw_surface_noise(s.w, &c, ret);
+    r = geo_mw_surface_noise(s.w, &c, ctx, ret);
     if (r < 0)
-        geo_err_set(err, r, "out of memory");
+        geo_err_set(err, r, r == -ECANCELED ? "canceled" : "out of memory");
     session_close(&s);
     geo_merge_report_clear(&rep);
     return r;
@@ -605,8 +605,10 @@ int geo_merge_auto(geo_poly *p, const geo_merge_opts *opts,
     c.step = views ? M_PI / views : 0;
     if (r == 0 && o.noise > 0)
         c.noise = o.noise;
-    else if (r == 0 && o.noise == 0 && (r = geo_mw_surface_noise(s.w, &c, &c.noise)) < 0)
-        r = geo_err_set(err, r, "out of memory");
+    else if (r == 0 && o.noise == 0 &&
+             (r = geo_mw_surface_noise(s.w, &c, ctx, &c.noise)) < 0)
+        r = geo_err_set(err, r, r == -ECANCELED ? "merge canceled"
+                                                : "out of memory");
     rep->views = views;
     rep->noise = c.noise;
     rep->max_dev = c.max_dev;
