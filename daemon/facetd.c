@@ -34,6 +34,7 @@
 #include "job_exec.h"
 #include "job_pool.h"
 #include "log.h"
+#include "reserve.h"
 #include "metrics.h"
 #include "parallel.h"
 #include "scanners.h"
@@ -61,6 +62,28 @@ static void on_job_done(void *user, const job_rec *job, job_state st,
     app *a = user;
     metrics_job(a->m, st, seconds);
     scanners_job_done(a->sc, job);
+}
+
+/* Opens the store and queues again the jobs the last stop interrupted.
+ * On a disk that filled up meanwhile both need a little room: the
+ * reserve (reserve.h) is given up for it, and made again next time. */
+static store *open_store(const cfg *c, unsigned *requeued, geo_err *err)
+{
+    for (int attempt = 0; attempt < 2; attempt++) {
+        store *s = store_sqlite_open(c->state_dir, err);
+        if (s && store_recover(s, requeued, err) == 0) {
+            if (reserve_keep(c->state_dir, RESERVE_BYTES) < 0)
+                log_msg(LOG_WARNING, NULL, "no room for the %u MiB disk "
+                        "reserve in %s", RESERVE_BYTES >> 20, c->state_dir);
+            return s;
+        }
+        store_close(s);
+        if (attempt > 0 || !reserve_release(c->state_dir))
+            break;
+        log_msg(LOG_WARNING, NULL, "%s; gave up the %u MiB disk reserve to "
+                "start", err->msg, RESERVE_BYTES >> 20);
+    }
+    return NULL;
 }
 
 static unsigned cpus(void)
@@ -264,13 +287,9 @@ int main(int argc, char **argv)
         rc = 2;
         goto out;
     }
-    s = store_sqlite_open(c.state_dir, &err);
-    if (!s) {
-        log_msg(LOG_ERR, NULL, "%s", err.msg);
-        goto out;
-    }
     unsigned requeued = 0;
-    if (store_recover(s, &requeued, &err) < 0) {
+    s = open_store(&c, &requeued, &err);
+    if (!s) {
         log_msg(LOG_ERR, NULL, "%s", err.msg);
         goto out;
     }

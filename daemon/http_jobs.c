@@ -372,6 +372,12 @@ enum MHD_Result http_post_job(http_req *r)
     } else if (rc == -EEXIST) {
         res = http_problem(r, 422, "idempotency-key-reused",
                            "Unprocessable Content", NULL, NULL, "%s", err.msg);
+    } else if (rc == -ENOSPC) {
+        log_msg(LOG_ERR, NULL, "submit: %s", err.msg);
+        const char *h[] = {"Retry-After", "5", NULL};
+        res = http_problem(r, 503, "store-full", "Service Unavailable", NULL,
+                           h, "the job store cannot take the job now (%s); "
+                           "retry later", err.msg);
     } else if (rc == -ERANGE || rc == -EINVAL) {
         /* a limit of the stored form the checks above did not foresee */
         res = http_problem(r, 422, "invalid-job", "Unprocessable Content",

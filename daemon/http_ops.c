@@ -36,6 +36,10 @@ enum MHD_Result http_readyz(http_req *r)
     if (store_ping(env->s, &err) < 0)
         json_array_append_new(failed, json_pack("{s:s,s:s}", "path", "store",
                                                 "message", err.msg));
+    char why[sizeof(geo_err)];
+    if (env->pool && job_pool_store_error(env->pool, why, sizeof why))
+        json_array_append_new(failed, json_pack("{s:s,s:s}", "path",
+                                                "store", "message", why));
     if (!env->pool || !job_pool_healthy(env->pool))
         json_array_append_new(failed, json_pack("{s:s,s:s}", "path",
                                                 "workers", "message",
