@@ -32,7 +32,7 @@ endif
 # works on a machine that does not have them yet.
 PKG_PROTO   := jansson
 PKG_SCANNER := libusb-1.0 hidapi-hidraw libudev
-PKG_DAEMON  := libmicrohttpd sqlite3 libsystemd
+PKG_DAEMON  := libmicrohttpd sqlite3 libsystemd libpq
 PKG_TEST    := cmocka
 PKG_MOCK    := umockdev-1.0 glib-2.0 gobject-2.0
 pkg_cflags = $(shell pkg-config --cflags $(1) 2>/dev/null)
@@ -132,6 +132,20 @@ $(FACET): $(call obj,$(CLI_SRCS)) $(LIBPROTO) $(LIBFACET)
 $(FACETD): $(call obj,daemon/facetd.c) $(ALL_LIBS)
 	$(CC) $(LDFLAGS) -o $@ $^ $(ALL_LDLIBS)
 
+# Man pages (man/): facet(1) and facetd(8) are written by hand;
+# facetd.conf(5) is generated from the configuration table (daemon/cfg.c)
+# by facetd itself, as is systemd/facetd.conf.example (make
+# config-example rewrites it; tests/integration/man.sh fails when the
+# checked-in copy differs).
+MAN_GEN := $(B)/man/facetd.conf.5
+$(MAN_GEN): $(FACETD)
+	@mkdir -p $(dir $@)
+	$(FACETD) --dump-config-man > $@.tmp && mv $@.tmp $@
+all: $(if $(wildcard daemon/facetd.c),$(MAN_GEN))
+.PHONY: config-example
+config-example: $(FACETD)
+	$(FACETD) --dump-config-example > systemd/facetd.conf.example
+
 $(B)/tests/%: $(B)/obj/tests/unit/%.o $(call obj,$(TESTLIB_SRCS)) $(ALL_LIBS)
 	@mkdir -p $(dir $@)
 	$(CC) $(LDFLAGS) -o $@ $^ $(call pkg_libs,$(PKG_TEST)) $(ALL_LDLIBS)
@@ -146,7 +160,7 @@ $(B)/tools/%: $(B)/obj/tests/tools/%.o $(call obj,$(TESTLIB_SRCS)) $(ALL_LIBS)
 DEB_PKGS := build-essential pkg-config libjansson-dev libmicrohttpd-dev \
     libsqlite3-dev libsystemd-dev libusb-1.0-0-dev libhidapi-dev libudev-dev \
     libcmocka-dev umockdev libumockdev-dev libglib2.0-dev curl systemd \
-    clang libclang-rt-14-dev wrk jq
+    clang libclang-rt-14-dev wrk jq libpq-dev postgresql-15 man-db groff-base
 deps:
 	@sh tests/tools/install-deps.sh $(DEB_PKGS)
 
@@ -228,12 +242,21 @@ install: all
 	if [ -x $(FACETD) ]; then install -m 0755 $(FACETD) $(DESTDIR)$(PREFIX)/bin/facetd; fi
 	install -d $(DESTDIR)$(PREFIX)/lib/systemd/system $(DESTDIR)$(PREFIX)/lib/tmpfiles.d \
 	    $(DESTDIR)$(PREFIX)/lib/sysusers.d $(DESTDIR)$(PREFIX)/share/doc/facetd
-	sed -e 's|@bindir@|$(PREFIX)/bin|' -e 's|@docdir@|$(PREFIX)/share/doc/facetd|' \
+	sed -e 's|@bindir@|$(PREFIX)/bin|' \
 	    systemd/facetd.service.in > $(DESTDIR)$(PREFIX)/lib/systemd/system/facetd.service
 	install -m 0644 systemd/facetd.socket $(DESTDIR)$(PREFIX)/lib/systemd/system/facetd.socket
 	install -m 0644 systemd/facetd.tmpfiles $(DESTDIR)$(PREFIX)/lib/tmpfiles.d/facetd.conf
 	install -m 0644 systemd/facetd.sysusers $(DESTDIR)$(PREFIX)/lib/sysusers.d/facetd.conf
 	install -m 0644 systemd/facetd.conf.example README.md $(DESTDIR)$(PREFIX)/share/doc/facetd/
+	install -d $(DESTDIR)$(PREFIX)/share/doc/facetd/docs/kernels
+	install -m 0644 docs/*.md $(DESTDIR)$(PREFIX)/share/doc/facetd/docs/
+	install -m 0644 docs/kernels/*.md $(DESTDIR)$(PREFIX)/share/doc/facetd/docs/kernels/
+	install -d $(DESTDIR)$(PREFIX)/share/man/man1 $(DESTDIR)$(PREFIX)/share/man/man5 \
+	    $(DESTDIR)$(PREFIX)/share/man/man8
+	install -m 0644 man/facet.1 $(DESTDIR)$(PREFIX)/share/man/man1/facet.1
+	if [ -x $(FACETD) ]; then \
+	  install -m 0644 man/facetd.8 $(DESTDIR)$(PREFIX)/share/man/man8/facetd.8 && \
+	  install -m 0644 $(MAN_GEN) $(DESTDIR)$(PREFIX)/share/man/man5/facetd.conf.5; fi
 	install -d $(DESTDIR)$(PREFIX)/lib/udev/rules.d
 	install -m 0644 systemd/70-facetd-scanners.rules $(DESTDIR)$(PREFIX)/lib/udev/rules.d/
 

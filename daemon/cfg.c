@@ -30,7 +30,8 @@ typedef struct key {
     uint64_t min, max;    /* numeric range */
     bool reloadable;      /* SIGHUP can change it */
     const char *def;      /* default, as text */
-    const char *help;
+    const char *help;     /* one line: --help */
+    const char *doc;      /* more: facetd.conf(5), facetd.conf.example */
 } key;
 
 #define F(field) offsetof(cfg, field), sizeof(((cfg *)0)->field)
@@ -41,79 +42,167 @@ typedef struct key {
 
 static const key keys[] = {
     {"Server", "Listen", "listen", K_STR, F(listen), 0, 0, false,
-     "127.0.0.1:8080", "HOST:PORT, [IPV6]:PORT or :PORT to listen on"},
+     "127.0.0.1:8080", "HOST:PORT, [IPV6]:PORT or :PORT to listen on",
+     "Port 0 picks a free port (logged). Ignored when systemd passes "
+     "the socket (facetd.socket)."},
     {"Server", "ApiToken", "api-token", K_STR, F(api_token), 0, 0, true, "",
-     "bearer token every request must carry (Authorization: Bearer)"},
+     "bearer token every request must carry (Authorization: Bearer)",
+     "Any address other than loopback needs a token, sent by clients "
+     "as \"Authorization: Bearer TOKEN\" and compared in constant time, "
+     "or AllowUnauthenticated=yes: facetd refuses to start otherwise. "
+     "Visible ASCII characters only."},
     {"Server", "ApiTokenFile", "api-token-file", K_STR, F(api_token_file), 0,
-     0, true, "", "file holding the API token"},
+     0, true, "", "file holding the API token",
+     "The token is read from this file (whitespace around it trimmed) "
+     "at start and on every reload, and replaces ApiToken=; it keeps "
+     "the token out of the configuration. For example "
+     "/etc/facetd/api-token."},
     {"Server", "AllowUnauthenticated", "allow-unauthenticated", K_BOOL,
      F(allow_unauthenticated), 0, 1, true, "no",
-     "allow a non-loopback listener without an API token"},
+     "allow a non-loopback listener without an API token",
+     "Without it facetd refuses to start on such an address."},
     {"Server", "HttpThreads", "http-threads", K_UINT, F(http_threads), 0, 64,
-     false, "0", "HTTP threads (0: one per CPU)"},
+     false, "0", "HTTP threads (0: one per CPU)",
+     "Each thread has its own epoll set on the listening socket; "
+     "long-polls and event streams suspend their connection instead of "
+     "holding a thread."},
     {"Server", "MaxConnections", "max-connections", K_UINT,
      F(max_connections), 4, 1000000, false, "1024",
-     "concurrent HTTP connections"},
+     "concurrent HTTP connections", ""},
     {"Server", "MaxBody", "max-body", K_SIZE, F(max_body), KiB, 64 * GiB,
-     true, "64M", "largest request body (413 above)"},
+     true, "64M", "largest request body (413 above)",
+     "An oversized Content-Length is refused before a byte is read."},
     {"Server", "ConnectionTimeout", "connection-timeout", K_DURATION,
      F(connection_timeout_ms), SEC, 3600 * SEC, false, "60s",
-     "idle connection timeout"},
+     "idle connection timeout", ""},
     {"Server", "ConnectionMemory", "connection-memory", K_SIZE,
      F(connection_memory), 8 * KiB, 16 * MiB, false, "64K",
-     "memory per connection for headers"},
+     "memory per connection for headers", ""},
     {"Server", "HeaderTimeout", "header-timeout", K_DURATION,
      F(header_timeout_ms), 100, 3600 * SEC, false, "10s",
-     "time a client has to send a request's headers (closed after)"},
+     "time a client has to send a request's headers (closed after)",
+     "Counted from the connection, or from the previous answer on it."},
     {"Server", "PerClientConnections", "per-client-connections", K_UINT,
      F(per_client_connections), 0, 1000000, false, "64",
-     "concurrent connections from one address (0: no limit)"},
+     "concurrent connections from one address (0: no limit)", ""},
     {"Server", "MaxQueryArgs", "max-query-args", K_UINT, F(max_query_args),
-     1, 100000, true, "100", "query arguments per request (400 above)"},
+     1, 100000, true, "100", "query arguments per request (400 above)",
+     ""},
     {"Server", "MaxWaiters", "max-waiters", K_UINT, F(max_waiters), 1,
-     1000000, true, "4096", "clients waiting on ?wait= or events (429 above)"},
+     1000000, true, "4096", "clients waiting on ?wait= or events (429 above)",
+     "A waiting client holds no thread: its connection is suspended "
+     "until its job changes."},
     {"Server", "MaxWait", "max-wait", K_DURATION, F(max_wait_ms), 0,
-     3600 * SEC, true, "60s", "longest ?wait="},
+     3600 * SEC, true, "60s", "longest ?wait=",
+     "A longer ?wait= is cut to this."},
     {"Server", "KeepAlive", "keep-alive", K_DURATION, F(keepalive_ms),
-     100, 3600 * SEC, true, "15s", "event stream keep-alive interval"},
+     100, 3600 * SEC, true, "15s", "event stream keep-alive interval",
+     "A comment line goes out at this interval while the stream has "
+     "nothing else to send."},
     {"Server", "InspectMaxFacets", "inspect-max-facets", K_UINT,
      F(inspect_max_facets), 4, 100000000, true, "20000",
-     "largest model POST /v1/inspect takes"},
+     "largest model POST /v1/inspect takes",
+     "POST /v1/inspect answers synchronously; bigger models must be "
+     "submitted as jobs. The facets are counted while the body is "
+     "tokenised, so a larger model is refused (413) before it is built."},
     {"Server", "InspectTimeout", "inspect-timeout", K_DURATION,
      F(inspect_timeout_ms), 100, 3600 * SEC, true, "10s",
-     "time limit of one POST /v1/inspect (503 after)"},
+     "time limit of one POST /v1/inspect (503 after)",
+     "Inspections run on two threads of their own, not on the HTTP "
+     "threads; one that runs longer is stopped and answered 503."},
     {"Jobs", "Workers", "workers", K_UINT, F(workers), 0, 256, false, "0",
-     "job workers (0: one per CPU)"},
+     "job workers (0: one per CPU)",
+     "Each runs one job at a time; the kernels of a job share the "
+     "thread pool."},
     {"Jobs", "QueueSize", "queue-size", K_UINT, F(queue_size), 1, 10000000,
-     true, "1000", "queued jobs before submissions get 503"},
+     true, "1000", "queued jobs before submissions get 503",
+     "The 503 carries Retry-After. Scanner jobs are not bounded by it."},
     {"Jobs", "JobTimeout", "job-timeout", K_DURATION, F(job_timeout_ms), SEC,
-     7 * 24 * 3600 * SEC, true, "10min", "wall time limit of one job"},
+     7 * 24 * 3600 * SEC, true, "10min", "wall time limit of one job",
+     "A job running longer is cancelled and fails."},
     {"Jobs", "ShutdownTimeout", "shutdown-timeout", K_DURATION,
      F(shutdown_timeout_ms), 0, 3600 * SEC, true, "30s",
-     "time running jobs get to finish on SIGTERM"},
+     "time running jobs get to finish on SIGTERM",
+     "The jobs still running then are queued again and run after the "
+     "next start."},
     {"Jobs", "Paused", "paused", K_BOOL, F(paused), 0, 1, true, "no",
-     "accept and keep jobs but start none (maintenance)"},
+     "accept and keep jobs but start none (maintenance)",
+     "Jobs (and scans) are still accepted and stored durably; no "
+     "worker starts one until Paused=no is reloaded."},
+    {"Jobs", "Lease", "job-lease", K_DURATION, F(job_lease_ms), SEC,
+     3600 * SEC, false, "30s", "with a shared store: how long a node's "
+     "claim on a job lasts unless renewed (a dead node's jobs run again "
+     "after it)",
+     "A node renews the claims of the jobs it runs; a worker whose lease "
+     "was lost stops its run. Without Store URL= it has no effect."},
+    {"Store", "URL", "store-url", K_STR, F(store_url), 0, 0, false, "",
+     "job store shared by a cluster: postgresql://HOST[:PORT]/DB (no "
+     "password in it); empty: SQLite in StateDirectory",
+     "Every node of a cluster names the same database; cluster events "
+     "wake the workers, waiting clients and scanner RESULTs of every "
+     "node. An unreachable store answers 503 with Retry-After."},
+    {"Store", "PasswordFile", "store-password-file", K_STR,
+     F(store_password_file), 0, 0, false, "", "libpq password file for "
+     "URL (default: PGPASSFILE or ~/.pgpass)",
+     "A URL= that carries a password is refused: it goes here, in "
+     "PGPASSFILE or in a service file."},
     {"Store", "StateDirectory", "state-dir", K_STR, F(state_dir), 0, 0, false,
-     "/var/lib/facetd", "directory of the job store"},
+     "/var/lib/facetd", "directory of the job store",
+     "The SQLite job store lives here (facetd.db, WAL mode); a lock "
+     "file keeps a second facetd off the same directory."},
     {"Store", "RetentionAge", "retention-age", K_DURATION,
      F(retention_age_ms), SEC, 100ull * 365 * 24 * 3600 * SEC, true, "7d",
-     "finished jobs older than this are deleted"},
+     "finished jobs older than this are deleted",
+     "Checked at start, every minute and on reload; queued and running "
+     "jobs are never deleted."},
     {"Store", "RetentionBytes", "retention-bytes", K_SIZE,
      F(retention_bytes), MiB, 1ull << 50, true, "1G",
-     "finished jobs beyond this total size are deleted, oldest first"},
+     "finished jobs beyond this total size are deleted, oldest first",
+     "Counts the inputs and results of all jobs."},
+    {"Cluster", "NodeName", "node-name", K_STR, F(node_name), 0, 0, false,
+     "", "this node's name in the cluster (default: HOST:PORT)",
+     "Recorded with each claim in the shared store; the default is the "
+     "host name and the listening port."},
     {"Log", "LogLevel", "log-level", K_LEVEL, F(log_level), 0, 0, true,
-     "info", "err, warning, notice, info or debug"},
+     "info", "log level: err, warning, notice, info or debug",
+     "Logs go to standard error, one line per event with its level and "
+     "job id (journald priorities under systemd)."},
     {"Scanners", "Enabled", "scanners", K_BOOL, F(scanners), 0, 1, false,
-     "yes", "take scans from USB scanners (--no-scanners: serve HTTP only)"},
+     "yes", "take scans from USB scanners (--no-scanners: serve HTTP only)",
+     "Each finished scan (FSP/1 over USB) becomes a high-priority job "
+     "with source usb:SERIAL, and the scanner gets a RESULT frame when "
+     "the job ends."},
     {"Scanners", "Scanner", "scanner", K_LIST, F(scanner), 0, 0, false,
      SCAN_DEFAULT_DEVICES, "VID:PID:bulk|hid [PIPELINE]: a scanner model "
-     "(repeatable; the first replaces the default list)"},
+     "(repeatable; the first replaces the default list)",
+     "A line may add the pipeline for that model (as Pipeline=), for "
+     "example \"0483:5740:hid /etc/facetd/pipelines/small-stones.json\". "
+     "The default list is the specification's two test devices; an "
+     "empty Scanner= restores it. Add a udev rule for every model "
+     "listed (70-facetd-scanners.rules)."},
     {"Scanners", "Pipeline", "scanner-pipeline", K_PIPELINE,
-     F(scanner_pipeline), 0, 0, true, "auto",
-     "pipeline of scanner jobs: auto, op names (inspect,triangulate), "
-     "inline JSON or a /path/to/pipeline.json"},
+     F(scanner_pipeline), 0, 0, true, "correct",
+     "pipeline of scanner jobs: correct, op names (inspect,triangulate), "
+     "inline JSON or a /path/to/pipeline.json",
+     "correct is the post-scan correction; a JSON file is read again "
+     "on SIGHUP, as `facet run` takes it. facetd does not start when a "
+     "configured pipeline names an unknown operation."},
 };
 enum { NKEYS = sizeof keys / sizeof keys[0] };
+
+/* What each section of keys[] is for: the headings of facetd.conf(5) and
+ * of the example file. */
+static const struct { const char *name, *doc; } sections[] = {
+    {"Server", "The HTTP server: where it listens, who may use it, and its "
+               "limits."},
+    {"Jobs", "The queue and the workers that run the pipelines."},
+    {"Store", "The durable job store, and how long finished jobs are kept."},
+    {"Cluster", "Several facetd nodes sharing one job store ([Store] "
+                "URL=)."},
+    {"Log", "What facetd logs."},
+    {"Scanners", "USB scanners speaking FSP/1: which devices, and the "
+                 "pipeline of their jobs."},
+};
 
 static char *trim(char *s)
 {
@@ -667,8 +756,8 @@ json_t *cfg_pipeline_json(const char *spec, geo_err *err)
                         je.column, je.text);
             return NULL;
         }
-    } else if (strcmp(spec, "auto") == 0) {
-        pj = json_string("auto");
+    } else if (strcmp(spec, "correct") == 0 || strcmp(spec, "auto") == 0) {
+        pj = json_string(spec);
     } else {
         pj = json_array();
         char buf[CFG_PIPELINE_LEN];
@@ -702,11 +791,36 @@ const char *cfg_scanner_split(const char *line, char *dev, size_t dev_size)
     return line;
 }
 
+int cfg_key_count(void)
+{
+    return NKEYS;
+}
+
+void cfg_key_describe(int i, cfg_key_doc *d)
+{
+    static const char *const forms[] = {
+        [K_STR] = "TEXT",         [K_BOOL] = "BOOLEAN",
+        [K_UINT] = "NUMBER",      [K_SIZE] = "SIZE",
+        [K_DURATION] = "DURATION", [K_LEVEL] = "LEVEL",
+        [K_LIST] = "DEVICE [PIPELINE]", [K_PIPELINE] = "PIPELINE",
+    };
+    const key *k = &keys[i];
+    *d = (cfg_key_doc){.section = k->section, .name = k->name,
+                       .flag = k->flag, .form = forms[k->type],
+                       .def = k->def, .help = k->help, .doc = k->doc,
+                       .section_doc = "", .reloadable = k->reloadable,
+                       .boolean = k->type == K_BOOL,
+                       .repeatable = k->type == K_LIST};
+    for (size_t j = 0; j < sizeof sections / sizeof sections[0]; j++)
+        if (strcmp(sections[j].name, k->section) == 0)
+            d->section_doc = sections[j].doc;
+}
+
 void cfg_print_help(FILE *out, const char *prog)
 {
     fprintf(out,
             "usage: %s [-c PATH] [--KEY=VALUE ...]\n\n"
-            "facetd serves the facet job API over HTTP (see README).\n"
+            "facetd serves the facet job API over HTTP (see facetd(8)).\n"
             "Configuration: built-in defaults, then %s (or -c PATH),\n"
             "then PATH.d/NAME.conf, then the flags below.\n\n"
             "  -c, --config PATH         configuration file\n"

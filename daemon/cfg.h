@@ -68,10 +68,16 @@ typedef struct cfg {
     uint64_t shutdown_timeout_ms; /* SIGTERM: how long running jobs may
                                      finish before they are requeued */
     bool paused;                  /* accept and keep jobs, start none */
+    uint64_t job_lease_ms;        /* shared store: a claim's lease */
     /* [Store] */
     char state_dir[512];          /* directory of the job store */
+    char store_url[1024];         /* PostgreSQL URI shared by a cluster;
+                                     empty: SQLite in state_dir */
+    char store_password_file[512]; /* libpq passfile for store_url */
     uint64_t retention_age_ms;    /* finished jobs older than this go */
     uint64_t retention_bytes;     /* finished jobs' total size cap */
+    /* [Cluster] */
+    char node_name[64];           /* empty: host name and port */
     /* [Log] */
     int log_level;                /* syslog level, LOG_INFO by default */
     /* [Scanners] */
@@ -111,6 +117,26 @@ bool cfg_wants_help(int argc, char **argv);
 
 /* Prints the usage with every flag, its section/key, default and meaning. */
 void cfg_print_help(FILE *out, const char *prog);
+
+/* One key of the configuration table as the documentation generated from
+ * it shows it (cfg_doc.h): facetd.conf(5) and the example file. */
+typedef struct cfg_key_doc {
+    const char *section, *name, *flag;
+    const char *form;        /* the value's form: "SIZE", "DURATION", ... */
+    const char *def;         /* default as text, "" for none; a list's
+                                entries separated by commas */
+    const char *help;        /* one line, as --help prints it */
+    const char *doc;         /* the rest, sentences */
+    const char *section_doc; /* what the key's section is for */
+    bool reloadable;         /* SIGHUP applies it */
+    bool boolean;            /* also --no-FLAG */
+    bool repeatable;         /* one entry per line */
+} cfg_key_doc;
+
+/* The number of keys, and key i (0 ≤ i < count) in table order, sections
+ * grouped. */
+int cfg_key_count(void);
+void cfg_key_describe(int i, cfg_key_doc *d);
 
 /* The pipeline a Pipeline= value (or the PIPELINE of a Scanner= line)
  * names, as the JSON value of the Job API's "pipeline" member: "auto";

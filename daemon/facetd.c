@@ -28,6 +28,7 @@
 #include <systemd/sd-daemon.h>
 
 #include "cfg.h"
+#include "cfg_doc.h"
 #include "version.h"
 #include "http_listen.h"
 #include "http_server.h"
@@ -44,6 +45,7 @@
  * the workers start. */
 typedef struct app {
     _Atomic(http_server *) hs;
+    _Atomic(job_pool *) pool;
     metrics *m;
     scanners *sc;
 } app;
@@ -54,6 +56,56 @@ static void on_job_changed(void *user, const char *id, bool progress_only)
     http_server *hs = atomic_load(&a->hs);
     if (hs)
         http_server_job_changed(hs, id, progress_only);
+}
+
+/* A change anywhere in the cluster (a shared store's own thread): wakes
+ * this node's workers, waiting clients and owed scanner RESULTs. */
+static void on_store_event(void *user, store_event ev, const char *id,
+                           const char *source)
+{
+    app *a = user;
+    job_pool *pool = atomic_load(&a->pool);
+    if (pool && (ev == STORE_EV_QUEUED || ev == STORE_EV_RESYNC))
+        job_pool_wake(pool);
+    if (!id)
+        return;
+    http_server *hs = atomic_load(&a->hs);
+    if (hs)
+        http_server_job_changed(hs, id, ev == STORE_EV_PROGRESS);
+    if (ev == STORE_EV_ENDED || ev == STORE_EV_DELETED) {
+        job_rec j = {.state = JOB_SUCCEEDED};
+        snprintf(j.id, sizeof j.id, "%s", id);
+        snprintf(j.source, sizeof j.source, "%s", source ? source : "");
+        scanners_job_done(a->sc, &j);
+    }
+}
+
+/* [Store] URL= names a PostgreSQL database shared by the cluster; else
+ * the embedded SQLite store. The node is named HOST:PORT by default. */
+static store *open_store(const cfg *c, const char *where, geo_err *err)
+{
+    if (!c->store_url[0])
+        return store_sqlite_open(c->state_dir, err);
+    char node[64];
+    if (c->node_name[0]) {
+        snprintf(node, sizeof node, "%s", c->node_name);
+    } else {
+        char host[48] = "localhost";
+        gethostname(host, sizeof host - 1);
+        const char *port = strrchr(where, ':');
+        snprintf(node, sizeof node, "%s:%s", host, port ? port + 1 : "0");
+    }
+    store_pg_config pc = {
+        .url = c->store_url,
+        .password_file = c->store_password_file,
+        .node = node,
+        .lease_ms = c->job_lease_ms,
+    };
+    store *s = store_pg_open(&pc, err);
+    if (s)
+        log_msg(LOG_NOTICE, NULL, "cluster node %s on a shared PostgreSQL "
+                "store (lease %.3g s)", node, (double)c->job_lease_ms / 1000);
+    return s;
 }
 
 static void on_job_done(void *user, const job_rec *job, job_state st,
@@ -67,18 +119,20 @@ static void on_job_done(void *user, const job_rec *job, job_state st,
 /* Opens the store and queues again the jobs the last stop interrupted.
  * On a disk that filled up meanwhile both need a little room: the
  * reserve (reserve.h) is given up for it, and made again next time. */
-static store *open_store(const cfg *c, unsigned *requeued, geo_err *err)
+static store *open_store_reserved(const cfg *c, const char *where,
+                                  unsigned *requeued, geo_err *err)
 {
     for (int attempt = 0; attempt < 2; attempt++) {
-        store *s = store_sqlite_open(c->state_dir, err);
+        store *s = open_store(c, where, err);
         if (s && store_recover(s, requeued, err) == 0) {
-            if (reserve_keep(c->state_dir, RESERVE_BYTES) < 0)
+            if (!c->store_url[0] &&
+                reserve_keep(c->state_dir, RESERVE_BYTES) < 0)
                 log_msg(LOG_WARNING, NULL, "no room for the %u MiB disk "
                         "reserve in %s", RESERVE_BYTES >> 20, c->state_dir);
             return s;
         }
         store_close(s);
-        if (attempt > 0 || !reserve_release(c->state_dir))
+        if (attempt > 0 || c->store_url[0] || !reserve_release(c->state_dir))
             break;
         log_msg(LOG_WARNING, NULL, "%s; gave up the %u MiB disk reserve to "
                 "start", err->msg, RESERVE_BYTES >> 20);
@@ -138,6 +192,11 @@ static void reload(cfg *cur, int argc, char **argv, http_env *env,
         /* Restart-only keys keep their running values. */
         snprintf(next.listen, sizeof next.listen, "%s", cur->listen);
         snprintf(next.state_dir, sizeof next.state_dir, "%s", cur->state_dir);
+        snprintf(next.store_url, sizeof next.store_url, "%s", cur->store_url);
+        snprintf(next.store_password_file, sizeof next.store_password_file,
+                 "%s", cur->store_password_file);
+        snprintf(next.node_name, sizeof next.node_name, "%s", cur->node_name);
+        next.job_lease_ms = cur->job_lease_ms;
         next.http_threads = cur->http_threads;
         next.max_connections = cur->max_connections;
         next.connection_timeout_ms = cur->connection_timeout_ms;
@@ -196,11 +255,22 @@ int main(int argc, char **argv)
         cfg_print_help(stdout, "facetd");
         return 0;
     }
-    for (int i = 1; i < argc; i++)
+    for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--version") == 0) {
             printf("facetd %s\n", FACET_VERSION);
             return 0;
         }
+        /* hidden: the build writes facetd.conf(5) and the example file
+         * from the key table with these (cfg_doc.h) */
+        if (strcmp(argv[i], "--dump-config-man") == 0) {
+            cfg_doc_man(stdout);
+            return fflush(stdout) == 0 ? 0 : 1;
+        }
+        if (strcmp(argv[i], "--dump-config-example") == 0) {
+            cfg_doc_example(stdout);
+            return fflush(stdout) == 0 ? 0 : 1;
+        }
+    }
     cfg c;
     geo_err err = {{0}};
     if (cfg_load(&c, argc - 1, argv + 1, &err) < 0) {
@@ -233,7 +303,7 @@ int main(int argc, char **argv)
     scanners *sc = NULL;
     http_env env;
     http_env_init(&env);
-    app a = {NULL, NULL, NULL};
+    app a = {NULL, NULL, NULL, NULL};
 
     /* A scanner pipeline this build cannot run is a configuration error:
      * scans would be taken only to be refused. */
@@ -288,7 +358,7 @@ int main(int argc, char **argv)
         goto out;
     }
     unsigned requeued = 0;
-    s = open_store(&c, &requeued, &err);
+    s = open_store_reserved(&c, where, &requeued, &err);
     if (!s) {
         log_msg(LOG_ERR, NULL, "%s", err.msg);
         goto out;
@@ -323,6 +393,8 @@ int main(int argc, char **argv)
         log_msg(LOG_ERR, NULL, "%s", err.msg);
         goto out;
     }
+    atomic_store(&a.pool, pool);
+    store_set_events(s, &(store_events){on_store_event, &a});
     if (scanners_start(sc, s, pool, m, &err) < 0) {
         log_msg(LOG_ERR, NULL, "%s", err.msg);
         goto out;
@@ -352,8 +424,8 @@ int main(int argc, char **argv)
     atomic_store(&env.ready, 1);
     log_msg(LOG_NOTICE, NULL, "facetd %s listening on http://%s (store %s, "
             "%u workers%s, %u HTTP threads%s)", FACET_VERSION, where,
-            c.state_dir, workers, c.paused ? " paused" : "", threads,
-            env.token[0] ? ", API token required" : "");
+            c.store_url[0] ? "PostgreSQL" : c.state_dir, workers,
+            c.paused ? " paused" : "", threads, env.token[0] ? ", API token required" : "");
     sd_notifyf(0, "READY=1\nSTATUS=listening on %s", where);
 
     uint64_t wd_usec = 0;
@@ -399,6 +471,10 @@ int main(int argc, char **argv)
                "running jobs", (double)c.shutdown_timeout_ms / 1000);
     http_server_quiesce(hs);
 out:
+    /* no more cluster events: what they reach is going away */
+    if (s)
+        store_set_events(s, &(store_events){NULL, NULL});
+    atomic_store(&a.pool, NULL);
     /* scans still arriving are stored for the next start */
     scanners_detach_pool(sc);
     if (pool) {

@@ -362,10 +362,6 @@ enum MHD_Result http_post_inspect(http_req *r)
                             NULL, NULL, "more than %u facets; synchronous "
                             "inspection takes at most %u (submit a job "
                             "instead)", cap, cap);
-    if (!runner_op_available(PROTO_OP_INSPECT))
-        return http_problem(r, 501, "not-available", "Not Implemented", NULL,
-                            NULL, "op 'inspect' is not available in this "
-                            "build");
     bool syntax;
     geo_err err = {{0}};
     geo_poly *p = read_model(r, &s, cap, &syntax, &je, &err);

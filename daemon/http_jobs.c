@@ -28,6 +28,11 @@ static enum MHD_Result store_failure(http_req *r, int code, const geo_err *e)
     if (code == -ENOENT)
         return http_problem(r, 404, "job-not-found", "Not Found", NULL, NULL,
                             "no job '%s'", r->id);
+    if (code == -ENOTCONN) {
+        const char *h[] = {"Retry-After", "2", NULL};
+        return http_problem(r, 503, "store-unavailable",
+                            "Service Unavailable", NULL, h, "%s", e->msg);
+    }
     log_msg(LOG_ERR, r->id[0] ? r->id : NULL, "store: %s", e->msg);
     return http_problem(r, 500, "store-error", "Internal Server Error", NULL,
                         NULL, "the job store failed: %s", e->msg);
@@ -278,13 +283,12 @@ enum MHD_Result http_post_job(http_req *r)
     json_t *pdefault = pv       ? NULL
                        : frep   ? json_pack("[s]", "triangulate")
                        : meshes ? json_pack("[s, s]", "stitch", "inspect")
-                                : json_string("auto");
+                                : json_string("correct");
     geo_err err = {{0}};
     bool have_pipeline = false;
     if (proto_pipeline_from_json(pv ? pv : pdefault, "pipeline", &pl, &err) < 0)
         add_geo_error(errors, &err);
-    else if (runner_check(&pl, &err) < 0 ||
-             (inputs == 1 && runner_check_input(&pl, frep != NULL, &err) < 0))
+    else if (inputs == 1 && runner_check_input(&pl, frep != NULL, &err) < 0)
         add_geo_error(errors, &err);
     else
         have_pipeline = true;
@@ -369,6 +373,11 @@ enum MHD_Result http_post_job(http_req *r)
         const char *h[] = {"Retry-After", "1", NULL};
         res = http_problem(r, 503, "queue-full", "Service Unavailable", NULL,
                            h, "%s; retry later", err.msg);
+    } else if (rc == -ENOTCONN) {
+        /* nothing accepted: the client retries (with its key, safely) */
+        const char *h[] = {"Retry-After", "2", NULL};
+        res = http_problem(r, 503, "store-unavailable", "Service Unavailable",
+                           NULL, h, "%s; retry later", err.msg);
     } else if (rc == -EEXIST) {
         res = http_problem(r, 422, "idempotency-key-reused",
                            "Unprocessable Content", NULL, NULL, "%s", err.msg);
@@ -395,8 +404,18 @@ enum MHD_Result http_post_job(http_req *r)
                            replayed ? "Idempotent-Replayed" : NULL, "true",
                            NULL};
         json_t *extra = NULL;
-        if (rep.plane_mismatches)
-            extra = json_pack("{s:[s]}", "warnings", rep.first);
+        char dep[256];
+        bool deprecated = proto_pipeline_deprecations(&pl, dep, sizeof dep);
+        if (rep.plane_mismatches || deprecated) {
+            json_t *w = json_array();
+            if (rep.plane_mismatches)
+                json_array_append_new(w, json_string(rep.first));
+            if (deprecated)
+                json_array_append_new(w, json_string(dep));
+            extra = json_pack("{s:o}", "warnings", w);
+        }
+        if (deprecated && !replayed)
+            log_msg(LOG_WARNING, job.id, "%s", dep);
         if (!replayed && poly)
             log_msg(LOG_INFO, job.id, "queued (%u vertices, %u facets, "
                     "%zu ops, priority %s)", poly->nverts, poly->nfacets,

@@ -66,6 +66,7 @@ enum MHD_Result http_metrics(http_req *r)
     g.waiters = http_hub_count(r->srv->hub);
     g.queue_size = atomic_load(&env->queue_size);
     g.ready = atomic_load(&env->ready);
+    g.node = store_node(env->s);
     scanners_get_metrics(env->sc, &g.scan);
     char *text;
     size_t len;
@@ -81,8 +82,7 @@ enum MHD_Result http_version(http_req *r)
 {
     json_t *ops = json_array(), *fmts = json_array();
     for (int k = 0; k < PROTO_OP_COUNT; k++)
-        if (runner_op_available((proto_op_kind)k))
-            json_array_append_new(ops,
+        json_array_append_new(ops,
                                   json_string(proto_op_name((proto_op_kind)k)));
     static const char *const formats[] = {"json", "poly", "obj", "stl",
                                           "stl-ascii", "ply", "ply-ascii",

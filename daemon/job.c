@@ -161,6 +161,8 @@ json_t *job_to_json(const job_rec *r)
         json_string(r->priority == JOB_PRIO_HIGH ? "high" : "normal"));
     e |= json_object_set_new(o, "source", json_string(r->source));
     e |= json_object_set_new(o, "label", json_string(r->label));
+    if (r->node[0])
+        e |= json_object_set_new(o, "node", json_string(r->node));
     e |= json_object_set_new(o, "pipeline", embedded(r->pipeline));
     e |= set_time(o, "created", r->created_ms);
     e |= set_time(o, "started", r->started_ms);

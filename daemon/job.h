@@ -39,6 +39,7 @@ typedef enum job_priority { JOB_PRIO_NORMAL = 0, JOB_PRIO_HIGH = 1 } job_priorit
 #define JOB_SOURCE_MAX 72  /* bytes of source, NUL included ("usb:" and
                               a serial of up to 63) */
 #define JOB_LABEL_MAX 256  /* bytes of label, NUL included */
+#define JOB_NODE_MAX 64    /* bytes of node, NUL included */
 
 typedef struct job_rec {
     char id[JOB_ID_LEN + 1];
@@ -60,6 +61,8 @@ typedef struct job_rec {
                              the input (FNV-1a 64 of the model for jobs
                              finished by older versions), 0 if none */
     uint64_t idem_hash;   /* hash of the request that created it */
+    char node[JOB_NODE_MAX]; /* the node that runs or ran it, "" when the
+                                store is not shared (not in the JSON then) */
 } job_rec;
 
 /* Frees the owned strings and zeroes r; accepts NULL. */
@@ -87,7 +90,8 @@ int64_t job_mono_ms(void);
 void job_time_format(int64_t ms, char *buf, size_t size);
 
 /* The job's public JSON view (id, state, progress, priority, source,
- * label, pipeline, created/started/finished, error, summary, links), or
+ * label, node when set, pipeline, created/started/finished, error,
+ * summary, links), or
  * NULL on out-of-memory. The caller owns the result. */
 json_t *job_to_json(const job_rec *r);
 

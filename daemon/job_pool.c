@@ -89,6 +89,10 @@ static int on_progress(void *user, double fraction)
             if (cancel)
                 set_reason(sl, R_CANCELED);
             notify(p, sl->id, true);
+        } else if (r == -ESTALE) {
+            /* another node runs it now: this run's result would be refused */
+            log_msg(LOG_WARNING, sl->id, "%s; stopping this run", err.msg);
+            set_reason(sl, R_CANCELED);
         } else {
             log_msg(LOG_WARNING, sl->id, "progress not recorded: %s", err.msg);
         }

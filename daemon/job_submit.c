@@ -12,9 +12,7 @@ int job_submit(store *s, job_pool *pool, unsigned queue_size,
                const job_request *rq, job_rec *ret, bool *ret_replayed,
                geo_err *err)
 {
-    int r = runner_check(rq->pipeline, err);
-    if (r == 0)
-        r = runner_check_input(rq->pipeline, rq->frep != NULL, err);
+    int r = runner_check_input(rq->pipeline, rq->frep != NULL, err);
     if (r < 0)
         return r;
     json_t *pj = proto_pipeline_to_json(rq->pipeline);

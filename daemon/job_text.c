@@ -175,6 +175,10 @@ char *job_to_text(const job_rec *r, size_t *ret_len)
     put_string(&t, r->source);
     put_key(&t, "label");
     put_string(&t, r->label);
+    if (r->node[0]) {
+        put_key(&t, "node");
+        put_string(&t, r->node);
+    }
     put_embedded(&t, "pipeline", r->pipeline);
     put_time(&t, "created", r->created_ms);
     put_time(&t, "started", r->started_ms);

@@ -114,7 +114,10 @@ static int pipe_load(plslot *p, const char *spec, geo_err *err)
     if (r < 0)
         return r;
     p->set = true;
-    r = runner_check(&p->pl, err);
+    char dep[256];
+    if (proto_pipeline_deprecations(&p->pl, dep, sizeof dep))
+        log_msg(LOG_WARNING, NULL, "scanner pipeline %s: %s", spec, dep);
+    r = runner_check_input(&p->pl, false, err);
     if (r == 0) {
         p->json = proto_pipeline_to_json(&p->pl);
         if (!p->json)
@@ -125,14 +128,11 @@ static int pipe_load(plslot *p, const char *spec, geo_err *err)
     return r;
 }
 
-/* Loads every pipeline of c into the new set (model[0 .. n), global).
- * *global_failed says whether the error, if any, is Pipeline='s. */
+/* Loads every pipeline of c into the new set (model[0 .. n), global). */
 static int pipes_load(const cfg *c, const char spec[][CFG_SCANNER_LEN],
-                      size_t n, plslot *model, plslot *global,
-                      bool *global_failed, geo_err *err)
+                      size_t n, plslot *model, plslot *global, geo_err *err)
 {
     bool used_global = false;
-    *global_failed = false;
     for (size_t i = 0; i < n; i++) {
         if (!spec[i][0]) {
             used_global = true;
@@ -153,7 +153,6 @@ static int pipes_load(const cfg *c, const char spec[][CFG_SCANNER_LEN],
         return 0;
     int r = pipe_load(global, c->scanner_pipeline, err);
     if (r < 0) {
-        *global_failed = true;
         char where[CFG_PIPELINE_LEN + 32];
         snprintf(where, sizeof where, "[Scanners] Pipeline=%s",
                  c->scanner_pipeline);
@@ -195,26 +194,9 @@ int scanners_new(const cfg *c, scanners **ret, geo_err *err)
         snprintf(sc->spec[i], sizeof sc->spec[i], "%s", spec);
     }
     sc->nlist = c->nscanner;
-    bool global_failed;
-    geo_err perr = {{0}};
     int r = pipes_load(c, (const char (*)[CFG_SCANNER_LEN])sc->spec,
-                       sc->nlist, sc->model_pipe, &sc->global, &global_failed,
-                       &perr);
-    if (r == -ENOTSUP && global_failed && !c->scanner_pipeline_set) {
-        /* the default pipeline is not in this build: no scans rather than
-         * no daemon (an explicit setting is an error instead) */
-        snprintf(sc->why, sizeof sc->why, "%s (the default); set "
-                 "[Scanners] Pipeline= to a pipeline this build runs",
-                 perr.msg);
-        return 0;
-    }
+                       sc->nlist, sc->model_pipe, &sc->global, err);
     if (r < 0) {
-        if (r == -ENOTSUP)
-            geo_err_set(err, r, "%s; configure a pipeline this build runs "
-                        "(see the ops of /v1/version), or --no-scanners",
-                        perr.msg);
-        else
-            geo_err_set(err, r, "%s", perr.msg);
         *ret = scanners_free(sc);
         return r;
     }
@@ -236,9 +218,8 @@ int scanners_reload(scanners *sc, const cfg *c, geo_err *err)
     plslot model[SCAN_MATCH_MAX], global;
     memset(model, 0, sizeof model);
     memset(&global, 0, sizeof global);
-    bool global_failed;
     int r = pipes_load(c, (const char (*)[CFG_SCANNER_LEN])sc->spec,
-                       sc->nlist, model, &global, &global_failed, err);
+                       sc->nlist, model, &global, err);
     if (r < 0)
         return r;
     pthread_rwlock_wrlock(&sc->plk);

@@ -118,6 +118,17 @@ int store_ping(store *s, geo_err *err)
     return s->ops->ping(s, err);
 }
 
+void store_set_events(store *s, const store_events *ev)
+{
+    if (s->ops->set_events)
+        s->ops->set_events(s, ev);
+}
+
+const char *store_node(store *s)
+{
+    return s->ops->node ? s->ops->node(s) : NULL;
+}
+
 store *store_close(store *s)
 {
     if (s)

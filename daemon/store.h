@@ -15,7 +15,10 @@
  * Errors: every function returns 0 or a negative errno: -ENOENT (no such
  * job / nothing queued), -EEXIST (idempotency key already used), -EAGAIN
  * (queue full), -EBUSY (transition not allowed from the job's state),
- * -ENOMEM, -EIO (backend failure, err says what). Out-parameters are
+ * -ENOMEM, -EIO (backend failure, err says what), -ENOTCONN (a shared
+ * store is unreachable right now: nothing was changed that the caller
+ * can rely on; retry later), -ESTALE (store_progress: this node's claim
+ * on the job was lost, another node runs it). Out-parameters are
  * written only on success (and on -EEXIST for store_put).
  *
  * Thread safety: every function may be called from any thread
@@ -65,6 +68,8 @@ typedef struct store_counts {
     uint64_t file_bytes;    /* the backend's size on disk, 0 if unknown */
 } store_counts;
 
+struct store_events;
+
 /* The backend's functions; see the wrappers below for each contract. */
 typedef struct store_ops {
     const char *name;
@@ -91,6 +96,9 @@ typedef struct store_ops {
     int (*counts)(store *s, store_counts *ret, geo_err *err);
     int (*ping)(store *s, geo_err *err);
     void (*close)(store *s);
+    /* Optional (NULL: the store sees only this process's changes). */
+    void (*set_events)(store *s, const struct store_events *ev);
+    const char *(*node)(store *s);
 } store_ops;
 
 /* Every backend's handle starts with this. */
@@ -98,9 +106,52 @@ struct store {
     const store_ops *ops;
 };
 
+/* What a shared store tells about changes made anywhere in the cluster
+ * (also this node's own; a duplicate wake-up only costs a re-read). */
+typedef enum store_event {
+    STORE_EV_QUEUED = 0,   /* a job became queued: a worker may claim it */
+    STORE_EV_CHANGED = 1,  /* state or cancel request changed */
+    STORE_EV_PROGRESS = 2, /* only the progress moved */
+    STORE_EV_ENDED = 3,    /* reached a terminal state */
+    STORE_EV_DELETED = 4,
+    STORE_EV_RESYNC = 5,   /* events may have been missed (the store was
+                              unreachable): id and source are NULL */
+} store_event;
+
+/* Called on the store's own thread; must be quick and thread-safe. */
+typedef struct store_events {
+    void (*fn)(void *user, store_event ev, const char *id,
+               const char *source);
+    void *user;
+} store_events;
+
 /* Opens (creating or migrating) the SQLite store in dir/facetd.db.
  * Returns NULL with err set on failure. Close with store_close. */
 store *store_sqlite_open(const char *dir, geo_err *err);
+
+/* The PostgreSQL store shared by every node that names the same
+ * database (store_pg.c). */
+typedef struct store_pg_config {
+    const char *url;           /* libpq URI or conninfo */
+    const char *password_file; /* libpq passfile, or NULL/"" for libpq's
+                                  own default (PGPASSFILE, ~/.pgpass) */
+    const char *node;          /* this node's name (job_rec.node) */
+    uint64_t lease_ms;         /* claim lease, renewed while running */
+} store_pg_config;
+
+/* Connects, creates or migrates the schema (serialised across nodes by
+ * an advisory lock) and starts the thread that renews this node's leases,
+ * re-queues jobs whose lease expired, and listens for the cluster's job
+ * changes. NULL with err on failure. */
+store *store_pg_open(const store_pg_config *c, geo_err *err);
+
+/* Routes the cluster's job changes to ev (copied); a no-op for a store
+ * that only sees this process. */
+void store_set_events(store *s, const store_events *ev);
+
+/* This node's name in a shared store's cluster, or NULL for a store that
+ * only this process uses. */
+const char *store_node(store *s);
 
 /* Adds a queued job. 0 when committed. -EAGAIN when max_queued jobs are
  * already queued (nothing written). -EEXIST when j->idem_key was used
@@ -110,7 +161,8 @@ int store_put(store *s, const store_new_job *j, unsigned max_queued,
               job_rec *ret_existing, geo_err *err);
 
 /* Takes the next queued job (high priority first, then oldest) and marks
- * it running (started_ms, attempts+1). -ENOENT when none is queued. The
+ * it running (started_ms, attempts+1; a shared store also sets node and
+ * leases the job to this node until store_finish or store_requeue). -ENOENT when none is queued. The
  * caller owns *ret (job_rec_clear). */
 int store_claim(store *s, job_rec *ret, geo_err *err);
 
@@ -160,12 +212,15 @@ int store_list(store *s, const store_filter *f, job_rec **ret, size_t *ret_n,
                geo_err *err);
 
 /* At start-up: every running job goes back to queued (its previous run
- * died with the process). *ret_n (may be NULL) receives how many. */
+ * died with the process). A shared store re-queues only the jobs of this
+ * node and those whose lease expired. *ret_n (may be NULL) receives how
+ * many. */
 int store_recover(store *s, unsigned *ret_n, geo_err *err);
 
 /* Deletes terminal jobs finished before older_than_ms, then more terminal
  * jobs, oldest first, while all jobs together keep more than max_bytes.
- * Queued and running jobs are never deleted. */
+ * Queued and running jobs are never deleted. A shared store runs it once
+ * for the cluster: a call soon after another node's does nothing. */
 int store_retention(store *s, int64_t older_than_ms, uint64_t max_bytes,
                     unsigned *ret_deleted, geo_err *err);
 

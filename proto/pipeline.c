@@ -17,33 +17,48 @@
 
 static const char *const op_names[PROTO_OP_COUNT] = {
     [PROTO_OP_INSPECT] = "inspect",
-    [PROTO_OP_COLLAPSE_CLUSTERS] = "collapse_clusters",
-    [PROTO_OP_MERGE_FACETS] = "merge_facets",
+    [PROTO_OP_COLLAPSE] = "collapse",
+    [PROTO_OP_MERGE] = "merge",
     [PROTO_OP_CUT] = "cut",
-    [PROTO_OP_MOVE_VERTEX] = "move_vertex",
+    [PROTO_OP_MOVE] = "move",
     [PROTO_OP_INVERSION_STATS] = "inversion_stats",
     [PROTO_OP_TRIANGULATE] = "triangulate",
-    [PROTO_OP_FILL_HOLES] = "fill_holes",
+    [PROTO_OP_FILL] = "fill",
     [PROTO_OP_STITCH] = "stitch",
-    [PROTO_OP_AUTO] = "auto",
+    [PROTO_OP_CORRECT] = "correct",
+};
+
+/* Names of earlier releases, still accepted for one release so that saved
+ * pipelines run; each use is reported (proto_op.alias) as deprecated.
+ * "inversion-stats" is the CLI's spelling. */
+static const struct {
+    const char *name;
+    proto_op_kind kind;
+} op_aliases[] = {
+    {"auto", PROTO_OP_CORRECT},
+    {"merge_facets", PROTO_OP_MERGE},
+    {"fill_holes", PROTO_OP_FILL},
+    {"move_vertex", PROTO_OP_MOVE},
+    {"collapse_clusters", PROTO_OP_COLLAPSE},
+    {"inversion-stats", PROTO_OP_INVERSION_STATS},
 };
 
 /* Parameters each op accepts, "op" included, NULL-terminated. */
 static const char *const op_keys[PROTO_OP_COUNT][8] = {
     [PROTO_OP_INSPECT] = {"op", "keep_invalid"},
-    [PROTO_OP_COLLAPSE_CLUSTERS] = {"op", "radius"},
-    [PROTO_OP_MERGE_FACETS] = {"op", "max_angle_deg", "max_deviation",
+    [PROTO_OP_COLLAPSE] = {"op", "radius"},
+    [PROTO_OP_MERGE] = {"op", "max_angle_deg", "max_deviation",
                                "views", "groups"},
     [PROTO_OP_CUT] = {"op", "plane"},
-    [PROTO_OP_MOVE_VERTEX] = {"op", "vertex", "to", "by", "schedule",
+    [PROTO_OP_MOVE] = {"op", "vertex", "to", "by", "schedule",
                               "max_steps"},
     [PROTO_OP_INVERSION_STATS] = {"op", "samples", "magnitudes", "seed",
                                   "schedule"},
     [PROTO_OP_TRIANGULATE] = {"op", "quad_levels", "binary_levels", "fill",
                               "refine", "fair", "sharpen"},
-    [PROTO_OP_FILL_HOLES] = {"op", "weight", "refine", "fair"},
+    [PROTO_OP_FILL] = {"op", "weight", "refine", "fair"},
     [PROTO_OP_STITCH] = {"op"},
-    [PROTO_OP_AUTO] = {"op", "radius", "max_angle_deg", "max_deviation",
+    [PROTO_OP_CORRECT] = {"op", "radius", "max_angle_deg", "max_deviation",
                        "views"},
 };
 
@@ -61,12 +76,26 @@ const char *proto_op_name(proto_op_kind kind)
     return (unsigned)kind < PROTO_OP_COUNT ? op_names[kind] : NULL;
 }
 
-static int find_op(const char *name)
+/* The op called name, or -1; *alias = the deprecated name used, or NULL. */
+static int find_op(const char *name, const char **alias)
 {
+    *alias = NULL;
     for (int i = 0; i < PROTO_OP_COUNT; i++)
         if (strcmp(name, op_names[i]) == 0)
             return i;
+    for (size_t i = 0; i < sizeof op_aliases / sizeof *op_aliases; i++)
+        if (strcmp(name, op_aliases[i].name) == 0) {
+            *alias = op_aliases[i].name;
+            return (int)op_aliases[i].kind;
+        }
     return -1;
+}
+
+const char *proto_op_canonical(const char *name)
+{
+    const char *alias;
+    int kind = find_op(name, &alias);
+    return kind < 0 ? NULL : op_names[kind];
 }
 
 /* Error at where[i].key (key may be NULL). */
@@ -252,19 +281,19 @@ static void set_defaults(proto_op *op)
 {
     memset(&op->u, 0, sizeof op->u);
     switch (op->kind) {
-    case PROTO_OP_COLLAPSE_CLUSTERS:
+    case PROTO_OP_COLLAPSE:
         op->u.collapse.radius = 0;
         break;
-    case PROTO_OP_MERGE_FACETS:
+    case PROTO_OP_MERGE:
         op->u.merge.max_angle_deg = 60.0;
         op->u.merge.max_deviation = 0;
         break;
-    case PROTO_OP_AUTO:
+    case PROTO_OP_CORRECT:
         op->u.correct.radius = 0;
         op->u.correct.max_angle_deg = 60.0;
         op->u.correct.max_deviation = 0;
         break;
-    case PROTO_OP_MOVE_VERTEX:
+    case PROTO_OP_MOVE:
         op->u.move.schedule = PROTO_SCHED_LOCAL_EXP;
         op->u.move.max_steps = 10000;
         break;
@@ -284,9 +313,9 @@ static void set_defaults(proto_op *op)
         op->u.triangulate.sharpen = true;
         op->u.triangulate.fair = PROTO_FAIR_UNIFORM;
         break;
-    case PROTO_OP_FILL_HOLES:
-        op->u.fill_holes.refine = true;
-        op->u.fill_holes.fair = true;
+    case PROTO_OP_FILL:
+        op->u.fill.refine = true;
+        op->u.fill.fair = true;
         break;
     default:
         break;
@@ -304,10 +333,10 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
     case PROTO_OP_STITCH:
     case PROTO_OP_COUNT:
         return 0;
-    case PROTO_OP_COLLAPSE_CLUSTERS:
+    case PROTO_OP_COLLAPSE:
         return get_number(o, "radius", pl, 0, 1e9, false,
                           &op->u.collapse.radius, err);
-    case PROTO_OP_AUTO:
+    case PROTO_OP_CORRECT:
         r = get_number(o, "radius", pl, 0, 1e9, false,
                        &op->u.correct.radius, err);
         if (r == 0)
@@ -322,7 +351,7 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
             r = get_u32(o, "views", pl, 0, PROTO_MAX_VIEWS,
                         &op->u.correct.views, err);
         return r;
-    case PROTO_OP_MERGE_FACETS: {
+    case PROTO_OP_MERGE: {
         r = get_number(o, "max_angle_deg", pl, 0, 90, true,
                        &op->u.merge.max_angle_deg, err);
         if (r == 0 && op->u.merge.max_angle_deg == 90)
@@ -357,7 +386,7 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
                 pv[i] /= n;
         return 0;
     }
-    case PROTO_OP_MOVE_VERTEX: {
+    case PROTO_OP_MOVE: {
         if (!json_object_get(o, "vertex"))
             return FAIL(pl, "vertex", "required");
         r = get_u32(o, "vertex", pl, 0, UINT32_MAX - 1, &op->u.move.vertex,
@@ -425,15 +454,15 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
         op->u.triangulate.fair = (proto_fair)fair;
         return r;
     }
-    case PROTO_OP_FILL_HOLES: {
+    case PROTO_OP_FILL: {
         static const char *const weights[] = {"area", "length"};
-        int w = op->u.fill_holes.weight_length;
+        int w = op->u.fill.weight_length;
         r = get_choice(o, "weight", pl, weights, 2, &w, err);
-        op->u.fill_holes.weight_length = w == 1;
+        op->u.fill.weight_length = w == 1;
         if (r == 0)
-            r = get_bool(o, "refine", pl, &op->u.fill_holes.refine, err);
+            r = get_bool(o, "refine", pl, &op->u.fill.refine, err);
         if (r == 0)
-            r = get_bool(o, "fair", pl, &op->u.fill_holes.fair, err);
+            r = get_bool(o, "fair", pl, &op->u.fill.fair, err);
         return r;
     }
     }
@@ -442,7 +471,7 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
 
 static void op_free(proto_op *op)
 {
-    if (op->kind == PROTO_OP_MERGE_FACETS) {
+    if (op->kind == PROTO_OP_MERGE) {
         free(op->u.merge.gstart);
         free(op->u.merge.gfacets);
         op->u.merge.gstart = op->u.merge.gfacets = NULL;
@@ -464,12 +493,14 @@ static int parse_op(const json_t *v, const place *pl, proto_op *op,
     } else {
         return FAIL(pl, NULL, "expected an operation name or object");
     }
-    int kind = find_op(name);
+    const char *alias;
+    int kind = find_op(name, &alias);
     if (kind < 0)
         return FAIL(pl, json_is_object(v) ? "op" : NULL,
                     "unknown operation '%.64s'", name);
     op->kind = (proto_op_kind)kind;
     set_defaults(op);
+    op->alias = alias;
     if (!json_is_object(v))
         return 0;
     const char *key;
@@ -487,28 +518,35 @@ static int parse_op(const json_t *v, const place *pl, proto_op *op,
     return r;
 }
 
-static const char *const auto_ops[] = {"inspect", "auto", "inspect"};
+/* The pipeline "correct" names: the post-scan correction. */
+static const char *const correct_ops[] = {"inspect", "correct", "inspect"};
 
 int proto_pipeline_from_json(const json_t *v, const char *where,
                              proto_pipeline *ret, geo_err *err)
 {
     place whole = {where, (size_t)-1};
     json_t *expanded = NULL;
+    const char *whole_alias = NULL;
     if (json_is_string(v)) {
-        if (strcmp(json_string_value(v), "auto") != 0)
+        const char *s = json_string_value(v);
+        if (strcmp(s, "auto") == 0)
+            whole_alias = "auto";
+        else if (strcmp(s, "correct") != 0)
             return FAIL(&whole, NULL, "expected an array of operations or "
-                        "\"auto\"");
+                        "\"correct\"");
         expanded = json_array();
-        size_t nauto = sizeof auto_ops / sizeof *auto_ops;
-        for (size_t i = 0; expanded && i < nauto; i++)
-            if (json_array_append_new(expanded, json_string(auto_ops[i])) < 0)
+        size_t nops = sizeof correct_ops / sizeof *correct_ops;
+        for (size_t i = 0; expanded && i < nops; i++)
+            if (json_array_append_new(expanded,
+                                      json_string(correct_ops[i])) < 0)
                 expanded = (json_decref(expanded), NULL);
         if (!expanded)
             return geo_err_set(err, -ENOMEM, "out of memory");
         v = expanded;
     }
     if (!json_is_array(v))
-        return FAIL(&whole, NULL, "expected an array of operations or \"auto\"");
+        return FAIL(&whole, NULL,
+                    "expected an array of operations or \"correct\"");
     size_t n = json_array_size(v);
     int r = 0;
     if (n == 0)
@@ -533,9 +571,36 @@ int proto_pipeline_from_json(const json_t *v, const char *where,
         free(ops);
         return r;
     }
+    if (whole_alias)
+        ops[1].alias = whole_alias; /* "auto" named the correct op */
     ret->nops = n;
     ret->ops = ops;
     return 0;
+}
+
+size_t proto_pipeline_deprecations(const proto_pipeline *p, char *buf,
+                                   size_t size)
+{
+    size_t count = 0, len = 0;
+    if (size)
+        buf[0] = 0;
+    for (size_t i = 0; i < p->nops; i++) {
+        const proto_op *op = &p->ops[i];
+        if (!op->alias)
+            continue;
+        bool seen = false;
+        for (size_t j = 0; j < i; j++)
+            seen |= p->ops[j].alias && strcmp(p->ops[j].alias, op->alias) == 0;
+        if (seen)
+            continue;
+        int w = snprintf(buf + len, len < size ? size - len : 0,
+                         "%sop '%s' is deprecated: use '%s'",
+                         count ? "; " : "", op->alias, op_names[op->kind]);
+        if (w > 0 && len + (size_t)w < size)
+            len += (size_t)w;
+        count++;
+    }
+    return count;
 }
 
 void proto_pipeline_free(proto_pipeline *p)
@@ -569,10 +634,10 @@ static json_t *op_to_json(const proto_op *op)
         if (op->u.inspect.keep_invalid)
             e |= json_object_set_new(o, "keep_invalid", json_true());
         break;
-    case PROTO_OP_COLLAPSE_CLUSTERS:
+    case PROTO_OP_COLLAPSE:
         e |= json_object_set_new(o, "radius", json_real(op->u.collapse.radius));
         break;
-    case PROTO_OP_MERGE_FACETS:
+    case PROTO_OP_MERGE:
         e |= json_object_set_new(o, "max_angle_deg",
                                  json_real(op->u.merge.max_angle_deg));
         e |= json_object_set_new(o, "max_deviation",
@@ -596,7 +661,7 @@ static json_t *op_to_json(const proto_op *op)
     case PROTO_OP_CUT:
         e |= json_object_set_new(o, "plane", vec(op->u.cut.plane, 4));
         break;
-    case PROTO_OP_AUTO:
+    case PROTO_OP_CORRECT:
         e |= json_object_set_new(o, "radius", json_real(op->u.correct.radius));
         e |= json_object_set_new(o, "max_angle_deg",
                                  json_real(op->u.correct.max_angle_deg));
@@ -605,7 +670,7 @@ static json_t *op_to_json(const proto_op *op)
         e |= json_object_set_new(o, "views",
                                  json_integer(op->u.correct.views));
         break;
-    case PROTO_OP_MOVE_VERTEX:
+    case PROTO_OP_MOVE:
         e |= json_object_set_new(o, "vertex", json_integer(op->u.move.vertex));
         e |= json_object_set_new(o, op->u.move.relative ? "by" : "to",
                                  vec(op->u.move.xyz, 3));
@@ -639,13 +704,13 @@ static json_t *op_to_json(const proto_op *op)
         e |= json_object_set_new(o, "sharpen",
                                  json_boolean(op->u.triangulate.sharpen));
         break;
-    case PROTO_OP_FILL_HOLES:
+    case PROTO_OP_FILL:
         e |= json_object_set_new(
             o, "weight",
-            json_string(op->u.fill_holes.weight_length ? "length" : "area"));
+            json_string(op->u.fill.weight_length ? "length" : "area"));
         e |= json_object_set_new(o, "refine",
-                                 json_boolean(op->u.fill_holes.refine));
-        e |= json_object_set_new(o, "fair", json_boolean(op->u.fill_holes.fair));
+                                 json_boolean(op->u.fill.refine));
+        e |= json_object_set_new(o, "fair", json_boolean(op->u.fill.fair));
         break;
     default:
         break;
@@ -684,9 +749,9 @@ void proto_pipeline_set_views(proto_pipeline *p, uint32_t views)
 {
     for (size_t i = 0; i < p->nops; i++) {
         proto_op *op = &p->ops[i];
-        if (op->kind == PROTO_OP_MERGE_FACETS && op->u.merge.views == 0)
+        if (op->kind == PROTO_OP_MERGE && op->u.merge.views == 0)
             op->u.merge.views = views;
-        else if (op->kind == PROTO_OP_AUTO && op->u.correct.views == 0)
+        else if (op->kind == PROTO_OP_CORRECT && op->u.correct.views == 0)
             op->u.correct.views = views;
     }
 }

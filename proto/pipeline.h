@@ -1,27 +1,29 @@
 /* pipeline.h — the job pipeline of the Job API (formats.md): a JSON array
- * of operations, or the string "auto", parsed into structs with every
+ * of operations, or the string "correct", parsed into structs with every
  * parameter checked and defaulted, and written back in canonical form.
  *
  * An operation is either its name as a string ("inspect", "stitch") or an
  * object {"op": NAME, PARAM: VALUE, ...}. Unknown operations and unknown
  * parameters are errors (a typo must not silently run with a default).
  * Errors name the place: `pipeline[2].max_angle_deg: expected a number`.
+ * Each op has one name, the same as the `facet` command that runs it
+ * (inversion_stats is `facet inversion-stats`).
  *
  * Operations and parameters (lengths in the model's units, mm):
  *   inspect {keep_invalid [false]} — after an op that changed the model,
  *                 an invalid model fails the job unless keep_invalid
- *   collapse_clusters {radius ≥ 0 [0: 2e-4 × the model's size]}
- *   merge_facets {max_angle_deg in (0, 90) [60], max_deviation ≥ 0
+ *   collapse {radius ≥ 0 [0: 2e-4 × the model's size]}
+ *   merge {max_angle_deg in (0, 90) [60], max_deviation ≥ 0
  *                 [0: 5e-4 × the model's size], views ≥ 0 (the scanner's
  *                 contours over 180°) [0: read off the model], groups?:
  *                 [[facet, facet, ...], ...]}
- *   auto {radius, max_angle_deg, max_deviation, views: as above} — the whole
- *                 post-scan correction of lib/correct/correct.h in one op
+ *   correct {radius, max_angle_deg, max_deviation, views: as above} — the
+ *                 whole post-scan correction of lib/correct/correct.h
  *   cut {plane: [a, b, c, d]} — keeps plane(p) ≤ 0; (a,b,c) non-zero,
  *                 normalised to unit length (d scaled with it) unless
  *                 already unit to rounding, so that the canonical JSON
  *                 parses back to the same bits
- *   move_vertex {vertex, to: [x,y,z] | by: [dx,dy,dz], schedule
+ *   move {vertex, to: [x,y,z] | by: [dx,dy,dz], schedule
  *                 "local-exp"|"scaled"|"global-exp" ["local-exp"],
  *                 max_steps ≥ 1 [10000]}
  *   inversion_stats {samples 1..100000 [100], magnitudes: [m > 0, ...]
@@ -33,14 +35,16 @@
  *                 sharpen [true]} — an F-rep input (lib/frep/triangulate.h)
  *                 to a mesh; only as the first op of a job whose input is
  *                 a frep-object/1
- *   fill_holes {weight "area"|"length" ["area"], refine [true],
- *                 fair [true]}
+ *   fill {weight "area"|"length" ["area"], refine [true], fair [true]}
  *   stitch
- * "auto" is the post-scan correction: inspect → auto → inspect, with the
- * defaults above; the auto op merges (automatic groups) and collapses
- * clusters, repeating both until nothing changes (formats.md's inspect →
- * collapse_clusters → merge_facets → inspect, in the order and with the
- * repeats that lib/correct/correct.h explains).
+ * The pipeline "correct" is the post-scan correction: inspect → correct →
+ * inspect, with the defaults above; the correct op merges (automatic
+ * groups) and collapses clusters, repeating both until nothing changes (in
+ * the order and with the repeats that lib/correct/correct.h explains).
+ *
+ * Deprecated names, accepted for one release (each use is reported by
+ * proto_pipeline_deprecations): "auto" (correct), merge_facets,
+ * fill_holes, move_vertex, collapse_clusters, "inversion-stats".
  *
  * Ownership: a proto_pipeline owns its arrays; proto_pipeline_free
  * releases them. Functions are reentrant and thread-safe. */
@@ -57,15 +61,15 @@
 
 typedef enum proto_op_kind {
     PROTO_OP_INSPECT = 0,
-    PROTO_OP_COLLAPSE_CLUSTERS,
-    PROTO_OP_MERGE_FACETS,
+    PROTO_OP_COLLAPSE,
+    PROTO_OP_MERGE,
     PROTO_OP_CUT,
-    PROTO_OP_MOVE_VERTEX,
+    PROTO_OP_MOVE,
     PROTO_OP_INVERSION_STATS,
     PROTO_OP_TRIANGULATE,
-    PROTO_OP_FILL_HOLES,
+    PROTO_OP_FILL,
     PROTO_OP_STITCH,
-    PROTO_OP_AUTO,
+    PROTO_OP_CORRECT,
     PROTO_OP_COUNT
 } proto_op_kind;
 
@@ -86,6 +90,7 @@ enum { PROTO_PIPELINE_MAX_OPS = 64, PROTO_MAX_MAGNITUDES = 64,
 
 typedef struct proto_op {
     proto_op_kind kind;
+    const char *alias; /* the deprecated name it was given, or NULL */
     union {
         struct {
             /* an inspect after an op that changed the model fails the job
@@ -132,7 +137,7 @@ typedef struct proto_op {
         struct {
             bool weight_length;  /* weight by edge length (else area) */
             bool refine, fair;
-        } fill_holes;
+        } fill;
     } u;
 } proto_op;
 
@@ -141,10 +146,20 @@ typedef struct proto_pipeline {
     proto_op *ops;
 } proto_pipeline;
 
-/* The operation's name as in the API ("merge_facets"); NULL if invalid. */
+/* The operation's name as in the API ("merge"); NULL if invalid. */
 const char *proto_op_name(proto_op_kind kind);
 
-/* Parses a pipeline value (array or "auto") into *ret. where names the
+/* The current name of the op called name (itself, or what a deprecated
+ * alias stands for); NULL for no op. */
+const char *proto_op_canonical(const char *name);
+
+/* Writes "op 'auto' is deprecated: use 'correct'; ..." into buf (size
+ * bytes, always terminated) for each deprecated name p was given, and
+ * returns how many there were (0: buf is ""). */
+size_t proto_pipeline_deprecations(const proto_pipeline *p, char *buf,
+                                   size_t size);
+
+/* Parses a pipeline value (array or "correct") into *ret. where names the
  * value in messages (e.g. "pipeline"; NULL for none). 0, or -EINVAL with
  * err naming the place, or -ENOMEM; *ret is untouched on error. */
 int proto_pipeline_from_json(const json_t *v, const char *where,

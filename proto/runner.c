@@ -131,7 +131,7 @@ static int run_triangulate(const proto_op *op, const geo_frep *f,
                                                             : GEO_FAIR_NONE;
     geo_tri_report rep;
     geo_poly *m = NULL;
-    int r = geo_frep_triangulate(f, &o, ctx, &m, &rep, err);
+    int r = geo_triangulate(f, &o, ctx, &m, &rep, err);
     if (r < 0)
         return r;
     json_t *j = proto_tri_report_to_json(&rep);
@@ -175,7 +175,7 @@ static int run_collapse(const proto_op *op, geo_poly **model,
     geo_collapse_opts_default(&o);
     o.radius = op->u.collapse.radius;
     geo_collapse_report rep;
-    int r = geo_collapse_clusters(*model, &o, ctx, &rep, err);
+    int r = geo_collapse(*model, &o, ctx, &rep, err);
     if (r < 0)
         return r;
     json_t *j = proto_collapse_report_to_json(&rep);
@@ -218,7 +218,7 @@ static int run_auto(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
     o.merge.max_deviation = op->u.correct.max_deviation;
     o.merge.views = op->u.correct.views;
     geo_correct_report rep;
-    int r = geo_correct_auto(*model, &o, ctx, &rep, err);
+    int r = geo_correct(*model, &o, ctx, &rep, err);
     if (r < 0)
         return r;
     json_t *j = proto_correct_report_to_json(&rep);
@@ -241,11 +241,11 @@ static int run_fill_holes(const proto_op *op, geo_poly **model,
     geo_mesh_fill_opts o;
     geo_mesh_fill_opts_default(&o);
     o.fill.weight =
-        op->u.fill_holes.weight_length ? GEO_FILL_EDGES : GEO_FILL_AREA;
-    o.fill.refine = op->u.fill_holes.refine;
-    o.fill.fair = op->u.fill_holes.fair ? GEO_FAIR_UNIFORM : GEO_FAIR_NONE;
+        op->u.fill.weight_length ? GEO_FILL_EDGES : GEO_FILL_AREA;
+    o.fill.refine = op->u.fill.refine;
+    o.fill.fair = op->u.fill.fair ? GEO_FAIR_UNIFORM : GEO_FAIR_NONE;
     geo_mesh_fill_report rep;
-    int r = geo_fill_mesh(*model, &o, ctx, &rep, err);
+    int r = geo_fill(*model, &o, ctx, &rep, err);
     if (r < 0)
         return r;
     json_t *j = proto_fill_report_to_json(&rep);
@@ -362,7 +362,7 @@ static int run_move_vertex(const proto_op *op, geo_poly **model,
     o.max_steps = op->u.move.max_steps;
     geo_replanar_log log = {0};
     geo_replanar_result res;
-    int r = geo_move_vertex(p, v, to, s, &o, ctx, &log, &res, err);
+    int r = geo_move(p, v, to, s, &o, ctx, &log, &res, err);
     if (r < 0) {
         geo_replanar_log_clear(&log);
         return r;
@@ -430,22 +430,16 @@ static int run_inversion_stats(const proto_op *op, geo_poly **model,
 
 static const op_entry ops[PROTO_OP_COUNT] = {
     [PROTO_OP_INSPECT] = {run_inspect, false},
-    [PROTO_OP_COLLAPSE_CLUSTERS] = {run_collapse, true},
-    [PROTO_OP_MERGE_FACETS] = {run_merge, true},
+    [PROTO_OP_COLLAPSE] = {run_collapse, true},
+    [PROTO_OP_MERGE] = {run_merge, true},
     [PROTO_OP_TRIANGULATE] = {NULL, true, run_triangulate},
-    [PROTO_OP_FILL_HOLES] = {run_fill_holes, true},
+    [PROTO_OP_FILL] = {run_fill_holes, true},
     [PROTO_OP_STITCH] = {run_stitch, true},
-    [PROTO_OP_AUTO] = {run_auto, true},
+    [PROTO_OP_CORRECT] = {run_auto, true},
     [PROTO_OP_CUT] = {run_cut, true},
-    [PROTO_OP_MOVE_VERTEX] = {run_move_vertex, true},
+    [PROTO_OP_MOVE] = {run_move_vertex, true},
     [PROTO_OP_INVERSION_STATS] = {run_inversion_stats, false},
 };
-
-bool runner_op_available(proto_op_kind op)
-{
-    return (unsigned)op < PROTO_OP_COUNT &&
-           (ops[op].run != NULL || ops[op].run_frep != NULL);
-}
 
 int runner_check_input(const proto_pipeline *p, bool frep, geo_err *err)
 {
@@ -470,11 +464,11 @@ int runner_check_model(const proto_pipeline *p, const geo_poly *m,
 {
     for (size_t i = 0; i < p->nops; i++) {
         const proto_op *op = &p->ops[i];
-        if (op->kind == PROTO_OP_MOVE_VERTEX && op->u.move.vertex >= m->nverts)
+        if (op->kind == PROTO_OP_MOVE && op->u.move.vertex >= m->nverts)
             return geo_err_set(err, -EINVAL, "pipeline[%zu].vertex: %u out "
                                "of range (%u vertices)", i, op->u.move.vertex,
                                m->nverts);
-        if (op->kind == PROTO_OP_MERGE_FACETS && op->u.merge.ngroups) {
+        if (op->kind == PROTO_OP_MERGE && op->u.merge.ngroups) {
             uint32_t n = op->u.merge.gstart[op->u.merge.ngroups];
             for (uint32_t k = 0; k < n; k++)
                 if (op->u.merge.gfacets[k] >= m->nfacets)
@@ -482,7 +476,7 @@ int runner_check_model(const proto_pipeline *p, const geo_poly *m,
                                        "facet %u out of range (%u facets)",
                                        i, op->u.merge.gfacets[k], m->nfacets);
         }
-        if (!runner_op_available(op->kind) || ops[op->kind].changes_model)
+        if (ops[op->kind].changes_model)
             break; /* later indices name the changed model */
     }
     return 0;
@@ -491,20 +485,9 @@ int runner_check_model(const proto_pipeline *p, const geo_poly *m,
 bool runner_changes_model(const proto_pipeline *p)
 {
     for (size_t i = 0; i < p->nops; i++)
-        if (!runner_op_available(p->ops[i].kind) ||
-            ops[p->ops[i].kind].changes_model)
+        if (ops[p->ops[i].kind].changes_model)
             return true;
     return false;
-}
-
-int runner_check(const proto_pipeline *p, geo_err *err)
-{
-    for (size_t i = 0; i < p->nops; i++)
-        if (!runner_op_available(p->ops[i].kind))
-            return geo_err_set(err, -ENOTSUP,
-                               "pipeline[%zu]: op '%s' is not available in "
-                               "this build", i, proto_op_name(p->ops[i].kind));
-    return 0;
 }
 
 /* Maps an operation's progress into its share of the whole run. */
@@ -545,9 +528,7 @@ static int run_pipeline(const proto_pipeline *p, const geo_frep *frep,
                         json_t **ret_stats, json_t **ret_summary,
                         geo_err *err)
 {
-    int r = runner_check(p, err);
-    if (r == 0)
-        r = runner_check_input(p, frep != NULL, err);
+    int r = runner_check_input(p, frep != NULL, err);
     if (r < 0)
         return r;
     json_t *stats = json_object(), *list = json_array(),

@@ -39,13 +39,6 @@
 #include "pipeline.h"
 #include "poly.h"
 
-/* True when this build has a kernel for op. */
-bool runner_op_available(proto_op_kind op);
-
-/* 0 when every operation of p is available; else -ENOTSUP with err
- * "pipeline[1]: op 'cut' is not available in this build". */
-int runner_check(const proto_pipeline *p, geo_err *err);
-
 /* True when an operation of p may change the model; false for a pipeline
  * of read-only operations (inspect), whose result is its input. */
 bool runner_changes_model(const proto_pipeline *p);

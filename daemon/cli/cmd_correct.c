@@ -125,7 +125,7 @@ int cmd_correct(int argc, char **argv)
     if (!p)
         return cli_input_error("correct", "%s", err.msg);
     geo_correct_report rep;
-    int r = geo_correct_auto(p, &o, NULL, &rep, &err);
+    int r = geo_correct(p, &o, NULL, &rep, &err);
     if (r < 0) {
         geo_poly_free(p);
         return cli_input_error("correct", "%s: %s", in, err.msg);

@@ -104,7 +104,7 @@ int cmd_fill(int argc, char **argv)
         return cli_input_error("fill", "%s", err.msg);
     geo_mesh_fill_report rep;
     double t0 = mono_ms();
-    int r = geo_fill_mesh(p, &o, NULL, &rep, &err);
+    int r = geo_fill(p, &o, NULL, &rep, &err);
     double ms = mono_ms() - t0;
     if (r < 0) {
         geo_poly_free(p);

@@ -195,7 +195,7 @@ int cmd_move(int argc, char **argv)
 
     geo_replanar_log log = {0};
     geo_replanar_result res;
-    int rc = geo_move_vertex(p, vertex, to, rp.schedule, &o, NULL,
+    int rc = geo_move(p, vertex, to, rp.schedule, &o, NULL,
                              log_path ? &log : NULL, &res, &err);
     int status = CLI_OK;
     if (rc < 0) {

@@ -77,10 +77,9 @@ int cmd_run(int argc, char **argv)
     json_decref(pj);
     if (r < 0)
         return cli_input_error("run", "%s: %s", files[0], err.msg);
-    if (runner_check(&pl, &err) < 0) {
-        proto_pipeline_free(&pl);
-        return cli_input_error("run", "%s: %s", files[0], err.msg);
-    }
+    char dep[256];
+    if (proto_pipeline_deprecations(&pl, dep, sizeof dep))
+        fprintf(stderr, "facet run: warning: %s: %s\n", files[0], dep);
     geo_poly *p = proto_model_read_file(files[1], PROTO_FMT_UNKNOWN, NULL,
                                         &err);
     if (!p) {

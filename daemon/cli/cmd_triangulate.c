@@ -169,7 +169,7 @@ int cmd_triangulate(int argc, char **argv)
     geo_ctx ctx = {.parallel_for = par_for, .pf_user = pool};
     geo_poly *m = NULL;
     geo_tri_report rep;
-    int rc = geo_frep_triangulate(f, &o, &ctx, &m, &rep, &err);
+    int rc = geo_triangulate(f, &o, &ctx, &m, &rep, &err);
     par_pool_free(pool);
     geo_frep_free(f);
     if (rc < 0)

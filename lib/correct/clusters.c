@@ -371,7 +371,7 @@ static uint32_t blame(const geo_poly *q, const uint8_t *badf,
     return n;
 }
 
-int geo_collapse_clusters(geo_poly *p, const geo_collapse_opts *opts,
+int geo_collapse(geo_poly *p, const geo_collapse_opts *opts,
                           const geo_ctx *ctx, geo_collapse_report *report,
                           geo_err *err)
 {

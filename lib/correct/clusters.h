@@ -82,7 +82,7 @@ void geo_collapse_report_clear(geo_collapse_report *r);
  * earlier one with geo_collapse_report_clear first). Returns 0 (p changed in place, or left as it was
  * when nothing could be collapsed), -EINVAL when p is not a closed
  * manifold with valid indices, -ENOMEM, -ECANCELED (p unchanged). */
-int geo_collapse_clusters(geo_poly *p, const geo_collapse_opts *opts,
+int geo_collapse(geo_poly *p, const geo_collapse_opts *opts,
                           const geo_ctx *ctx, geo_collapse_report *report,
                           geo_err *err);
 

@@ -72,7 +72,7 @@ static int append_pass(geo_merge_report *all, const geo_merge_report *pass)
     return 0;
 }
 
-int geo_correct_auto(geo_poly *p, const geo_correct_opts *opts,
+int geo_correct(geo_poly *p, const geo_correct_opts *opts,
                      const geo_ctx *ctx, geo_correct_report *report,
                      geo_err *err)
 {
@@ -165,7 +165,7 @@ int geo_correct_auto(geo_poly *p, const geo_correct_opts *opts,
         uint32_t collapsed = 0;
         if (o.collapse_clusters) {
             geo_collapse_report cr = {0};
-            if ((r = geo_collapse_clusters(q, &o.collapse, &sub, &cr, err)) < 0)
+            if ((r = geo_collapse(q, &o.collapse, &sub, &cr, err)) < 0)
                 goto done;
             compose(cur, nin, cr.vmap);
             rep->clusters_found += cr.clusters;

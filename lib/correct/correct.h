@@ -73,7 +73,7 @@ void geo_correct_report_clear(geo_correct_report *r);
  * be NULL. Returns 0, -EINVAL (p not a closed manifold, not orientable,
  * or invalid indices; err says which), -ENOMEM, -ECANCELED (p unchanged
  * on error). */
-int geo_correct_auto(geo_poly *p, const geo_correct_opts *opts,
+int geo_correct(geo_poly *p, const geo_correct_opts *opts,
                      const geo_ctx *ctx, geo_correct_report *report,
                      geo_err *err);
 

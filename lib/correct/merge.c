@@ -521,7 +521,7 @@ int geo_merge_groups(geo_poly *p, uint32_t ngroups, const uint32_t *gstart,
     return r;
 }
 
-int geo_merge_facets(geo_poly *p, const uint32_t *group, uint32_t n,
+int geo_merge(geo_poly *p, const uint32_t *group, uint32_t n,
                      const geo_merge_opts *opts, const geo_ctx *ctx,
                      geo_merge_report *report, geo_err *err)
 {

@@ -198,7 +198,7 @@ int geo_merge_surface_noise(const geo_poly *p, const geo_merge_opts *opts,
  * would be invalid (p unchanged; err and the report's group say why);
  * -ENOMEM, -ECANCELED (p unchanged). report may be NULL; on success and
  * on -EINVAL it has one group. opts NULL means defaults. */
-int geo_merge_facets(geo_poly *p, const uint32_t *group, uint32_t n,
+int geo_merge(geo_poly *p, const uint32_t *group, uint32_t n,
                      const geo_merge_opts *opts, const geo_ctx *ctx,
                      geo_merge_report *report, geo_err *err);
 

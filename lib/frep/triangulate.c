@@ -308,7 +308,7 @@ static int grow_region(const geo_poly *m, uint8_t *region, geo_err *err)
     return 0;
 }
 
-int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
+int geo_triangulate(const geo_frep *f, const geo_tri_opts *opts,
                          const geo_ctx *ctx, geo_poly **ret_mesh,
                          geo_tri_report *report, geo_err *err)
 {
@@ -397,7 +397,7 @@ int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
     lo.fair = GEO_FAIR_NONE;
     sc = sub_ctx(ctx, &sr, 0.55, 0.6);
     uint32_t nf0 = mesh->nfacets;
-    if ((rc = geo_fill_holes(mesh, &lo, &sc, &rep.fill, err)) < 0)
+    if ((rc = geo_fill_loops(mesh, &lo, &sc, &rep.fill, err)) < 0)
         goto fail;
     uint8_t *region = realloc(flat, (size_t)mesh->nfacets + 1);
     if (!region) {

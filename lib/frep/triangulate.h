@@ -100,7 +100,7 @@ void geo_tri_report_clear(geo_tri_report *r);
 
 /* Triangulates f (finished). opts NULL means defaults; report may be
  * NULL. Progress runs 0 → 1 over the stages. */
-int geo_frep_triangulate(const geo_frep *f, const geo_tri_opts *opts,
+int geo_triangulate(const geo_frep *f, const geo_tri_opts *opts,
                          const geo_ctx *ctx, geo_poly **ret_mesh,
                          geo_tri_report *report, geo_err *err);
 

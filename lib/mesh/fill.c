@@ -393,7 +393,7 @@ static int try_liepa(mfill *M, const loop_ref *L, const geo_fill_opts *fo,
         inner.cancel = M->ctx->cancel;
         inner.seed = M->ctx->seed;
     }
-    rc = geo_fill_holes(sub, &o, &inner, &st, err);
+    rc = geo_fill_loops(sub, &o, &inner, &st, err);
     if (rc < 0)
         goto done_l;
     *status = st.nholes == 1 ? st.holes[0].status : GEO_HOLE_NOT_A_LOOP;
@@ -601,7 +601,7 @@ kept:
     return 0;
 }
 
-int geo_fill_mesh(geo_poly *p, const geo_mesh_fill_opts *opts,
+int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
                   const geo_ctx *ctx, geo_mesh_fill_report *rep, geo_err *err)
 {
     geo_mesh_fill_opts mo;

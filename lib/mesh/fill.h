@@ -104,7 +104,7 @@ typedef struct geo_mesh_fill_report {
 
 /* Fills the holes of p as described above. rep may be NULL; opts NULL
  * means defaults. 0 or a negative errno (see the file comment). */
-int geo_fill_mesh(geo_poly *p, const geo_mesh_fill_opts *opts,
+int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
                   const geo_ctx *ctx, geo_mesh_fill_report *rep, geo_err *err);
 
 /* Frees rep->holes and zeroes *rep; accepts NULL. */

@@ -1988,7 +1988,7 @@ int geo_fair_vertices(geo_poly *p, uint32_t first_free,
     return 0;
 }
 
-int geo_fill_holes(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
+int geo_fill_loops(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
                    geo_fill_stats *stats, geo_err *err)
 {
     geo_fill_opts o;

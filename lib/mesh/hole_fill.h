@@ -222,13 +222,13 @@ typedef struct geo_fill_stats {
 
 /* Fills every hole of p as described above. 0 or a negative errno (see
  * the file comment); stats may be NULL. */
-int geo_fill_holes(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
+int geo_fill_loops(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
                    geo_fill_stats *stats, geo_err *err);
 
 /* Steps 3 and 4 alone: refines (when opts->refine) and fairs (opts->fair)
  * the triangles of p flagged in region (one byte per facet; other facets
  * and non-triangles are left alone), with the same rules, fixed region
- * boundary, output order and error contract as geo_fill_holes; only the
+ * boundary, output order and error contract as geo_fill_loops; only the
  * refinement fields of *stats are set (stats may be NULL). */
 int geo_refine_region(geo_poly *p, const uint8_t *region,
                       const geo_fill_opts *opts, const geo_ctx *ctx,
@@ -236,7 +236,7 @@ int geo_refine_region(geo_poly *p, const uint8_t *region,
 
 /* Step 4 alone: fairs vertices first_free … p->nverts − 1 of p with
  * opts->fair (every other vertex fixed: the fixed ring of the U²
- * operator), with the same rules as geo_fill_holes; the facets touching
+ * operator), with the same rules as geo_fill_loops; the facets touching
  * them get new least-squares planes. Only nfair_sweeps of *stats is set
  * (stats may be NULL). 0, -EINVAL (invalid indices, first_free beyond
  * the vertices), -ENOMEM (p unchanged) or -ECANCELED (the free vertices

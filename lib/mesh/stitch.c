@@ -603,7 +603,7 @@ openings:
         goto oom;
     R.welded = nw;
     /* the openings left: the loop vertices not bridged, other loops */
-    if ((rc = geo_fill_mesh(out, &o.fill, NULL, &R.fill, err)) < 0) {
+    if ((rc = geo_fill(out, &o.fill, NULL, &R.fill, err)) < 0) {
         geo_err_prefix(err, "closing the openings");
         goto fail;
     }

@@ -975,7 +975,7 @@ int geo_replanarize(geo_poly *p, const uint32_t *fixed, uint32_t nfixed,
     return rc;
 }
 
-int geo_move_vertex(geo_poly *p, uint32_t v, const double target[3],
+int geo_move(geo_poly *p, uint32_t v, const double target[3],
                     enum geo_replanar_schedule schedule,
                     const geo_replanar_opts *opts, const geo_ctx *ctx,
                     geo_replanar_log *log, geo_replanar_result *ret,

@@ -28,7 +28,7 @@ static double now_ms(void)
     return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
 }
 
-/* Best of runs of geo_correct_auto on copies of p. */
+/* Best of runs of geo_correct on copies of p. */
 static double correct_ms(const geo_poly *p, int runs, uint32_t *ret_facets)
 {
     double best = 1e30;
@@ -37,7 +37,7 @@ static double correct_ms(const geo_poly *p, int runs, uint32_t *ret_facets)
         geo_correct_report rep;
         geo_err err;
         double t0 = now_ms();
-        int r = geo_correct_auto(q, NULL, NULL, &rep, &err);
+        int r = geo_correct(q, NULL, NULL, &rep, &err);
         double ms = now_ms() - t0;
         if (r < 0) {
             fprintf(stderr, "bench_correct: %s\n", err.msg);
@@ -74,7 +74,7 @@ static void parts(const char *name, const geo_poly *p, int runs)
         geo_merge_report_clear(&mr);
         geo_collapse_report cr;
         double t4 = now_ms();
-        geo_collapse_clusters(q, NULL, NULL, &cr, NULL);
+        geo_collapse(q, NULL, NULL, &cr, NULL);
         double t5 = now_ms();
         geo_collapse_report_clear(&cr);
         double h;

@@ -137,7 +137,7 @@ static void sphere_patch_quality(const geo_poly *p, uint32_t nv0, uint32_t nf0,
     geo_edgemap_destroy(&he);
 }
 
-/* Best time of geo_fill_holes on copies of p; *nv gets the vertices
+/* Best time of geo_fill_loops on copies of p; *nv gets the vertices
  * added; quality, when not NULL, sphere_patch_quality of the last run. */
 static double time_fill(const geo_poly *p, const geo_fill_opts *o, int runs,
                         uint32_t *nv, uint32_t *loop, double *quality)
@@ -148,7 +148,7 @@ static double time_fill(const geo_poly *p, const geo_fill_opts *o, int runs,
         geo_fill_stats st;
         geo_err err;
         double t0 = now_ms();
-        if (geo_fill_holes(q, o, NULL, &st, &err) < 0 || st.nfilled != 1) {
+        if (geo_fill_loops(q, o, NULL, &st, &err) < 0 || st.nfilled != 1) {
             fprintf(stderr, "fill failed: %s\n", err.msg);
             exit(1);
         }
@@ -206,7 +206,7 @@ int main(void)
     printf("hole_sphere_distance_mean: %.3f\n", qual[4]);
     geo_poly_free(s);
 
-    /* the checked fill of a 500-vertex hole (geo_fill_mesh) */
+    /* the checked fill of a 500-vertex hole (geo_fill) */
     s = holed_sphere(88, 0.5);
     double best = INFINITY;
     geo_mesh_fill_report rep = {0};
@@ -214,7 +214,7 @@ int main(void)
         geo_poly *q = geo_poly_copy(s);
         geo_mesh_fill_report_clear(&rep);
         double t0 = now_ms();
-        if (geo_fill_mesh(q, NULL, NULL, &rep, NULL) < 0)
+        if (geo_fill(q, NULL, NULL, &rep, NULL) < 0)
             exit(1);
         double t = now_ms() - t0;
         best = t < best ? t : best;

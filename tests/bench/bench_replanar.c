@@ -21,7 +21,7 @@ static double now(void)
 }
 
 /* Moves vertex v by m × (its nearest-vertex distance) and returns the best
- * wall time (ms) of reps runs of geo_move_vertex, preparation included. */
+ * wall time (ms) of reps runs of geo_move, preparation included. */
 static double bench_move(const geo_poly *orig, uint32_t v, double m, int reps,
                          geo_replanar_result *ret)
 {
@@ -34,7 +34,7 @@ static double bench_move(const geo_poly *orig, uint32_t v, double m, int reps,
     for (int r = 0; r < reps; r++) {
         geo_poly *p = geo_poly_copy(orig);
         double t0 = now();
-        if (geo_move_vertex(p, v, t, GEO_REPLANAR_LOCAL_EXP, NULL, NULL, NULL,
+        if (geo_move(p, v, t, GEO_REPLANAR_LOCAL_EXP, NULL, NULL, NULL,
                             ret, NULL) < 0) {
             fprintf(stderr, "move failed\n");
             exit(1);

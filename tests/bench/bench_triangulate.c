@@ -41,7 +41,7 @@ static geo_poly *best_run_at(const geo_frep *f, int threads, int runs,
         geo_tri_report rep;
         geo_poly *m = NULL;
         geo_err err = {{0}};
-        if (geo_frep_triangulate(f, &o, &ctx, &m, &rep, &err) < 0) {
+        if (geo_triangulate(f, &o, &ctx, &m, &rep, &err) < 0) {
             fprintf(stderr, "triangulate: %s\n", err.msg);
             break;
         }

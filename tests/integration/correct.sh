@@ -1,7 +1,7 @@
 #!/bin/bash
 # correct.sh — the automatic post-scan correction end to end: `facet
 # correct` and `facet merge` offline (summaries, reports, exit codes), and
-# facetd's "auto" pipeline serving byte for byte the model `facet correct`
+# facetd's "correct" pipeline serving byte for byte the model `facet correct`
 # writes, with statistics that call it valid.
 . "$(dirname "$0")/lib.sh" "$@"
 F="$BUILD/facet"
@@ -36,7 +36,7 @@ out=$("$F" merge "$K400" --auto -o "$T/m.json")
 check "merge --auto merges every group it finds" grep -q '"failed":0' <<<"$out"
 
 start_facetd --workers 1 || { not_ok "facetd starts"; finish; exit 1; }
-submit brilliant.scan-k400.json '"auto"'
+submit brilliant.scan-k400.json '"correct"'
 expect_eq "a job with pipeline \"auto\" is accepted" 202 "$CODE"
 wait_job "$ID" 60
 expect_eq "the job succeeds" succeeded "$STATE_OF"
@@ -51,5 +51,5 @@ req GET "/v1/jobs/$ID/stats"
 # "after" is the last member of the statistics, so its "valid" comes last
 expect_eq "the statistics after the correction say valid" '"valid":true' \
     "$(grep -o '"valid":[a-z]*' "$BODY" | tail -n 1)"
-check "the statistics report the auto op" grep -q '"op":"auto"' "$BODY"
+check "the statistics report the correct op" grep -q '"op":"correct"' "$BODY"
 finish

@@ -42,21 +42,21 @@ job "$T/j.json" '["inspect"]' "$T/big-cap.json"
 post_json /v1/jobs "$T/j.json"
 expect_eq "a facet of 70,000 vertices is 422 at submission (FMB1 holds 65,535)" 422 "$CODE"
 check "... naming the facet" grep -q '"path":"model.facets\[0\]","message":"70000 vertices, FMB1 holds at most 65535 per facet"' "$BODY"
-job "$T/j.json" '[{"op":"merge_facets","groups":[[0,1,99]]}]' "$MODELS/notch-cube.json"
+job "$T/j.json" '[{"op":"merge","groups":[[0,1,99]]}]' "$MODELS/notch-cube.json"
 post_json /v1/jobs "$T/j.json"
 expect_eq "a merge group naming facet 99 of a 9-facet model is 422" 422 "$CODE"
 check "... naming the place" grep -q '"path":"pipeline\[0\].groups"' "$BODY"
-job "$T/j.json" '["collapse_clusters",{"op":"move_vertex","vertex":9999,"to":[0,0,0]}]' "$MODELS/notch-cube.json"
+job "$T/j.json" '["collapse",{"op":"move","vertex":9999,"to":[0,0,0]}]' "$MODELS/notch-cube.json"
 post_json /v1/jobs "$T/j.json"
 expect_eq "a vertex index after an op that renumbers is left to the run (202)" 202 "$CODE"
 flat='{"format":"facet-model/1","vertices":[[0,0,0],[1,0,0],[1,1,0],[0,1,0]],"facets":[{"vertices":[0,1,2,3]},{"vertices":[3,2,1,0]}]}'
 printf '%s' "$flat" >"$T/flat.json"
-job "$T/j.json" '"auto"' "$T/flat.json"
+job "$T/j.json" '"correct"' "$T/flat.json"
 post_json /v1/jobs "$T/j.json"
 wait_job "$(jstr id)"
 expect_eq "auto on a zero-volume model fails" failed "$STATE_OF"
 check "... saying the result is not valid and why" grep -q '"error":"pipeline\[2\] (inspect): the result is not a valid polyhedron: ' "$BODY"
-job "$T/j.json" '["inspect","auto",{"op":"inspect","keep_invalid":true}]' "$T/flat.json"
+job "$T/j.json" '["inspect","correct",{"op":"inspect","keep_invalid":true}]' "$T/flat.json"
 post_json /v1/jobs "$T/j.json"
 wait_job "$(jstr id)"
 expect_eq "... and succeeds when its last inspect keeps invalid results" succeeded "$STATE_OF"
@@ -99,7 +99,7 @@ check "... saying so" grep -q 'inspect-timeout' "$T/i1"
 
 # ---- 6. JobTimeout and DELETE on a running correction
 prism 59998 >"$T/p60k.json"
-job "$T/j60.json" '"auto"' "$T/p60k.json"
+job "$T/j60.json" '"correct"' "$T/p60k.json"
 post_json /v1/jobs "$T/j60.json"
 wait_job "$(jstr id)" 60
 took=$(( $(ms_of "$(jstr finished)") - $(ms_of "$(jstr started)") ))
@@ -108,7 +108,7 @@ check "... within 1 s of the limit (ran $took ms)" test "$took" -le $((3000 * SL
 prism 9998 >"$T/p10k.json"
 stop_facetd
 start_facetd --no-scanners --workers 1 || { not_ok "facetd restarts"; finish; exit 1; }
-job "$T/j10.json" '"auto"' "$T/p10k.json"
+job "$T/j10.json" '"correct"' "$T/p10k.json"
 post_json /v1/jobs "$T/j10.json"
 id=$(jstr id)
 for k in $(seq 50); do

@@ -23,7 +23,7 @@ mkdir -p "$STATE"
 STATE_KEEP=1 start_facetd --no-scanners --workers 1 || {
     not_ok "facetd starts"; finish; exit 1; }
 check "start-up made the disk reserve" test -s "$STATE/facetd.reserve"
-f=$(body brilliant.scan-k800.json '"auto"')
+f=$(body brilliant.scan-k800.json '"correct"')
 ids=()
 for i in 1 2 3 4; do post_json /v1/jobs "$f"; ids+=("$(jstr id)"); done
 dd if=/dev/zero of="$MNT/fill" bs=64k 2>/dev/null

@@ -10,7 +10,7 @@
 start_facetd || { not_ok "facetd starts"; finish; exit 1; }
 
 req GET /v1/version
-for op in cut move_vertex inversion_stats; do
+for op in cut move inversion_stats; do
     check "/v1/version lists $op" grep -q "\"$op\"" "$BODY"
 done
 
@@ -29,16 +29,16 @@ req GET "/v1/jobs/$ID/model?format=obj"
 expect_eq "the result has 6 facets" 6 "$(grep -c '^f ' "$BODY")"
 
 # move_vertex on the clean stone: a small move converges and is logged
-submit brilliant.truth.json '[{"op":"move_vertex","vertex":100,"by":[1e-6,-1e-6,5e-7],"schedule":"scaled"}]'
+submit brilliant.truth.json '[{"op":"move","vertex":100,"by":[1e-6,-1e-6,5e-7],"schedule":"scaled"}]'
 wait_job "$ID"
-expect_eq "a move_vertex job succeeds" succeeded "$STATE_OF"
+expect_eq "a move job succeeds" succeeded "$STATE_OF"
 req GET "/v1/jobs/$ID/stats"
 check "its report has the result" grep -q '"result":{[^}]*"converged":true' "$BODY"
 check "and the iteration log" grep -q '"log":\[{"step":0' "$BODY"
-submit brilliant.truth.json '[{"op":"move_vertex","vertex":9999,"to":[0,0,0]}]'
+submit brilliant.truth.json '[{"op":"move","vertex":9999,"to":[0,0,0]}]'
 expect_eq "a vertex out of range is refused at submission" 422 "$CODE"
 check "naming the op and the vertex" grep -q '"path":"pipeline\[0\].vertex","message":"9999 out of range (238 vertices)"' "$BODY"
-submit brilliant.truth.json '[{"op":"move_vertex","vertex":5,"by":[0.01,0,0],"max_steps":2}]'
+submit brilliant.truth.json '[{"op":"move","vertex":5,"by":[0.01,0,0],"max_steps":2}]'
 wait_job "$ID"
 expect_eq "a move that cannot converge fails the job" failed "$STATE_OF"
 check "saying why" grep -q 'does not give a valid polyhedron (no convergence after 2 steps' "$BODY"
@@ -61,9 +61,9 @@ f=$(body notch-cube.json '[{"op":"cut"}]')
 post_json /v1/jobs "$f"
 expect_eq "a cut without a plane is 422" 422 "$CODE"
 check "naming pipeline[0].plane" grep -q '"path":"pipeline\[0\].plane"' "$BODY"
-f=$(body notch-cube.json '[{"op":"move_vertex","vertex":1,"to":[0,0,0],"by":[1,0,0]}]')
+f=$(body notch-cube.json '[{"op":"move","vertex":1,"to":[0,0,0],"by":[1,0,0]}]')
 post_json /v1/jobs "$f"
-expect_eq "move_vertex with both to and by is 422" 422 "$CODE"
+expect_eq "move with both to and by is 422" 422 "$CODE"
 f=$(body notch-cube.json '[{"op":"inversion_stats","samples":0}]')
 post_json /v1/jobs "$f"
 expect_eq "inversion_stats with 0 samples is 422" 422 "$CODE"

@@ -241,33 +241,4 @@ check "facetd stops cleanly" test "${FACETD_STATUS:-1}" = 0
 check "no sanitizer report" test $? -eq 0
 mock_stop
 
-# --- pipelines this build cannot run ------------------------------------------
-missing=""
-for op in collapse_clusters merge_facets cut move_vertex inversion_stats \
-          triangulate fill_holes stitch; do
-    if ! "$BUILD/facet" run <(echo "[\"$op\"]") "$MODELS/notch-cube.json" \
-            -o "$T/op.json" 2>&1 | grep -q 'not available in this build'; then
-        continue
-    fi
-    missing=$op
-    break
-done
-if [ -n "$missing" ]; then
-    mkdir -p "$T/refuse"
-    timeout 10 "$FACETD" --listen 127.0.0.1:0 --state-dir "$T/refuse" \
-        --scanner-pipeline "$missing" >"$T/refuse.log" 2>&1
-    st=$?
-    check "a configured scanner pipeline with an op this build lacks ($missing) stops facetd at start (exit 2)" \
-        test $st = 2 -a -n "$(grep "Pipeline=$missing: .*not available" "$T/refuse.log")"
-else
-    skip "every op is in this build"
-fi
-if "$BUILD/facet" run <(echo '"auto"') "$MODELS/notch-cube.json" -o "$T/op.json" 2>/dev/null; then
-    skip "the default pipeline auto is in this build"
-else
-    start_facetd
-    req GET /v1/scanners
-    check "the default pipeline (auto) missing from the build keeps only the intake off" \
-        test "$(jq -r '.enabled' "$BODY")" = false -a -n "$(jq -r '.disabled_reason' "$BODY" | grep 'Pipeline=auto')"
-fi
 finish

@@ -19,13 +19,16 @@ fi
 for f in bin/facetd bin/facet lib/systemd/system/facetd.service \
          lib/systemd/system/facetd.socket lib/tmpfiles.d/facetd.conf \
          lib/sysusers.d/facetd.conf share/doc/facetd/facetd.conf.example \
-         lib/udev/rules.d/70-facetd-scanners.rules; do
+         lib/udev/rules.d/70-facetd-scanners.rules share/man/man1/facet.1 \
+         share/man/man5/facetd.conf.5 share/man/man8/facetd.8 \
+         share/doc/facetd/docs/README.md; do
     check "installed: $f" test -s "$root/usr/$f"
 done
 check "the unit runs the installed facetd" \
     grep -qx "ExecStart=$root/usr/bin/facetd" "$root/usr/lib/systemd/system/facetd.service"
 if command -v systemd-analyze >/dev/null; then
-    if systemd-analyze verify "$root/usr/lib/systemd/system/facetd.service" \
+    # its man: links are looked up in the installed pages
+    if MANPATH="$root/usr/share/man" systemd-analyze verify "$root/usr/lib/systemd/system/facetd.service" \
         "$root/usr/lib/systemd/system/facetd.socket" >"$T/verify" 2>&1; then
         ok "systemd-analyze verify accepts the units"
     else

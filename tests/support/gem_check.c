@@ -40,7 +40,7 @@ geo_poly *gem_triangulate(const geo_frep *f, uint32_t q, geo_tri_report *rep,
     o.quad_levels = q;
     o.binary_levels = q + 1;
     geo_poly *m = NULL;
-    if (geo_frep_triangulate(f, &o, NULL, &m, rep, err) != 0)
+    if (geo_triangulate(f, &o, NULL, &m, rep, err) != 0)
         return geo_poly_free(m);
     return m;
 }

@@ -2,7 +2,7 @@
  * (docs/kernels/correct.md): simulated stones of several cuts and
  * seeds scanned with K views (tests/support/stone_sim.h; silhouette noise
  * --sim-noise, 1 µm by default), each scan
- * corrected by geo_correct_auto, and the result compared with the stone.
+ * corrected by geo_correct, and the result compared with the stone.
  *
  *   correct_table [--cuts brilliant,princess,emerald,jubilee,jubilee96]
  *                 [--seeds 1,2,3]
@@ -50,7 +50,7 @@ static void row(const char *cut, const char *seed, unsigned k,
     geo_correct_report rep;
     geo_err err;
     double t0 = now();
-    int r = p ? geo_correct_auto(p, o, NULL, &rep, &err) : -1;
+    int r = p ? geo_correct(p, o, NULL, &rep, &err) : -1;
     double ms = (now() - t0) * 1e3;
     t->rows++;
     if (r < 0) {

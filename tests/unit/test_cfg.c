@@ -181,7 +181,7 @@ static void test_scanner_lines_replace_the_default_list_then_add(
     assert_string_equal(c.scanner[0], "1d50:6150:bulk");
     assert_string_equal(c.scanner[1], "1d50:6151:hid");
     assert_false(c.scanner_set);
-    assert_string_equal(c.scanner_pipeline, "auto");
+    assert_string_equal(c.scanner_pipeline, "correct");
     assert_false(c.scanner_pipeline_set);
     char path[256];
     snprintf(path, sizeof path, "%s",

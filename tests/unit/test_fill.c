@@ -43,7 +43,7 @@ static void test_missing_planar_facets_come_back_as_one_facet_each(void **s)
     geo_poly *truth = load("brilliant.truth.json");
     uint32_t nv = p->nverts, nf = p->nfacets;
     geo_mesh_fill_report rep;
-    assert_int_equal(geo_fill_mesh(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
     assert_int_equal(rep.nloops, 2);
     assert_int_equal(rep.nplanar, 2);
     assert_int_equal(rep.nopen, 0);
@@ -141,7 +141,7 @@ static void test_planar_hole_sharing_two_edges_with_a_facet_is_triangulated(
     (void)s;
     geo_poly *p = block_with_a_triangle_in_its_open_top();
     geo_mesh_fill_report rep;
-    assert_int_equal(geo_fill_mesh(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
     assert_int_equal(rep.nloops, 1);
     assert_int_equal(rep.nfilled, 1);
     assert_int_equal(rep.holes[0].status, GEO_HOLE_FILLED);
@@ -172,7 +172,7 @@ static void test_holes_touching_at_a_vertex_are_two_loops(void **s)
     free(ls), free(lc);
     geo_topo_free(t);
     geo_mesh_fill_report rep;
-    assert_int_equal(geo_fill_mesh(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
     assert_int_equal(rep.nloops, 2);
     assert_int_equal(rep.nplanar, 2);
     assert_int_equal(p->nfacets, nf + 2);
@@ -204,7 +204,7 @@ static void test_large_curved_hole_filled_validly_at_mesh_density(void **s)
     cut_cap(p, 0.5);
     uint32_t nv0 = p->nverts;
     geo_mesh_fill_report rep;
-    assert_int_equal(geo_fill_mesh(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
     assert_int_equal(rep.nloops, 1);
     assert_int_equal(rep.nfilled, 1);
     const geo_mesh_hole *h = &rep.holes[0];
@@ -246,7 +246,7 @@ static void test_unfillable_hole_stays_open_with_reason(void **s)
     geo_poly_free(b);
     uint32_t nv = p->nverts, nf = p->nfacets;
     geo_mesh_fill_report rep;
-    assert_int_equal(geo_fill_mesh(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
     assert_int_equal(rep.nloops, 1);
     assert_int_equal(rep.nfilled, 0);
     assert_int_equal(rep.nopen, 1);
@@ -292,7 +292,7 @@ static void test_every_weight_fills_a_nonplanar_hole_validly(void **s)
             o.fill.weight = ws[wi];
             o.fill.refine = refine;
             geo_mesh_fill_report rep;
-            assert_int_equal(geo_fill_mesh(p, &o, NULL, &rep, NULL), 0);
+            assert_int_equal(geo_fill(p, &o, NULL, &rep, NULL), 0);
             assert_int_equal(rep.nfilled, 1);
             assert_int_equal(rep.nplanar, 0);
             assert_int_equal(rep.holes[0].status, GEO_HOLE_FILLED);
@@ -310,7 +310,7 @@ static void test_closed_mesh_is_left_alone(void **s)
     geo_poly *p = load("brilliant.truth.json");
     geo_poly *q = geo_poly_copy(p);
     geo_mesh_fill_report rep;
-    assert_int_equal(geo_fill_mesh(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
     assert_int_equal(rep.nloops, 0);
     assert_int_equal(p->nfacets, q->nfacets);
     assert_memory_equal(p->fidx, q->fidx,

@@ -52,7 +52,7 @@ static void test_box_hole_closes_with_two_triangles(void **state)
     bool keep[6] = {true, true, true, true, true, false};
     assert_int_equal(geo_poly_compact(p, keep, NULL, NULL), 0);
     geo_fill_stats st;
-    assert_int_equal(geo_fill_holes(p, NULL, NULL, &st, NULL), 0);
+    assert_int_equal(geo_fill_loops(p, NULL, NULL, &st, NULL), 0);
     assert_int_equal(st.nholes, 1);
     assert_int_equal(st.holes[0].status, GEO_HOLE_FILLED);
     assert_int_equal(st.holes[0].nverts, 4);
@@ -84,7 +84,7 @@ static void test_sphere_cap_refined_and_faired_stays_valid(void **state)
         geo_fill_opts_default(&o);
         o.fair = modes[mi];
         geo_fill_stats st;
-        assert_int_equal(geo_fill_holes(p, &o, NULL, &st, NULL), 0);
+        assert_int_equal(geo_fill_loops(p, &o, NULL, &st, NULL), 0);
         assert_int_equal(st.nfilled, 1);
         /* the cap is much larger than the surrounding triangles: the
          * patch gets interior vertices, with edges like those around */
@@ -228,7 +228,7 @@ static void test_patch_has_least_weight_of_all_fold_free_triangulations(
             o.refine = false;
             o.fair = GEO_FAIR_NONE;
             geo_fill_stats st;
-            assert_int_equal(geo_fill_holes(p, &o, NULL, &st, NULL), 0);
+            assert_int_equal(geo_fill_loops(p, &o, NULL, &st, NULL), 0);
             assert_int_equal(st.holes[0].status, GEO_HOLE_FILLED);
             assert_int_equal(st.holes[0].ntriangles, 6);
             assert_true(fabs(st.holes[0].weight - want) <= 1e-12 * want);
@@ -294,7 +294,7 @@ static void test_jagged_loop_cut_by_bridges_is_closed_without_folds(
     o.refine = false;
     o.fair = GEO_FAIR_NONE;
     geo_fill_stats st;
-    assert_int_equal(geo_fill_holes(p, &o, NULL, &st, NULL), 0);
+    assert_int_equal(geo_fill_loops(p, &o, NULL, &st, NULL), 0);
     assert_int_equal(st.holes[0].status, GEO_HOLE_FILLED);
     assert_true(st.holes[0].nbridges >= 4);
     for (uint32_t f = nf0; f < p->nfacets; f++) {
@@ -321,7 +321,7 @@ static void test_bridged_hole_is_faired_into_a_dome(void **state)
     geo_fill_opts_default(&o);
     o.max_dp_vertices = 40;
     geo_fill_stats st;
-    assert_int_equal(geo_fill_holes(p, &o, NULL, &st, NULL), 0);
+    assert_int_equal(geo_fill_loops(p, &o, NULL, &st, NULL), 0);
     assert_int_equal(st.holes[0].status, GEO_HOLE_FILLED);
     assert_true(st.holes[0].nbridges >= 4);
     double top = 0, dev = 0;
@@ -347,7 +347,7 @@ static void test_long_loop_is_cut_by_bridges(void **state)
     o.refine = false;
     o.fair = GEO_FAIR_NONE;
     geo_fill_stats st;
-    assert_int_equal(geo_fill_holes(p, &o, NULL, &st, NULL), 0);
+    assert_int_equal(geo_fill_loops(p, &o, NULL, &st, NULL), 0);
     assert_int_equal(st.holes[0].status, GEO_HOLE_FILLED);
     assert_true(st.holes[0].nbridges >= 8);
     assert_int_equal(st.holes[0].ntriangles, 398);
@@ -366,7 +366,7 @@ static void test_too_large_hole_is_left_open_with_reason(void **state)
     geo_fill_opts_default(&o);
     o.max_hole_vertices = 20;
     geo_fill_stats st;
-    assert_int_equal(geo_fill_holes(p, &o, NULL, &st, NULL), 0);
+    assert_int_equal(geo_fill_loops(p, &o, NULL, &st, NULL), 0);
     assert_int_equal(st.nholes, 1);
     assert_int_equal(st.nopen, 1);
     assert_int_equal(st.holes[0].status, GEO_HOLE_TOO_LARGE);
@@ -465,7 +465,7 @@ static void test_cancel_leaves_the_mesh_unchanged(void **state)
     geo_ctx ctx = {.progress = cancel_now};
     geo_err err = {{0}};
     geo_fill_stats st;
-    assert_int_equal(geo_fill_holes(p, NULL, &ctx, &st, &err), -ECANCELED);
+    assert_int_equal(geo_fill_loops(p, NULL, &ctx, &st, &err), -ECANCELED);
     assert_int_equal(p->nfacets, copy->nfacets);
     assert_int_equal(p->nverts, copy->nverts);
     assert_memory_equal(p->fidx, copy->fidx,

@@ -100,7 +100,7 @@ static void merge_n(uint32_t n)
     geo_vnormalize(nsum);
     geo_merge_report rep = {0};
     geo_err err = {{0}};
-    int r = geo_merge_facets(p, g, n, NULL, NULL, &rep, &err);
+    int r = geo_merge(p, g, n, NULL, NULL, &rep, &err);
     if (r != 0)
         fail_msg("merging %u facets: %s", n, err.msg);
     assert_int_equal(rep.ngroups, 1);
@@ -146,7 +146,7 @@ static void test_group_bordered_by_non_convex_facets_merges(void **state)
     uint32_t g[2] = {0, 1};
     geo_merge_report rep = {0};
     geo_err err = {{0}};
-    int r = geo_merge_facets(p, g, 2, NULL, NULL, &rep, &err);
+    int r = geo_merge(p, g, 2, NULL, NULL, &rep, &err);
     if (r != 0)
         fail_msg("%s", err.msg);
     /* the two dip vertices were left in the merged facet and an L only:
@@ -268,7 +268,7 @@ static void test_unmergeable_group_leaves_the_model_untouched(void **state)
     geo_topo_free(t);
     geo_merge_report rep = {0};
     geo_err err = {{0}};
-    assert_int_equal(geo_merge_facets(p, g, 2, NULL, NULL, &rep, &err), -EINVAL);
+    assert_int_equal(geo_merge(p, g, 2, NULL, NULL, &rep, &err), -EINVAL);
     assert_non_null(strstr(err.msg, "simply connected"));
     assert_int_equal(rep.groups[0].status, -EINVAL);
     char why[256];
@@ -276,9 +276,9 @@ static void test_unmergeable_group_leaves_the_model_untouched(void **state)
         fail_msg("model changed: %s", why);
     /* a facet index out of range, a facet listed twice */
     uint32_t bad[2] = {3, p->nfacets};
-    assert_int_equal(geo_merge_facets(p, bad, 2, NULL, NULL, NULL, &err), -EINVAL);
+    assert_int_equal(geo_merge(p, bad, 2, NULL, NULL, NULL, &err), -EINVAL);
     uint32_t twice[2] = {3, 3};
-    assert_int_equal(geo_merge_facets(p, twice, 2, NULL, NULL, NULL, &err), -EINVAL);
+    assert_int_equal(geo_merge(p, twice, 2, NULL, NULL, NULL, &err), -EINVAL);
     assert_non_null(strstr(err.msg, "listed twice"));
     assert_true(tu_poly_same(orig, p, 0, 0, why, sizeof why));
     geo_merge_report_clear(&rep);
@@ -296,7 +296,7 @@ static void test_correct_auto_recovers_the_stone_from_its_scan(void **state)
     geo_poly *scan = geo_poly_copy(p);
     geo_correct_report rep;
     geo_err err = {{0}};
-    int r = geo_correct_auto(p, NULL, NULL, &rep, &err);
+    int r = geo_correct(p, NULL, NULL, &rep, &err);
     if (r != 0)
         fail_msg("%s", err.msg);
     assert_true(rep.after.valid);
@@ -356,7 +356,7 @@ static void test_view_grid_reads_the_scanners_step_off_a_scan(void **state)
     /* a model that is not a raw scan shows no grid */
     geo_correct_report rep;
     geo_err err = {{0}};
-    assert_int_equal(geo_correct_auto(scan, NULL, NULL, &rep, &err), 0);
+    assert_int_equal(geo_correct(scan, NULL, NULL, &rep, &err), 0);
     assert_int_equal(rep.views, 100);
     assert_true(rep.noise > 0);
     geo_correct_report_clear(&rep);
@@ -399,7 +399,7 @@ static void check_scan_correction(enum sim_cut cut, uint64_t seed, uint32_t k,
     geo_poly *p = geo_poly_copy(scan);
     geo_correct_report rep;
     geo_err err = {{0}};
-    assert_int_equal(geo_correct_auto(p, NULL, NULL, &rep, &err), 0);
+    assert_int_equal(geo_correct(p, NULL, NULL, &rep, &err), 0);
     assert_true(rep.after.valid);
     if (strict) {
         assert_int_equal(rep.views, k);
@@ -514,7 +514,7 @@ static void test_collapse_joins_vertices_of_short_edges(void **state)
     o.radius = 0.002;
     geo_collapse_report rep;
     geo_err err = {{0}};
-    assert_int_equal(geo_collapse_clusters(p, &o, NULL, &rep, &err), 0);
+    assert_int_equal(geo_collapse(p, &o, NULL, &rep, &err), 0);
     assert_true(rep.clusters >= 1);
     assert_true(rep.collapsed >= 1);
     assert_int_equal(rep.collapsed + rep.rolled_back, rep.clusters);
@@ -551,7 +551,7 @@ static void test_report_json_has_the_documented_keys(void **state)
     (void)state;
     geo_poly *p = tu_load_model("brilliant.scan-k100.json");
     geo_correct_report rep;
-    assert_int_equal(geo_correct_auto(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(geo_correct(p, NULL, NULL, &rep, NULL), 0);
     json_t *j = proto_correct_report_to_json(&rep);
     assert_non_null(j);
     const char *keys[] = {"vertices_before", "facets_after", "hausdorff",
@@ -591,14 +591,14 @@ static void test_correction_of_a_torus_keeps_its_volume(void **state)
     to.binary_levels = 7;
     geo_poly *m = NULL;
     geo_tri_report tr;
-    if (geo_frep_triangulate(f, &to, NULL, &m, &tr, &err) != 0)
+    if (geo_triangulate(f, &to, NULL, &m, &tr, &err) != 0)
         fail_msg("triangulate: %s", err.msg);
     geo_tri_report_clear(&tr);
     geo_frep_free(f);
     double before = geo_poly_volume(m);
     uint32_t facets = m->nfacets;
     geo_correct_report rep;
-    assert_int_equal(geo_correct_auto(m, NULL, NULL, &rep, &err), 0);
+    assert_int_equal(geo_correct(m, NULL, NULL, &rep, &err), 0);
     assert_true(rep.merge.merged > 0);
     assert_true(m->nfacets < facets);
     double after = geo_poly_volume(m);

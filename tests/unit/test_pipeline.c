@@ -1,5 +1,5 @@
 /* test_pipeline.c — the job pipeline parser accepts both op forms and
- * "auto", fills defaults, rejects unknown ops and parameters and bad
+ * "correct", fills defaults, rejects unknown ops and parameters and bad
  * values with messages naming the place, and its canonical JSON parses
  * back to the same pipeline. */
 #include "testutil.h"
@@ -35,12 +35,12 @@ static void test_names_and_objects_parse_with_defaults(void **state)
     (void)state;
     proto_pipeline p;
     geo_err err = {{0}};
-    assert_int_equal(parse("[\"inspect\", {\"op\":\"merge_facets\","
-                           "\"max_angle_deg\":0.5}, {\"op\":\"collapse_clusters\"}]",
+    assert_int_equal(parse("[\"inspect\", {\"op\":\"merge\","
+                           "\"max_angle_deg\":0.5}, {\"op\":\"collapse\"}]",
                            &p, &err), 0);
     assert_int_equal(p.nops, 3);
     assert_int_equal(p.ops[0].kind, PROTO_OP_INSPECT);
-    assert_int_equal(p.ops[1].kind, PROTO_OP_MERGE_FACETS);
+    assert_int_equal(p.ops[1].kind, PROTO_OP_MERGE);
     assert_true(p.ops[1].u.merge.max_angle_deg == 0.5);
     /* 0: relative to the model's size (lib/correct/merge.h, lib/correct/clusters.h) */
     assert_true(p.ops[1].u.merge.max_deviation == 0);
@@ -49,23 +49,65 @@ static void test_names_and_objects_parse_with_defaults(void **state)
     proto_pipeline_free(&p);
 }
 
-static void test_auto_is_the_post_scan_correction(void **state)
+static void test_correct_is_the_post_scan_correction(void **state)
 {
     (void)state;
     proto_pipeline p;
-    assert_int_equal(parse("\"auto\"", &p, NULL), 0);
+    assert_int_equal(parse("\"correct\"", &p, NULL), 0);
     assert_int_equal(p.nops, 3);
-    proto_op_kind want[] = {PROTO_OP_INSPECT, PROTO_OP_AUTO, PROTO_OP_INSPECT};
+    proto_op_kind want[] = {PROTO_OP_INSPECT, PROTO_OP_CORRECT, PROTO_OP_INSPECT};
     for (int i = 0; i < 3; i++)
         assert_int_equal(p.ops[i].kind, want[i]);
     assert_true(p.ops[1].u.correct.max_angle_deg == 60);
     proto_pipeline_free(&p);
 }
 
+/* The names of the last release still parse, to the current op, and are
+ * reported once each; the canonical JSON has the current names. */
+static void test_deprecated_names_are_aliases(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *old, *now;
+    } names[] = {{"auto", "correct"}, {"merge_facets", "merge"},
+                 {"fill_holes", "fill"}, {"move_vertex", "move"},
+                 {"collapse_clusters", "collapse"},
+                 {"inversion-stats", "inversion_stats"}};
+    for (size_t i = 0; i < sizeof names / sizeof *names; i++)
+        assert_string_equal(proto_op_canonical(names[i].old), names[i].now);
+    assert_string_equal(proto_op_canonical("merge"), "merge");
+    assert_null(proto_op_canonical("flatten"));
+    proto_pipeline p;
+    assert_int_equal(parse("[\"inspect\", \"merge_facets\", {\"op\":\"fill_holes\"}, "
+                           "\"merge_facets\"]", &p, NULL), 0);
+    assert_int_equal(p.ops[1].kind, PROTO_OP_MERGE);
+    assert_int_equal(p.ops[2].kind, PROTO_OP_FILL);
+    char msg[256];
+    assert_int_equal(proto_pipeline_deprecations(&p, msg, sizeof msg), 2);
+    assert_string_equal(msg, "op 'merge_facets' is deprecated: use 'merge'; "
+                             "op 'fill_holes' is deprecated: use 'fill'");
+    json_t *j = proto_pipeline_to_json(&p);
+    char *text = json_dumps(j, JSON_COMPACT);
+    assert_non_null(strstr(text, "{\"op\":\"merge\","));
+    assert_null(strstr(text, "merge_facets"));
+    free(text);
+    json_decref(j);
+    proto_pipeline_free(&p);
+    assert_int_equal(parse("\"auto\"", &p, NULL), 0);
+    assert_int_equal(p.ops[1].kind, PROTO_OP_CORRECT);
+    assert_int_equal(proto_pipeline_deprecations(&p, msg, sizeof msg), 1);
+    assert_string_equal(msg, "op 'auto' is deprecated: use 'correct'");
+    proto_pipeline_free(&p);
+    assert_int_equal(parse("\"correct\"", &p, NULL), 0);
+    assert_int_equal(proto_pipeline_deprecations(&p, msg, sizeof msg), 0);
+    assert_string_equal(msg, "");
+    proto_pipeline_free(&p);
+}
+
 static void test_errors_name_the_place(void **state)
 {
     (void)state;
-    expect_error("[\"inspect\", \"inspect\", {\"op\":\"merge_facets\","
+    expect_error("[\"inspect\", \"inspect\", {\"op\":\"merge\","
                  "\"max_angle_deg\":\"1\"}]",
                  "pipeline[2].max_angle_deg: expected a number");
     expect_error("[\"flatten\"]", "pipeline[0]: unknown operation 'flatten'");
@@ -77,19 +119,19 @@ static void test_errors_name_the_place(void **state)
                  "with a finite length");
     expect_error("[{\"op\":\"cut\",\"plane\":[0,0,1]}]",
                  "pipeline[0].plane: expected an array of 4 numbers");
-    expect_error("[{\"op\":\"move_vertex\",\"vertex\":3,\"to\":[0,0,0],"
+    expect_error("[{\"op\":\"move\",\"vertex\":3,\"to\":[0,0,0],"
                  "\"by\":[1,0,0]}]",
                  "pipeline[0]: exactly one of \"to\" and \"by\" is required");
-    expect_error("[{\"op\":\"move_vertex\",\"vertex\":-1,\"to\":[0,0,0]}]",
+    expect_error("[{\"op\":\"move\",\"vertex\":-1,\"to\":[0,0,0]}]",
                  "pipeline[0].vertex: -1 out of range [0, 4294967294]");
-    expect_error("[{\"op\":\"move_vertex\",\"vertex\":1,\"to\":[0,0,0],"
+    expect_error("[{\"op\":\"move\",\"vertex\":1,\"to\":[0,0,0],"
                  "\"schedule\":\"fast\"}]",
                  "pipeline[0].schedule: expected one of \"local-exp\", "
                  "\"scaled\", \"global-exp\"");
-    expect_error("[{\"op\":\"merge_facets\",\"groups\":[[1]]}]",
+    expect_error("[{\"op\":\"merge\",\"groups\":[[1]]}]",
                  "pipeline[0].groups[0]: expected an array of at least 2 "
                  "facet indices");
-    expect_error("[{\"op\":\"merge_facets\",\"max_angle_deg\":0}]",
+    expect_error("[{\"op\":\"merge\",\"max_angle_deg\":0}]",
                  "pipeline[0].max_angle_deg: 0 out of range (0, 90]");
     expect_error("[{\"op\":\"inversion_stats\",\"magnitudes\":[1,0]}]",
                  "pipeline[0].magnitudes[1]: expected a positive number");
@@ -98,13 +140,13 @@ static void test_errors_name_the_place(void **state)
     expect_error("[{\"op\":\"triangulate\",\"fair\":true}]",
                  "pipeline[0].fair: expected one of \"none\", \"uniform\", "
                  "\"length\"");
-    expect_error("[{\"op\":\"fill_holes\",\"refine\":\"yes\"}]",
+    expect_error("[{\"op\":\"fill\",\"refine\":\"yes\"}]",
                  "pipeline[0].refine: expected true or false");
     expect_error("[{\"radius\":1}]",
                  "pipeline[0].op: required (the operation's name)");
     expect_error("[]", "pipeline: expected at least one operation");
     expect_error("\"manual\"",
-                 "pipeline: expected an array of operations or \"auto\"");
+                 "pipeline: expected an array of operations or \"correct\"");
     expect_error("[42]", "pipeline[0]: expected an operation name or object");
 }
 
@@ -140,15 +182,15 @@ static void test_canonical_json_round_trips(void **state)
 {
     (void)state;
     const char *text =
-        "[\"inspect\", {\"op\":\"merge_facets\",\"groups\":[[1,2],[5,6,7]]},"
-        "{\"op\":\"move_vertex\",\"vertex\":4,\"by\":[0.1,0,0],"
+        "[\"inspect\", {\"op\":\"merge\",\"groups\":[[1,2],[5,6,7]]},"
+        "{\"op\":\"move\",\"vertex\":4,\"by\":[0.1,0,0],"
         "\"schedule\":\"scaled\",\"max_steps\":50},"
         "{\"op\":\"inversion_stats\",\"samples\":10,\"magnitudes\":[1,0.1],"
         "\"seed\":7}, {\"op\":\"triangulate\",\"fair\":\"none\","
         "\"fill\":\"edges\"},"
-        "{\"op\":\"fill_holes\",\"weight\":\"length\"}, \"stitch\","
+        "{\"op\":\"fill\",\"weight\":\"length\"}, \"stitch\","
         "{\"op\":\"cut\",\"plane\":[1,0,0,0.25]},"
-        "{\"op\":\"collapse_clusters\",\"radius\":0.01}]";
+        "{\"op\":\"collapse\",\"radius\":0.01}]";
     proto_pipeline a, b;
     assert_int_equal(parse(text, &a, NULL), 0);
     json_t *j = proto_pipeline_to_json(&a);
@@ -168,7 +210,7 @@ static void test_canonical_json_round_trips(void **state)
     assert_true(b.ops[4].u.triangulate.fill_edges);
     assert_true(b.ops[4].u.triangulate.sharpen);
     assert_int_equal(b.ops[4].u.triangulate.quad_levels, 9);
-    assert_true(b.ops[5].u.fill_holes.weight_length);
+    assert_true(b.ops[5].u.fill.weight_length);
     free(canon);
     free(canon2);
     json_decref(j);
@@ -185,8 +227,8 @@ static void test_views_are_set_on_a_copy_for_scanner_jobs(void **state)
     (void)state;
     proto_pipeline p, q;
     geo_err err = {{0}};
-    assert_int_equal(parse("[\"inspect\", \"auto\", {\"op\":\"merge_facets\","
-                           "\"views\":250}, \"merge_facets\"]", &p, &err), 0);
+    assert_int_equal(parse("[\"inspect\", \"correct\", {\"op\":\"merge\","
+                           "\"views\":250}, \"merge\"]", &p, &err), 0);
     assert_int_equal(p.ops[1].u.correct.views, 0);
     assert_int_equal(p.ops[2].u.merge.views, 250);
     assert_int_equal(proto_pipeline_copy(&p, &q), 0);
@@ -198,7 +240,7 @@ static void test_views_are_set_on_a_copy_for_scanner_jobs(void **state)
     assert_int_equal(p.ops[3].u.merge.views, 0);
     proto_pipeline_free(&q);
     proto_pipeline_free(&p);
-    expect_error("[{\"op\":\"auto\",\"views\":-1}]",
+    expect_error("[{\"op\":\"correct\",\"views\":-1}]",
                  "pipeline[0].views: -1 out of range [0, 100000]");
 }
 
@@ -206,7 +248,8 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_names_and_objects_parse_with_defaults),
-        cmocka_unit_test(test_auto_is_the_post_scan_correction),
+        cmocka_unit_test(test_correct_is_the_post_scan_correction),
+        cmocka_unit_test(test_deprecated_names_are_aliases),
         cmocka_unit_test(test_errors_name_the_place),
         cmocka_unit_test(test_cut_plane_is_normalised),
         cmocka_unit_test(test_cut_plane_survives_the_round_trip),

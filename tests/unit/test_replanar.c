@@ -70,7 +70,7 @@ static void test_box_corner_move_converges_with_invariants(void **state)
         double t[3] = {1.01, 0.995, 1.002};
         geo_replanar_result res;
         geo_err err = {{0}};
-        assert_int_equal(geo_move_vertex(p, 7, t, (enum geo_replanar_schedule)s,
+        assert_int_equal(geo_move(p, 7, t, (enum geo_replanar_schedule)s,
                                          NULL, NULL, NULL, &res, &err),
                          0);
         assert_true(res.converged);
@@ -100,7 +100,7 @@ static void test_scan_move_converges_with_invariants_all_schedules(
             geo_replanar_opts o;
             geo_replanar_opts_default(&o, (enum geo_replanar_schedule)s);
             o.max_steps = 3000;
-            assert_int_equal(geo_move_vertex(p, verts[i], t,
+            assert_int_equal(geo_move(p, verts[i], t,
                                              (enum geo_replanar_schedule)s,
                                              &o, NULL, NULL, &res, &err),
                              0);
@@ -127,7 +127,7 @@ static void test_local_exp_log_doubles_k_and_halves_eps_per_round(
     move_target(p, 100, 0.01, t);
     geo_replanar_log log = {0};
     geo_replanar_result res;
-    assert_int_equal(geo_move_vertex(p, 100, t, GEO_REPLANAR_LOCAL_EXP, NULL,
+    assert_int_equal(geo_move(p, 100, t, GEO_REPLANAR_LOCAL_EXP, NULL,
                                      NULL, &log, &res, NULL),
                      0);
     assert_true(res.converged);
@@ -169,7 +169,7 @@ static geo_replanar_result local_exp_rounds(enum geo_replanar_fit fit,
     o.fit = fit;
     geo_replanar_log log = {0};
     geo_replanar_result res;
-    assert_int_equal(geo_move_vertex(p, 100, t, GEO_REPLANAR_LOCAL_EXP, &o,
+    assert_int_equal(geo_move(p, 100, t, GEO_REPLANAR_LOCAL_EXP, &o,
                                      NULL, &log, &res, NULL),
                      0);
     assert_true(res.converged);
@@ -234,7 +234,7 @@ static void test_scaled_k_follows_the_chosen_rule(void **state)
         o.scaled_k = (enum geo_replanar_scaled_k)rule;
         geo_replanar_log log = {0};
         geo_replanar_result res;
-        assert_int_equal(geo_move_vertex(p, 100, t, GEO_REPLANAR_SCALED, &o,
+        assert_int_equal(geo_move(p, 100, t, GEO_REPLANAR_SCALED, &o,
                                          NULL, &log, &res, NULL),
                          0);
         assert_true(res.converged);
@@ -274,7 +274,7 @@ static void local_exp_profile(const geo_poly *p, uint32_t *ret_median0,
         o.max_steps = 5000;
         geo_replanar_log log = {0};
         geo_replanar_result res;
-        assert_int_equal(geo_move_vertex(q, v, t, GEO_REPLANAR_LOCAL_EXP, &o,
+        assert_int_equal(geo_move(q, v, t, GEO_REPLANAR_LOCAL_EXP, &o,
                                          NULL, &log, &res, NULL),
                          0);
         assert_true(res.converged);
@@ -304,7 +304,7 @@ static void test_corrected_scan_converges_like_the_paper_raw_scan_does_not(
     geo_poly *raw = tu_load_model("brilliant.scan-k100.json");
     assert_non_null(raw);
     geo_poly *fixed = geo_poly_copy(raw);
-    assert_int_equal(geo_correct_auto(fixed, NULL, NULL, NULL, NULL), 0);
+    assert_int_equal(geo_correct(fixed, NULL, NULL, NULL, NULL), 0);
     assert_true(fixed->nverts < raw->nverts / 4);
     uint32_t raw0, raw_later, fix0, fix_later;
     local_exp_profile(raw, &raw0, &raw_later);
@@ -331,7 +331,7 @@ static void test_global_exp_multiplies_k_each_step_and_keeps_s1_total(
     geo_replanar_opts o;
     geo_replanar_opts_default(&o, GEO_REPLANAR_GLOBAL_EXP);
     o.k_factor = 1.5;
-    assert_int_equal(geo_move_vertex(p, 100, t, GEO_REPLANAR_GLOBAL_EXP, &o,
+    assert_int_equal(geo_move(p, 100, t, GEO_REPLANAR_GLOBAL_EXP, &o,
                                      NULL, &log, &res, NULL),
                      0);
     assert_true(res.converged);
@@ -363,11 +363,11 @@ static void test_active_region_run_matches_global_run(void **state)
     geo_replanar_opts o;
     geo_replanar_opts_default(&o, GEO_REPLANAR_GLOBAL_EXP);
     geo_replanar_result ra, rb;
-    assert_int_equal(geo_move_vertex(a, 900, t, GEO_REPLANAR_GLOBAL_EXP, &o,
+    assert_int_equal(geo_move(a, 900, t, GEO_REPLANAR_GLOBAL_EXP, &o,
                                      NULL, NULL, &ra, NULL),
                      0);
     o.wake_tol = 0; /* every rounding-level change wakes: all facets */
-    assert_int_equal(geo_move_vertex(b, 900, t, GEO_REPLANAR_GLOBAL_EXP, &o,
+    assert_int_equal(geo_move(b, 900, t, GEO_REPLANAR_GLOBAL_EXP, &o,
                                      NULL, NULL, &rb, NULL),
                      0);
     assert_true(ra.converged && rb.converged);
@@ -442,12 +442,12 @@ static void test_bad_input_rejected_naming_the_place(void **state)
     geo_replanar_result res;
     geo_err err = {{0}};
     double t[3] = {0, 0, 0};
-    assert_int_equal(geo_move_vertex(p, 8, t, GEO_REPLANAR_LOCAL_EXP, NULL,
+    assert_int_equal(geo_move(p, 8, t, GEO_REPLANAR_LOCAL_EXP, NULL,
                                      NULL, NULL, &res, &err),
                      -EINVAL);
     assert_non_null(strstr(err.msg, "vertex 8"));
     t[1] = NAN;
-    assert_int_equal(geo_move_vertex(p, 1, t, GEO_REPLANAR_LOCAL_EXP, NULL,
+    assert_int_equal(geo_move(p, 1, t, GEO_REPLANAR_LOCAL_EXP, NULL,
                                      NULL, NULL, &res, &err),
                      -EINVAL);
     assert_non_null(strstr(err.msg, "targets[0]"));
@@ -514,7 +514,7 @@ static void test_budget_exhausted_reports_not_converged(void **state)
     o.max_steps = 3;
     geo_replanar_log log = {0};
     geo_replanar_result res;
-    assert_int_equal(geo_move_vertex(p, 700, t, GEO_REPLANAR_LOCAL_EXP, &o,
+    assert_int_equal(geo_move(p, 700, t, GEO_REPLANAR_LOCAL_EXP, &o,
                                      NULL, &log, &res, NULL),
                      0);
     assert_false(res.converged);
@@ -544,7 +544,7 @@ static void test_vertex_pushed_through_the_stone_is_invalid(void **state)
     o.count_selfint = true;
     geo_replanar_log log = {0};
     geo_replanar_result res;
-    assert_int_equal(geo_move_vertex(p, low, t, GEO_REPLANAR_SCALED, &o,
+    assert_int_equal(geo_move(p, low, t, GEO_REPLANAR_SCALED, &o,
                                      NULL, &log, &res, NULL),
                      0);
     assert_false(geo_replanar_result_valid(&res));
@@ -575,7 +575,7 @@ static void test_cancel_stops_with_ecanceled(void **state)
     geo_ctx ctx = {.progress = cancel_now};
     geo_replanar_result res;
     geo_err err = {{0}};
-    assert_int_equal(geo_move_vertex(p, 10, t, GEO_REPLANAR_LOCAL_EXP, NULL,
+    assert_int_equal(geo_move(p, 10, t, GEO_REPLANAR_LOCAL_EXP, NULL,
                                      &ctx, NULL, &res, &err),
                      -ECANCELED);
     assert_memory_equal(p->verts, copy->verts,

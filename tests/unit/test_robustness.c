@@ -75,7 +75,7 @@ static void test_kernels_accept_models_without_facets(void **state)
         geo_stats_clear(&st);
 
         geo_correct_report cr = {0};
-        assert_int_equal(geo_correct_auto(p, NULL, NULL, &cr, &err), -EINVAL);
+        assert_int_equal(geo_correct(p, NULL, NULL, &cr, &err), -EINVAL);
         assert_non_null(strstr(err.msg, "no facets"));
         geo_correct_report_clear(&cr);
 
@@ -92,14 +92,14 @@ static void test_kernels_accept_models_without_facets(void **state)
         geo_poly_free(out);
 
         geo_mesh_fill_report fr = {0};
-        assert_int_equal(geo_fill_mesh(p, NULL, NULL, &fr, &err), 0);
+        assert_int_equal(geo_fill(p, NULL, NULL, &fr, &err), 0);
         geo_mesh_fill_report_clear(&fr);
 
         if (nv) {
             double to[3] = {0.5, 0.5, 0.5};
             geo_replanar_result res;
             /* a vertex in no facet: a result either way, never a crash */
-            int r = geo_move_vertex(p, 0, to, GEO_REPLANAR_LOCAL_EXP, NULL,
+            int r = geo_move(p, 0, to, GEO_REPLANAR_LOCAL_EXP, NULL,
                                     NULL, NULL, &res, &err);
             assert_true(r == 0 || r == -EINVAL);
         }
@@ -107,7 +107,7 @@ static void test_kernels_accept_models_without_facets(void **state)
     }
 }
 
-/* Callers hand geo_collapse_clusters an uninitialised report: it once
+/* Callers hand geo_collapse an uninitialised report: it once
  * freed whatever the stack held (facetd's worker crashed on every
  * collapse_clusters job whose stack was not zero). */
 static void test_collapse_report_is_output_only(void **state)
@@ -117,7 +117,7 @@ static void test_collapse_report_is_output_only(void **state)
     geo_collapse_report rep;
     memset(&rep, 0xA5, sizeof rep);
     geo_err err = {{0}};
-    assert_int_equal(geo_collapse_clusters(p, NULL, NULL, &rep, &err), 0);
+    assert_int_equal(geo_collapse(p, NULL, NULL, &rep, &err), 0);
     assert_int_equal(rep.vertices_before, p->nverts);
     geo_collapse_report_clear(&rep);
     geo_poly_free(p);

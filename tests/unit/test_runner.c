@@ -20,21 +20,6 @@ static proto_pipeline parse(const char *text)
     return p;
 }
 
-/* Every operation the pipeline parser knows has its kernel in this build
- * (runner_check refuses the others by name and place, as the daemon's
- * 422 for an op that has not landed yet). */
-static void test_every_op_has_a_kernel(void **state)
-{
-    (void)state;
-    for (int k = 0; k < PROTO_OP_COUNT; k++)
-        if (!runner_op_available((proto_op_kind)k))
-            fail_msg("op '%s' has no kernel", proto_op_name((proto_op_kind)k));
-    assert_false(runner_op_available(PROTO_OP_COUNT));
-    proto_pipeline p = parse("[\"inspect\", {\"op\":\"cut\",\"plane\":[0,0,1,0]}]");
-    assert_int_equal(runner_check(&p, NULL), 0);
-    proto_pipeline_free(&p);
-}
-
 typedef struct track {
     double last;
     int calls, decreased;
@@ -108,7 +93,6 @@ static void test_cancel_flag_stops_the_run(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_every_op_has_a_kernel),
         cmocka_unit_test(test_inspect_reports_and_progress_rises),
         cmocka_unit_test(test_cancel_flag_stops_the_run),
     };

@@ -117,7 +117,7 @@ static void test_move_vertex_places_it_and_logs_the_run(void **state)
     memcpy(start, m->verts[100], sizeof start);
     json_t *stats;
     geo_err err = {{0}};
-    int r = run("[\"inspect\", {\"op\":\"move_vertex\",\"vertex\":100,"
+    int r = run("[\"inspect\", {\"op\":\"move\",\"vertex\":100,"
                 "\"by\":[1e-6,-1e-6,5e-7]}, \"inspect\"]", &m, NULL, &stats,
                 &err);
     if (r < 0)
@@ -147,17 +147,17 @@ static void test_move_vertex_errors_name_the_op(void **state)
     geo_poly *m = tu_load_model("brilliant.truth.json");
     json_t *stats;
     geo_err err = {{0}};
-    assert_int_equal(run("[{\"op\":\"move_vertex\",\"vertex\":9999,"
+    assert_int_equal(run("[{\"op\":\"move\",\"vertex\":9999,"
                          "\"to\":[0,0,0]}]", &m, NULL, &stats, &err),
                      -EINVAL);
-    assert_string_equal(err.msg, "pipeline[0] (move_vertex): vertex: 9999 "
+    assert_string_equal(err.msg, "pipeline[0] (move): vertex: 9999 "
                                  "out of range (238 vertices)");
     /* two steps cannot converge: the result is refused, not passed on */
-    assert_int_equal(run("[\"inspect\", {\"op\":\"move_vertex\",\"vertex\":5,"
+    assert_int_equal(run("[\"inspect\", {\"op\":\"move\",\"vertex\":5,"
                          "\"by\":[0.01,0,0],\"max_steps\":2}]", &m, NULL,
                          &stats, &err), -EINVAL);
     assert_null(stats);
-    assert_non_null(strstr(err.msg, "pipeline[1] (move_vertex): moving "
+    assert_non_null(strstr(err.msg, "pipeline[1] (move): moving "
                                     "vertex 5 does not give a valid "
                                     "polyhedron (no convergence after 2 "
                                     "steps"));
@@ -213,12 +213,11 @@ static void test_changes_model_follows_the_ops(void **state)
         {"[\"inspect\"]", false},
         {"[\"inspect\", \"inversion_stats\"]", false},
         {"[\"inspect\", {\"op\":\"cut\",\"plane\":[0,0,1,0]}]", true},
-        {"[{\"op\":\"move_vertex\",\"vertex\":0,\"to\":[0,0,0]}]", true},
+        {"[{\"op\":\"move\",\"vertex\":0,\"to\":[0,0,0]}]", true},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         proto_pipeline p = parse(cases[i].pipeline);
         assert_int_equal(runner_changes_model(&p), cases[i].changes);
-        assert_int_equal(runner_check(&p, NULL), 0);
         proto_pipeline_free(&p);
     }
 }

@@ -39,7 +39,7 @@ static geo_poly *run(const geo_frep *f, uint32_t q, uint32_t b,
     o.binary_levels = b;
     geo_poly *m = NULL;
     geo_err err = {{0}};
-    int rc = geo_frep_triangulate(f, &o, ctx, &m, rep, &err);
+    int rc = geo_triangulate(f, &o, ctx, &m, rep, &err);
     if (rc != 0)
         fail_msg("triangulate: %d %s", rc, err.msg);
     return m;
@@ -228,7 +228,7 @@ static void test_cancel_and_bad_bounds_are_reported(void **state)
     o.binary_levels = 7;
     geo_poly *m = NULL;
     geo_err err = {{0}};
-    assert_int_equal(geo_frep_triangulate(f, &o, &ctx, &m, NULL, &err),
+    assert_int_equal(geo_triangulate(f, &o, &ctx, &m, NULL, &err),
                      -ECANCELED);
     assert_null(m);
     assert_true(calls > 3);
@@ -240,11 +240,11 @@ static void test_cancel_and_bad_bounds_are_reported(void **state)
                         "\"radius\":0.7}}}";
     f = proto_frep_read_mem(tight, strlen(tight), NULL, &err);
     assert_non_null(f);
-    assert_int_equal(geo_frep_triangulate(f, &o, NULL, &m, NULL, &err),
+    assert_int_equal(geo_triangulate(f, &o, NULL, &m, NULL, &err),
                      -EINVAL);
     assert_non_null(strstr(err.msg, "reaches the boundary"));
     o.quad_levels = 0;
-    assert_int_equal(geo_frep_triangulate(f, &o, NULL, &m, NULL, &err),
+    assert_int_equal(geo_triangulate(f, &o, NULL, &m, NULL, &err),
                      -EINVAL);
     assert_non_null(strstr(err.msg, "quad levels"));
     geo_frep_free(f);

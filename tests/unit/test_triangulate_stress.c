@@ -32,7 +32,7 @@ static int run(const geo_frep *f, uint32_t q, geo_poly **m,
     geo_tri_opts_default(&o);
     o.quad_levels = q;
     o.binary_levels = q + 1;
-    return geo_frep_triangulate(f, &o, NULL, m, rep, err);
+    return geo_triangulate(f, &o, NULL, m, rep, err);
 }
 
 /* Closed, manifold, outward, no self-intersections. */
