@@ -236,12 +236,12 @@ static void run_job(slot *sl, job_rec *job)
 
 static void timed_wait(pthread_cond_t *cv, pthread_mutex_t *m, int64_t ms);
 
-/* Records the outcome, retrying with back-off while the store refuses it
- * (a full disk): first the whole outcome, then — a smaller write — the
- * job queued again for a later attempt, alternately, until one lands or
- * the pool stops (then the job stays running in the store, which start-up
- * queues again). Never leaves a job running with no worker behind it
- * while the process lives. */
+/* Records the outcome, retrying with back-off while the store cannot
+ * write (a full disk, a database away): first the whole outcome, then —
+ * a smaller write — the job queued again for a later attempt,
+ * alternately, until one lands or the pool stops (then the job stays
+ * running in the store, which start-up queues again). Never leaves a job
+ * running with no worker behind it while the process lives. */
 static int record_outcome(job_pool *p, const job_rec *job,
                           job_state final, const char *error,
                           const job_outcome *out, bool *ret_requeued,
@@ -261,11 +261,15 @@ static int record_outcome(job_pool *p, const job_rec *job,
                              out->model_len,
                              final == JOB_SUCCEEDED ? out->stats : NULL,
                              out->stats_len, err);
-        if (r == 0) {
-            *ret_requeued = requeue && final != JOB_QUEUED;
+        /* refused for good (the job is no longer this node's: -EBUSY,
+         * -ESTALE, -ENOENT) is an answer, not a store that cannot write */
+        bool transient = r == -ENOSPC || r == -EIO || r == -EAGAIN ||
+                         r == -ENOMEM;
+        if (r == 0 || !transient) {
+            *ret_requeued = r == 0 && requeue && final != JOB_QUEUED;
             if (failing)
                 atomic_fetch_sub(&p->store_failing, 1);
-            return 0;
+            return r;
         }
         if (!failing) {
             failing = true;
