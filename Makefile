@@ -160,7 +160,8 @@ $(B)/tools/%: $(B)/obj/tests/tools/%.o $(call obj,$(TESTLIB_SRCS)) $(ALL_LIBS)
 DEB_PKGS := build-essential pkg-config libjansson-dev libmicrohttpd-dev \
     libsqlite3-dev libsystemd-dev libusb-1.0-0-dev libhidapi-dev libudev-dev \
     libcmocka-dev umockdev libumockdev-dev libglib2.0-dev curl systemd \
-    clang libclang-rt-14-dev wrk jq libpq-dev postgresql-15 man-db groff-base
+    clang libclang-rt-14-dev wrk jq libpq-dev postgresql-15 man-db groff-base \
+    chromium zlib1g-dev
 deps:
 	@sh tests/tools/install-deps.sh $(DEB_PKGS)
 
@@ -175,19 +176,20 @@ bench: all $(BENCH_BINS) $(TOOL_BINS)
 	@sh tests/bench/run.sh $(B)
 
 # Side-by-side benchmarks against CGAL (tests/bench/cgal_*.cpp): built only
-# where libcgal-dev is installed (make bench-deps); CGAL is never linked
-# into facet or facetd.
+# where libcgal-dev is installed (make bench-deps, which adds Eigen for
+# CGAL's fairing); CGAL is never linked into facet or facetd.
 CGAL_SRCS := $(sort $(wildcard tests/bench/cgal_*.cpp))
 CGAL_BINS := $(if $(wildcard /usr/include/CGAL/version.h),\
     $(patsubst tests/bench/%.cpp,$(B)/bench/%,$(CGAL_SRCS)))
 CXX ?= g++
 $(B)/bench/cgal_%: tests/bench/cgal_%.cpp
 	@mkdir -p $(dir $@)
-	$(CXX) -std=c++17 -O2 -DNDEBUG -o $@ $< -lgmp -lmpfr $(LDLIBS_BASE)
+	$(CXX) -std=c++17 -O2 -DNDEBUG -DCGAL_EIGEN3_ENABLED \
+	    -I/usr/include/eigen3 -o $@ $< -lgmp -lmpfr $(LDLIBS_BASE)
 bench: $(CGAL_BINS)
 .PHONY: bench-deps
 bench-deps: deps
-	@sh tests/tools/install-deps.sh libcgal-dev g++
+	@sh tests/tools/install-deps.sh libcgal-dev libeigen3-dev g++
 
 # fsp-mock, the mocked USB scanner harness of the tests (tests/mock/, the
 # only code that links GLib and umockdev): a testbed playing FSP/1 devices.
@@ -265,5 +267,9 @@ clean:
 
 -include $(shell find build -name '*.d' 2>/dev/null)
 
-# The OpenAPI document is embedded with .incbin (no -MMD entry for it).
+# The OpenAPI document and the viewer's files are embedded with .incbin
+# (no -MMD entry for them).
 $(B)/obj/daemon/http_openapi.o: daemon/openapi.json
+$(B)/obj/daemon/http_web.o: $(wildcard daemon/web/*)
+# png_probe reads the browser test's screenshots (zlib's inflate).
+$(B)/tools/png_probe: ALL_LDLIBS += -lz

@@ -164,7 +164,7 @@ static int give_report(json_t *rep, json_t **ret_report, geo_err *err)
     return 0;
 }
 
-/* collapse_clusters (lib/correct/clusters.h): radius 0 means the kernel's
+/* collapse (lib/correct/clusters.h): radius 0 means the kernel's
  * default relative to the model's size. */
 static int run_collapse(const proto_op *op, geo_poly **model,
                         const geo_ctx *ctx, json_t **ret_report,
@@ -183,7 +183,7 @@ static int run_collapse(const proto_op *op, geo_poly **model,
     return give_report(j, ret_report, err);
 }
 
-/* merge_facets (lib/correct/merge.h): the given groups, or automatic ones. */
+/* merge (lib/correct/merge.h): the given groups, or automatic ones. */
 static int run_merge(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
                      json_t **ret_report, json_t *summary, geo_err *err)
 {
@@ -206,9 +206,9 @@ static int run_merge(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
     return give_report(j, ret_report, err);
 }
 
-/* auto (lib/correct/correct.h): the whole post-scan correction, the same call as
+/* correct (lib/correct/correct.h): the whole post-scan correction, the same call as
  * `facet correct`, so the daemon serves the same model. */
-static int run_auto(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
+static int run_correct(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
                     json_t **ret_report, json_t *summary, geo_err *err)
 {
     geo_correct_opts o;
@@ -233,8 +233,38 @@ static int run_auto(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
     return give_report(j, ret_report, err);
 }
 
-/* fill_holes (lib/mesh/fill.h): every hole closed and checked, or reported. */
-static int run_fill_holes(const proto_op *op, geo_poly **model,
+/* 0 when p is a valid closed solid (lib/inspect/stats.h), else -EINVAL
+ * with err "OP: the result is not a valid closed solid: REASONS" — the
+ * ops that close meshes fail their job rather than pass an invalid model
+ * on as a success. */
+static int require_valid(const geo_poly *p, const char *op,
+                         const geo_ctx *ctx, geo_err *err)
+{
+    geo_stats st;
+    int r = geo_inspect(p, NULL, ctx, &st, err);
+    if (r < 0)
+        return r;
+    bool valid = st.valid;
+    json_t *vj = valid ? NULL : proto_validity_to_json(&st);
+    geo_stats_clear(&st);
+    if (valid)
+        return 0;
+    char text[400] = "";
+    size_t n = 0;
+    json_t *why = vj ? json_object_get(vj, "reasons") : NULL;
+    for (size_t i = 0; why && i < json_array_size(why) && n < sizeof text;
+         i++)
+        n += (size_t)snprintf(text + n, sizeof text - n, "%s%s",
+                              i ? "; " : "",
+                              json_string_value(json_array_get(why, i)));
+    json_decref(vj);
+    return geo_err_set(err, -EINVAL, "%s: the result is not a valid closed "
+                       "solid: %s", op, text);
+}
+
+/* fill (lib/mesh/fill.h): every hole closed and checked; a result that is
+ * not valid (a hole left open: the report's reason) fails the job. */
+static int run_fill(const proto_op *op, geo_poly **model,
                           const geo_ctx *ctx, json_t **ret_report,
                           json_t *summary, geo_err *err)
 {
@@ -253,10 +283,33 @@ static int run_fill_holes(const proto_op *op, geo_poly **model,
     e |= json_object_set_new(summary, "holes_filled", json_integer(rep.nfilled));
     e |= json_object_set_new(summary, "holes_left_open",
                              json_integer(rep.nopen));
+    uint32_t nopen = rep.nopen;
+    char first[96] = "";
+    for (uint32_t i = 0; i < rep.nloops && !first[0]; i++) {
+        const geo_mesh_hole *h = &rep.holes[i];
+        if (h->status != GEO_HOLE_FILLED &&
+            h->status != GEO_HOLE_FILLED_PLANAR)
+            snprintf(first, sizeof first, " (hole %u, %u vertices at vertex "
+                     "%u: %s)", i, h->nverts, h->first_vertex,
+                     geo_hole_status_name(h->status));
+    }
     geo_mesh_fill_report_clear(&rep);
     if (e) {
         json_decref(j);
         return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    if ((r = require_valid(*model, "fill", ctx, err)) < 0) {
+        json_decref(j);
+        if (r == -EINVAL && nopen) {
+            char tail[160];
+            snprintf(tail, sizeof tail, "; %u holes left open%s", nopen,
+                     first);
+            size_t have = strlen(err->msg);
+            if (have + 1 < sizeof err->msg)
+                snprintf(err->msg + have, sizeof err->msg - have, "%.*s",
+                         (int)(sizeof err->msg - have - 1), tail);
+        }
+        return r;
     }
     *ret_report = j;
     return 0;
@@ -285,6 +338,11 @@ static int run_stitch(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
         json_decref(j);
         geo_poly_free(out);
         return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    if ((r = require_valid(out, "stitch", ctx, err)) < 0) {
+        json_decref(j);
+        geo_poly_free(out);
+        return r;
     }
     geo_poly_free(*model);
     *model = out;
@@ -338,12 +396,12 @@ static enum geo_replanar_schedule schedule_of(proto_schedule s)
                                          : GEO_REPLANAR_LOCAL_EXP;
 }
 
-/* move_vertex (lib/replanar/replanar.h, Palachev 2012, §4): places the vertex and
+/* move (lib/replanar/replanar.h, Palachev 2012, §4): places the vertex and
  * re-planarises. A result that is not a valid polyhedron (no convergence
  * within max_steps, a self-intersection, an inverted facet) fails the
  * job, as `facet move` refuses to write it: nothing invalid is passed on.
  * The report has the run's summary and its iteration log. */
-static int run_move_vertex(const proto_op *op, geo_poly **model,
+static int run_move(const proto_op *op, geo_poly **model,
                            const geo_ctx *ctx, json_t **ret_report,
                            json_t *summary, geo_err *err)
 {
@@ -433,11 +491,11 @@ static const op_entry ops[PROTO_OP_COUNT] = {
     [PROTO_OP_COLLAPSE] = {run_collapse, true},
     [PROTO_OP_MERGE] = {run_merge, true},
     [PROTO_OP_TRIANGULATE] = {NULL, true, run_triangulate},
-    [PROTO_OP_FILL] = {run_fill_holes, true},
+    [PROTO_OP_FILL] = {run_fill, true},
     [PROTO_OP_STITCH] = {run_stitch, true},
-    [PROTO_OP_CORRECT] = {run_auto, true},
+    [PROTO_OP_CORRECT] = {run_correct, true},
     [PROTO_OP_CUT] = {run_cut, true},
-    [PROTO_OP_MOVE] = {run_move_vertex, true},
+    [PROTO_OP_MOVE] = {run_move, true},
     [PROTO_OP_INVERSION_STATS] = {run_inversion_stats, false},
 };
 
