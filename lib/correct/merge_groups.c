@@ -448,6 +448,7 @@ int geo_mw_auto_round(geo_mw *w, const geo_group_crit *c, const geo_ctx *ctx,
                       uint32_t *ret_merged, geo_err *err)
 {
     uint32_t *start = NULL, *facets = NULL, ng = 0, merged = 0;
+    w->ctx = ctx;
     int r = geo_mw_world_build(w, err);
     if (r < 0)
         return r;

@@ -46,6 +46,8 @@ typedef struct geo_mw {
     uint32_t *fmark, *vmark, *vmark2;
     uint32_t capf, capv;
     uint32_t gen;          /* current stamp; bumped by geo_mw_stamp */
+    const geo_ctx *ctx;    /* the run's, while a round merges (NULL
+                              otherwise): geo_mw_check asks it */
     /* sides of vertices against the current plane, valid where
      * vside_at[v] == sgen (bumped by geo_mw_side_reset) */
     uint32_t *vside_at;
