@@ -161,8 +161,9 @@ static void run_job(slot *sl, job_rec *job)
             .user = sl,
             .cancel = &sl->cancel,
             /* the kernels stop at the time limit by themselves, without
-             * waiting for the monitor's next tick */
-            .deadline_ns = (t0 + (int64_t)limit) * 1000000,
+             * waiting for the monitor's next tick (t0 is whole ms: the
+             * extra one keeps the run at least the limit long) */
+            .deadline_ns = (t0 + 1 + (int64_t)limit) * 1000000,
             .seed = 1,
             .parallel_for = p->c.parallel_for,
             .pf_user = p->c.pf_user,
