@@ -103,7 +103,13 @@ static const key keys[] = {
      F(inspect_max_facets), 4, 100000000, true, "20000",
      "largest model POST /v1/inspect takes",
      "POST /v1/inspect answers synchronously; bigger models must be "
-     "submitted as jobs."},
+     "submitted as jobs. The facets are counted while the body is "
+     "tokenised, so a larger model is refused (413) before it is built."},
+    {"Server", "InspectTimeout", "inspect-timeout", K_DURATION,
+     F(inspect_timeout_ms), 100, 3600 * SEC, true, "10s",
+     "time limit of one POST /v1/inspect (503 after)",
+     "Inspections run on two threads of their own, not on the HTTP "
+     "threads; one that runs longer is stopped and answered 503."},
     {"Jobs", "Workers", "workers", K_UINT, F(workers), 0, 256, false, "0",
      "job workers (0: one per CPU)",
      "Each runs one job at a time; the kernels of a job share the "

@@ -60,6 +60,7 @@ typedef struct cfg {
     uint64_t max_wait_ms;         /* cap on ?wait= */
     uint64_t keepalive_ms;        /* SSE keep-alive comment interval */
     unsigned inspect_max_facets;  /* POST /v1/inspect model size cap */
+    uint64_t inspect_timeout_ms;  /* POST /v1/inspect time limit */
     /* [Jobs] */
     unsigned workers;             /* 0 = number of CPUs; max 256 */
     unsigned queue_size;          /* queued jobs before 503, ≥ 1 */

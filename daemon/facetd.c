@@ -35,6 +35,7 @@
 #include "job_exec.h"
 #include "job_pool.h"
 #include "log.h"
+#include "reserve.h"
 #include "metrics.h"
 #include "parallel.h"
 #include "scanners.h"
@@ -115,6 +116,30 @@ static void on_job_done(void *user, const job_rec *job, job_state st,
     scanners_job_done(a->sc, job);
 }
 
+/* Opens the store and queues again the jobs the last stop interrupted.
+ * On a disk that filled up meanwhile both need a little room: the
+ * reserve (reserve.h) is given up for it, and made again next time. */
+static store *open_store_reserved(const cfg *c, const char *where,
+                                  unsigned *requeued, geo_err *err)
+{
+    for (int attempt = 0; attempt < 2; attempt++) {
+        store *s = open_store(c, where, err);
+        if (s && store_recover(s, requeued, err) == 0) {
+            if (!c->store_url[0] &&
+                reserve_keep(c->state_dir, RESERVE_BYTES) < 0)
+                log_msg(LOG_WARNING, NULL, "no room for the %u MiB disk "
+                        "reserve in %s", RESERVE_BYTES >> 20, c->state_dir);
+            return s;
+        }
+        store_close(s);
+        if (attempt > 0 || c->store_url[0] || !reserve_release(c->state_dir))
+            break;
+        log_msg(LOG_WARNING, NULL, "%s; gave up the %u MiB disk reserve to "
+                "start", err->msg, RESERVE_BYTES >> 20);
+    }
+    return NULL;
+}
+
 static unsigned cpus(void)
 {
     long n = sysconf(_SC_NPROCESSORS_ONLN);
@@ -131,6 +156,7 @@ static void apply_http_settings(http_env *env, const cfg *c)
     atomic_store(&env->queue_size, c->queue_size);
     atomic_store(&env->inspect_max_facets, c->inspect_max_facets);
     atomic_store(&env->max_query_args, c->max_query_args);
+    atomic_store(&env->inspect_timeout_ms, c->inspect_timeout_ms);
     http_env_set_token(env, c->api_token);
 }
 
@@ -331,13 +357,9 @@ int main(int argc, char **argv)
         rc = 2;
         goto out;
     }
-    s = open_store(&c, where, &err);
-    if (!s) {
-        log_msg(LOG_ERR, NULL, "%s", err.msg);
-        goto out;
-    }
     unsigned requeued = 0;
-    if (store_recover(s, &requeued, &err) < 0) {
+    s = open_store_reserved(&c, where, &requeued, &err);
+    if (!s) {
         log_msg(LOG_ERR, NULL, "%s", err.msg);
         goto out;
     }

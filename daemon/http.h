@@ -57,6 +57,19 @@ void http_hub_notify(http_hub *h, const char *id, bool progress_only);
 void http_hub_close(http_hub *h);
 unsigned http_hub_count(http_hub *h);
 
+/* ---- the inspector threads of POST /v1/inspect (http_inspect.c) ---- */
+typedef struct inspect_task inspect_task;
+typedef struct http_inspector http_inspector;
+/* NULL when no thread could start. */
+http_inspector *http_inspector_start(void);
+/* Cancels queued and running inspections (their requests answer 503);
+ * later ones are refused. */
+void http_inspector_cancel_all(http_inspector *q);
+/* Cancels, joins (every connection resumed); accepts NULL; returns NULL. */
+http_inspector *http_inspector_stop(http_inspector *q);
+/* Frees a task whose request ended without its answer. */
+void http_inspect_task_free(inspect_task *t);
+
 /* ---- request state ---- */
 typedef enum http_method {
     HTTP_GET = 1, HTTP_HEAD = 2, HTTP_POST = 4, HTTP_DELETE = 8,
@@ -87,6 +100,7 @@ typedef struct http_req {
     /* waiting */
     http_waiter w;
     bool waiting;            /* a wait was started (the handler resumes) */
+    inspect_task *inspect;   /* queued or done inspection (http_inspect.c) */
     int64_t seen_version;
 } http_req;
 
@@ -104,6 +118,7 @@ struct http_server {
     struct MHD_Daemon *d;
     http_env *env;
     http_hub *hub;
+    http_inspector *inspector;
     bool quiesced;
     atomic_int active;       /* requests begun and not completed */
     /* the header deadline: every open connection, a reaper thread */

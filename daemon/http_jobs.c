@@ -176,6 +176,22 @@ static void add_geo_error(json_t *errors, const geo_err *e)
         json_array_append_new(errors, entry);
 }
 
+/* What the store cannot hold, and op arguments that name a vertex or
+ * facet the model lacks, are the client's error: named at submission
+ * rather than a 500 or a failed job later. pl may be NULL (not parsed). */
+static void check_model(json_t *errors, const geo_poly *poly,
+                        const proto_pipeline *pl, const char *where)
+{
+    geo_err err = {{0}};
+    if (proto_fmb1_check(poly, &err) < 0) {
+        char msg[600];
+        snprintf(msg, sizeof msg, "%s.%s", where, err.msg);
+        json_array_append_new(errors, http_error_entry(msg));
+    }
+    if (pl && runner_check_model(pl, poly, &err) < 0)
+        add_geo_error(errors, &err);
+}
+
 static bool valid_idem_key(const char *k)
 {
     size_t n = strlen(k);
@@ -266,6 +282,17 @@ static enum MHD_Result submit_and_reply(http_req *r, const geo_poly *poly,
     } else if (rc == -EEXIST) {
         res = http_problem(r, 422, "idempotency-key-reused",
                            "Unprocessable Content", NULL, NULL, "%s", err.msg);
+    } else if (rc == -ENOSPC) {
+        log_msg(LOG_ERR, NULL, "submit: %s", err.msg);
+        const char *h[] = {"Retry-After", "5", NULL};
+        res = http_problem(r, 503, "store-full", "Service Unavailable", NULL,
+                           h, "the job store cannot take the job now (%s); "
+                           "retry later", err.msg);
+    } else if (rc == -ERANGE || rc == -EINVAL) {
+        /* a limit of the stored form the checks above did not foresee */
+        res = http_problem(r, 422, "invalid-job", "Unprocessable Content",
+                           json_pack("[o]", http_error_entry(err.msg)), NULL,
+                           "%s", err.msg);
     } else if (rc < 0) {
         log_msg(LOG_ERR, NULL, "submit: %s", err.msg);
         res = http_problem(r, 500, "submit-failed", "Internal Server Error",
@@ -434,6 +461,8 @@ static enum MHD_Result post_job_file(http_req *r, const char *fmt_name)
         if (!poly) {
             geo_err_prefix(&err, "model");
             add_geo_error(errors, &err);
+        } else {
+            check_model(errors, poly, have_pipeline ? &pl : NULL, "model");
         }
     }
     enum MHD_Result res;
@@ -563,6 +592,9 @@ enum MHD_Result http_post_job(http_req *r)
         add_geo_error(errors, &jb.model_err);
     else if (meshes && json_array_size(meshes) == 2)
         poly = meshes_union(meshes, &rep, errors);
+    if (poly)
+        check_model(errors, poly, have_pipeline ? &pl : NULL,
+                    meshes ? "meshes" : "model");
     enum MHD_Result res;
     if (json_array_size(errors) > 0) {
         res = invalid_job(r, errors);

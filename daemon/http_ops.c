@@ -1,5 +1,5 @@
 /* http_ops.c — the operational routes: /livez, /readyz, /metrics,
- * /v1/version, /v1/openapi.json, and the synchronous POST /v1/inspect.
+ * /v1/version and /v1/openapi.json (POST /v1/inspect: http_inspect.c).
  *
  * /livez answers 200 while the process serves HTTP at all; /readyz
  * answers 200 only when start-up is complete, shutdown has not begun, the
@@ -36,6 +36,10 @@ enum MHD_Result http_readyz(http_req *r)
     if (store_ping(env->s, &err) < 0)
         json_array_append_new(failed, json_pack("{s:s,s:s}", "path", "store",
                                                 "message", err.msg));
+    char why[sizeof(geo_err)];
+    if (env->pool && job_pool_store_error(env->pool, why, sizeof why))
+        json_array_append_new(failed, json_pack("{s:s,s:s}", "path",
+                                                "store", "message", why));
     if (!env->pool || !job_pool_healthy(env->pool))
         json_array_append_new(failed, json_pack("{s:s,s:s}", "path",
                                                 "workers", "message",
@@ -101,54 +105,4 @@ enum MHD_Result http_openapi(http_req *r)
     if (http_not_modified(r, etag))
         return http_reply(r, 304, NULL, (char *)"", 0, false, h);
     return http_reply(r, 200, "application/json", (char *)doc, len, false, h);
-}
-
-enum MHD_Result http_post_inspect(http_req *r)
-{
-    json_error_t je;
-    json_t *root = json_loadb(r->body ? r->body : "", r->len,
-                              JSON_REJECT_DUPLICATES, &je);
-    if (!root) {
-        json_t *errors = json_pack("[{s:s, s:s, s:i, s:i}]", "path", "",
-                                   "message", je.text, "line",
-                                   (json_int_t)je.line, "column",
-                                   (json_int_t)je.column);
-        return http_problem(r, 400, "malformed-json", "Bad Request", errors,
-                            NULL, "line %d, column %d: %s", je.line,
-                            je.column, je.text);
-    }
-    /* The body is the model itself, or {"model": ...} as for jobs. */
-    const json_t *m = json_object_get(root, "model");
-    if (!m)
-        m = root;
-    geo_err err = {{0}};
-    proto_limits lim;
-    proto_limits_default(&lim);
-    geo_poly *p = proto_model_from_json(m, &lim, m == root ? NULL : "model",
-                                        &err);
-    json_decref(root);
-    if (!p)
-        return http_problem(r, 422, "invalid-model", "Unprocessable Content",
-                            json_pack("[o]", http_error_entry(err.msg)), NULL,
-                            "%s", err.msg);
-    unsigned cap = atomic_load(&r->env->inspect_max_facets);
-    if (p->nfacets > cap) {
-        unsigned n = p->nfacets;
-        geo_poly_free(p);
-        return http_problem(r, 413, "model-too-large", "Content Too Large",
-                            NULL, NULL, "%u facets; synchronous inspection "
-                            "takes at most %u (submit a job instead)", n, cap);
-    }
-    proto_op op = {.kind = PROTO_OP_INSPECT};
-    proto_pipeline pl = {1, &op};
-    json_t *stats = NULL, *summary = NULL;
-    int rc = runner_run(&pl, &p, NULL, NULL, NULL, &stats, &summary, &err);
-    geo_poly_free(p);
-    json_decref(summary);
-    if (rc < 0)
-        return http_problem(r, 500, "inspect-failed", "Internal Server Error",
-                            NULL, NULL, "%s", err.msg);
-    json_t *report = json_incref(json_object_get(stats, "before"));
-    json_decref(stats);
-    return http_reply_json(r, 200, report, NULL);
 }

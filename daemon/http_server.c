@@ -442,6 +442,7 @@ static void on_completed(void *cls, struct MHD_Connection *conn,
                 r->method == HTTP_POST ? "POST" : r->method == HTTP_DELETE
                 ? "DELETE" : "GET", r->status, secs * 1e3);
     }
+    http_inspect_task_free(r->inspect);
     free(r->body);
     free(r);
     *con_cls = NULL;
@@ -476,8 +477,11 @@ http_server *http_server_start(http_env *env, const http_config *c,
     }
     unsigned flags = MHD_USE_EPOLL_INTERNAL_THREAD | MHD_ALLOW_SUSPEND_RESUME |
                      MHD_USE_ERROR_LOG;
-    if (http_deadline_start(h, c->header_timeout_ms) < 0) {
-        geo_err_set(err, -EAGAIN, "cannot start the header deadline thread");
+    h->inspector = http_inspector_start();
+    if (!h->inspector || http_deadline_start(h, c->header_timeout_ms) < 0) {
+        geo_err_set(err, -EAGAIN, "cannot start the inspector or the "
+                    "header deadline threads");
+        h->inspector = http_inspector_stop(h->inspector);
         http_deadline_fini(h);
         http_hub_free(h->hub);
         free(h);
@@ -515,6 +519,7 @@ http_server *http_server_start(http_env *env, const http_config *c,
                     "messages above)");
         http_deadline_stop(h);
         http_deadline_fini(h);
+        http_inspector_stop(h->inspector);
         http_hub_free(h->hub);
         free(h);
         return NULL;
@@ -536,6 +541,7 @@ void http_server_quiesce(http_server *h)
     /* The socket is the caller's: quiescing only stops accepting on it. */
     MHD_quiesce_daemon(h->d);
     http_hub_close(h->hub);
+    http_inspector_cancel_all(h->inspector);
 }
 
 http_server *http_server_stop(http_server *h)
@@ -551,6 +557,8 @@ http_server *http_server_stop(http_server *h)
         nanosleep(&ts, NULL);
     }
     http_deadline_stop(h);
+    /* every suspended inspection resumed before MHD stops */
+    h->inspector = http_inspector_stop(h->inspector);
     MHD_stop_daemon(h->d);
     http_deadline_fini(h);
     http_hub_free(h->hub);

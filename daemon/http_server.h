@@ -46,6 +46,7 @@ typedef struct http_env {
     atomic_uint max_waiters;
     atomic_uint queue_size;
     atomic_uint inspect_max_facets;
+    atomic_uint_fast64_t inspect_timeout_ms;
     atomic_uint max_query_args;
     atomic_int ready;               /* 1 between start-up and shutdown */
     pthread_mutex_t token_lock;     /* guards token */

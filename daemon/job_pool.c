@@ -8,9 +8,13 @@
 #include "job_pool.h"
 
 #include <errno.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdbool.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -49,6 +53,11 @@ struct job_pool {
     atomic_uint_fast64_t timeout_ms;
     slot *slots;
     unsigned nslots;
+    /* workers whose outcome the store is refusing right now (disk full):
+     * while non-zero the pool is not ready (job_pool_store_error) */
+    atomic_uint store_failing;
+    pthread_mutex_t err_lock;
+    char store_err[sizeof(geo_err)]; /* under err_lock: the last refusal */
     pthread_t monitor;
     bool monitor_started;
 };
@@ -100,6 +109,26 @@ static void outcome_free(job_outcome *o)
     memset(o, 0, sizeof *o);
 }
 
+/* Inputs above this size leave many freed pages in the worker's malloc
+ * arena, which glibc keeps for reuse: a 1M-facet job left the RSS at
+ * 1 GB. They go back to the system after such a job. */
+enum { TRIM_ABOVE = 4 << 20 };
+
+static void trim_after(size_t bytes)
+{
+#ifdef __GLIBC__
+    if (bytes > TRIM_ABOVE)
+        malloc_trim(0);
+#else
+    (void)bytes;
+#endif
+}
+
+static int record_outcome(job_pool *p, const job_rec *job,
+                          job_state final, const char *error,
+                          const job_outcome *out, bool *ret_requeued,
+                          geo_err *err);
+
 static void run_job(slot *sl, job_rec *job)
 {
     job_pool *p = sl->pool;
@@ -131,6 +160,10 @@ static void run_job(slot *sl, job_rec *job)
             .progress = on_progress,
             .user = sl,
             .cancel = &sl->cancel,
+            /* the kernels stop at the time limit by themselves, without
+             * waiting for the monitor's next tick (t0 is whole ms: the
+             * extra one keeps the run at least the limit long) */
+            .deadline_ns = (t0 + 1 + (int64_t)limit) * 1000000,
             .seed = 1,
             .parallel_for = p->c.parallel_for,
             .pf_user = p->c.pf_user,
@@ -141,6 +174,10 @@ static void run_job(slot *sl, job_rec *job)
         out.error = strdup(err.msg);
     }
     double secs = (double)(job_mono_ms() - t0) / 1000.0;
+    if (r == -ECANCELED && job_mono_ms() >= t0 + (int64_t)limit) {
+        int none = R_NONE;
+        atomic_compare_exchange_strong(&sl->reason, &none, R_TIMEOUT);
+    }
     int why = atomic_load(&sl->reason);
     job_state final;
     const char *error = out.error;
@@ -163,17 +200,17 @@ static void run_job(slot *sl, job_rec *job)
         if (!error)
             error = r == -ENOMEM ? "out of memory" : "failed";
     }
-    if (final == JOB_QUEUED) {
-        r = store_requeue(p->s, job->id, &err);
+    bool requeued = false;
+    r = record_outcome(p, job, final, error, &out, &requeued, &err);
+    if (r == 0 && requeued) {
+        log_msg(LOG_NOTICE, job->id, "the store refused the outcome; queued "
+                "again for a later attempt");
+        final = JOB_QUEUED;
+    } else if (final == JOB_QUEUED) {
         if (r == 0)
             log_msg(LOG_NOTICE, job->id, "interrupted by shutdown after "
                     "%.3f s; queued again", secs);
     } else {
-        r = store_finish(p->s, job->id, final, error, out.summary,
-                         final == JOB_SUCCEEDED ? out.model : NULL,
-                         out.model_len,
-                         final == JOB_SUCCEEDED ? out.stats : NULL,
-                         out.stats_len, &err);
         if (r == 0) {
             if (final == JOB_FAILED)
                 log_msg(LOG_WARNING, job->id, "failed after %.3f s: %s", secs,
@@ -187,13 +224,78 @@ static void run_job(slot *sl, job_rec *job)
         log_msg(LOG_ERR, job->id, "outcome not recorded: %s", err.msg);
     else if (final != JOB_QUEUED && p->c.done)
         p->c.done(p->c.cb_user, job, final, secs);
+    size_t moved = input_len + out.model_len;
     outcome_free(&out);
+    trim_after(moved);
     pthread_mutex_lock(&p->lock);
     sl->busy = false;
     p->busy--;
     pthread_cond_broadcast(&p->idle);
     pthread_mutex_unlock(&p->lock);
     notify(p, job->id, false);
+}
+
+static void timed_wait(pthread_cond_t *cv, pthread_mutex_t *m, int64_t ms);
+
+/* Records the outcome, retrying with back-off while the store cannot
+ * write (a full disk, a database away): first the whole outcome, then —
+ * a smaller write — the job queued again for a later attempt,
+ * alternately, until one lands or the pool stops (then the job stays
+ * running in the store, which start-up queues again). Never leaves a job
+ * running with no worker behind it while the process lives. */
+static int record_outcome(job_pool *p, const job_rec *job,
+                          job_state final, const char *error,
+                          const job_outcome *out, bool *ret_requeued,
+                          geo_err *err)
+{
+    int64_t wait_ms = 100;
+    bool failing = false;
+    *ret_requeued = false;
+    for (unsigned attempt = 0;; attempt++) {
+        int r;
+        bool requeue = final == JOB_QUEUED || attempt % 2 == 1;
+        if (requeue)
+            r = store_requeue(p->s, job->id, err);
+        else
+            r = store_finish(p->s, job->id, final, error, out->summary,
+                             final == JOB_SUCCEEDED ? out->model : NULL,
+                             out->model_len,
+                             final == JOB_SUCCEEDED ? out->stats : NULL,
+                             out->stats_len, err);
+        /* refused for good (the job is no longer this node's: -EBUSY,
+         * -ESTALE, -ENOENT) is an answer, not a store that cannot write */
+        bool transient = r == -ENOSPC || r == -EIO || r == -EAGAIN ||
+                         r == -ENOMEM;
+        if (r == 0 || !transient) {
+            *ret_requeued = r == 0 && requeue && final != JOB_QUEUED;
+            if (failing)
+                atomic_fetch_sub(&p->store_failing, 1);
+            return r;
+        }
+        if (!failing) {
+            failing = true;
+            atomic_fetch_add(&p->store_failing, 1);
+        }
+        pthread_mutex_lock(&p->err_lock);
+        snprintf(p->store_err, sizeof p->store_err, "%s", err->msg);
+        pthread_mutex_unlock(&p->err_lock);
+        log_msg(attempt ? LOG_DEBUG : LOG_ERR, job->id, "outcome not "
+                "recorded (%s), retrying in %lld ms: %s",
+                requeue ? "queue again" : job_state_name(final),
+                (long long)wait_ms, err->msg);
+        pthread_mutex_lock(&p->lock);
+        bool stop = p->stopping;
+        if (!stop)
+            timed_wait(&p->tick, &p->lock, wait_ms);
+        stop = p->stopping;
+        pthread_mutex_unlock(&p->lock);
+        if (stop) {
+            atomic_fetch_sub(&p->store_failing, 1);
+            return r;
+        }
+        if (wait_ms < 5000)
+            wait_ms *= 2;
+    }
 }
 
 static void timed_wait(pthread_cond_t *cv, pthread_mutex_t *m, int64_t ms)
@@ -307,6 +409,8 @@ job_pool *job_pool_start(store *s, const job_pool_config *c, geo_err *err)
     p->nslots = c->workers;
     atomic_init(&p->timeout_ms, c->job_timeout_ms);
     pthread_mutex_init(&p->lock, NULL);
+    pthread_mutex_init(&p->err_lock, NULL);
+    atomic_init(&p->store_failing, 0);
     pthread_condattr_t ca;
     pthread_condattr_init(&ca);
     pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
@@ -389,6 +493,16 @@ unsigned job_pool_busy(job_pool *p)
     return n;
 }
 
+bool job_pool_store_error(job_pool *p, char *buf, size_t size)
+{
+    if (atomic_load(&p->store_failing) == 0)
+        return false;
+    pthread_mutex_lock(&p->err_lock);
+    snprintf(buf, size, "%s", p->store_err);
+    pthread_mutex_unlock(&p->err_lock);
+    return true;
+}
+
 int job_pool_healthy(job_pool *p)
 {
     pthread_mutex_lock(&p->lock);
@@ -428,6 +542,7 @@ job_pool *job_pool_stop(job_pool *p, uint64_t grace_ms)
     pthread_cond_destroy(&p->idle);
     pthread_cond_destroy(&p->tick);
     pthread_mutex_destroy(&p->lock);
+    pthread_mutex_destroy(&p->err_lock);
     free(p->slots);
     free(p);
     return NULL;

@@ -104,6 +104,10 @@ unsigned job_pool_busy(job_pool *p);
 /* True while the workers take jobs (not stopping), for /readyz. */
 int job_pool_healthy(job_pool *p);
 
+/* True while a worker's outcome is being refused by the store (and
+ * retried): buf gets the store's last message. */
+bool job_pool_store_error(job_pool *p, char *buf, size_t size);
+
 /* Stops claiming, waits up to grace_ms for running jobs, cancels and
  * requeues the rest, joins the threads and frees the pool. Accepts NULL;
  * returns NULL. */

@@ -175,7 +175,8 @@ typedef struct sq_store {
 static int db_err(sqlite3 *db, geo_err *err, const char *what)
 {
     int code = sqlite3_extended_errcode(db);
-    int r = (code & 0xff) == SQLITE_NOMEM ? -ENOMEM : -EIO;
+    int r = (code & 0xff) == SQLITE_NOMEM ? -ENOMEM
+            : (code & 0xff) == SQLITE_FULL ? -ENOSPC : -EIO;
     return geo_err_set(err, r, "store: %s: %s", what, sqlite3_errmsg(db));
 }
 

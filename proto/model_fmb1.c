@@ -144,13 +144,22 @@ fail:
     return geo_poly_free(p);
 }
 
-int proto_fmb1_write(const geo_poly *p, proto_buf *b, geo_err *err)
+int proto_fmb1_check(const geo_poly *p, geo_err *err)
 {
+    /* the counts are u32 like geo_poly's; a facet's length is u16 */
     for (uint32_t f = 0; f < p->nfacets; f++)
         if (geo_poly_facet_size(p, f) > UINT16_MAX)
             return geo_err_set(err, -ERANGE, "facets[%u]: %u vertices, FMB1 "
                                              "holds at most 65535 per facet",
                                f, geo_poly_facet_size(p, f));
+    return 0;
+}
+
+int proto_fmb1_write(const geo_poly *p, proto_buf *b, geo_err *err)
+{
+    int r = proto_fmb1_check(p, err);
+    if (r < 0)
+        return r;
     size_t size = HEAD + (size_t)p->nverts * VERT +
                   (size_t)p->nfacets * FACET_HEAD +
                   4 * (size_t)geo_poly_ncorners(p);

@@ -127,6 +127,11 @@ geo_poly *proto_model_read_file_ex(const char *path, proto_format fmt,
                                    proto_read_report *ret_report,
                                    geo_err *err);
 
+/* 0 when the store's format (FMB1) can hold p; else -ERANGE with err
+ * naming the place ("facets[3]: 70000 vertices, FMB1 holds at most 65535
+ * per facet"). The daemon checks this at submission. */
+int proto_fmb1_check(const geo_poly *p, geo_err *err);
+
 /* Serialises p in format fmt into a malloc'd buffer. 0, or a negative
  * errno with err set (-EINVAL for a format that cannot be written). */
 int proto_model_write_mem(const geo_poly *p, proto_format fmt, char **ret_buf,

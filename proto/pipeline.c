@@ -46,7 +46,7 @@ static const struct {
 
 /* Parameters each op accepts, "op" included, NULL-terminated. */
 static const char *const op_keys[PROTO_OP_COUNT][8] = {
-    [PROTO_OP_INSPECT] = {"op"},
+    [PROTO_OP_INSPECT] = {"op", "keep_invalid"},
     [PROTO_OP_COLLAPSE] = {"op", "radius"},
     [PROTO_OP_MERGE] = {"op", "max_angle_deg", "max_deviation",
                                "views", "groups"},
@@ -333,6 +333,8 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
     int r = 0;
     switch (op->kind) {
     case PROTO_OP_INSPECT:
+        return get_bool(o, "keep_invalid", pl, &op->u.inspect.keep_invalid,
+                        err);
     case PROTO_OP_STITCH:
     case PROTO_OP_COUNT:
         return 0;
@@ -648,6 +650,10 @@ static json_t *op_to_json(const proto_op *op)
         return NULL;
     int e = json_object_set_new(o, "op", json_string(op_names[op->kind]));
     switch (op->kind) {
+    case PROTO_OP_INSPECT:
+        if (op->u.inspect.keep_invalid)
+            e |= json_object_set_new(o, "keep_invalid", json_true());
+        break;
     case PROTO_OP_COLLAPSE:
         e |= json_object_set_new(o, "radius", json_real(op->u.collapse.radius));
         break;

@@ -10,7 +10,8 @@
  * (inversion_stats is `facet inversion-stats`).
  *
  * Operations and parameters (lengths in the model's units, mm):
- *   inspect
+ *   inspect {keep_invalid [false]} — after an op that changed the model,
+ *                 an invalid model fails the job unless keep_invalid
  *   collapse {radius ≥ 0 [0: 2e-4 × the model's size]}
  *   merge {max_angle_deg in (0, 90) [60], max_deviation ≥ 0
  *                 [0: 5e-4 × the model's size], views ≥ 0 (the scanner's
@@ -95,6 +96,11 @@ typedef struct proto_op {
     proto_op_kind kind;
     const char *alias; /* the deprecated name it was given, or NULL */
     union {
+        struct {
+            /* an inspect after an op that changed the model fails the job
+             * when the model is not valid, unless this is set */
+            bool keep_invalid;
+        } inspect;
         struct {
             double radius;
         } collapse;

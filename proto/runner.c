@@ -46,16 +46,52 @@ typedef struct op_entry {
     frep_fn run_frep;   /* set (and run NULL) for ops taking a frep */
 } op_entry;
 
-/* inspect (lib/inspect/stats.h): every statistic of the model, unchanged. */
-static int run_inspect(const proto_op *op, geo_poly **model,
-                       const geo_ctx *ctx, json_t **ret_report,
-                       json_t *summary, geo_err *err)
+/* Why st is not valid, in the order of geo_stats' definition. */
+static void invalid_reason(const geo_stats *st, char *buf, size_t size)
 {
-    (void)op;
+    if (!st->closed)
+        snprintf(buf, size, "not closed (%u boundary edges)",
+                 st->boundary_edges);
+    else if (st->nonmanifold_vertices)
+        snprintf(buf, size, "%u non-manifold vertices",
+                 st->nonmanifold_vertices);
+    else if (st->low_degree_vertices)
+        snprintf(buf, size, "%u vertices in fewer than 3 facets",
+                 st->low_degree_vertices);
+    else if (st->inverted_facets)
+        snprintf(buf, size, "%u inverted facets", st->inverted_facets);
+    else if (st->orientation != GEO_ORIENT_OUTWARD)
+        snprintf(buf, size, "orientation %s (volume %.3g mm^3)",
+                 geo_orientation_name(st->orientation), st->volume);
+    else if (st->max_nonplanarity > st->eps)
+        snprintf(buf, size, "a facet %.3g mm out of its plane (tolerance "
+                 "%.3g mm)", st->max_nonplanarity, st->eps);
+    else if (st->selfint.count)
+        snprintf(buf, size, "%llu self-intersections",
+                 (unsigned long long)st->selfint.count);
+    else
+        snprintf(buf, size, "%u degenerate facets", st->degenerate_facets);
+}
+
+/* inspect (lib/inspect/stats.h): every statistic of the model, unchanged.
+ * With *model_changed (an earlier op changed the model) an invalid model
+ * fails unless the op keeps invalid results. */
+static int inspect_checked(const proto_op *op, geo_poly **model,
+                           const geo_ctx *ctx, bool model_changed,
+                           json_t **ret_report, json_t *summary, geo_err *err)
+{
     geo_stats st;
     int r = geo_inspect(*model, NULL, ctx, &st, err);
     if (r < 0)
         return r;
+    if (model_changed && !st.valid && !op->u.inspect.keep_invalid) {
+        char why[160];
+        invalid_reason(&st, why, sizeof why);
+        geo_stats_clear(&st);
+        return geo_err_set(err, -EINVAL, "the result is not a valid "
+                           "polyhedron: %s (keep_invalid: true keeps it)",
+                           why);
+    }
     json_t *rep = proto_stats_to_json(&st);
     int e = !rep;
     e |= json_object_set_new(summary, "valid", json_boolean(st.valid));
@@ -114,6 +150,13 @@ static int run_report(const proto_op *op, geo_poly **model,
     }
     *ret_report = j;
     return 0;
+}
+
+static int run_inspect(const proto_op *op, geo_poly **model,
+                       const geo_ctx *ctx, json_t **ret_report,
+                       json_t *summary, geo_err *err)
+{
+    return inspect_checked(op, model, ctx, false, ret_report, summary, err);
 }
 
 /* triangulate (lib/frep/triangulate.h): the frep input to a closed mesh; the
@@ -521,6 +564,29 @@ int runner_check_input(const proto_pipeline *p, bool frep, geo_err *err)
     return 0;
 }
 
+int runner_check_model(const proto_pipeline *p, const geo_poly *m,
+                       geo_err *err)
+{
+    for (size_t i = 0; i < p->nops; i++) {
+        const proto_op *op = &p->ops[i];
+        if (op->kind == PROTO_OP_MOVE && op->u.move.vertex >= m->nverts)
+            return geo_err_set(err, -EINVAL, "pipeline[%zu].vertex: %u out "
+                               "of range (%u vertices)", i, op->u.move.vertex,
+                               m->nverts);
+        if (op->kind == PROTO_OP_MERGE && op->u.merge.ngroups) {
+            uint32_t n = op->u.merge.gstart[op->u.merge.ngroups];
+            for (uint32_t k = 0; k < n; k++)
+                if (op->u.merge.gfacets[k] >= m->nfacets)
+                    return geo_err_set(err, -EINVAL, "pipeline[%zu].groups: "
+                                       "facet %u out of range (%u facets)",
+                                       i, op->u.merge.gfacets[k], m->nfacets);
+        }
+        if (ops[op->kind].changes_model)
+            break; /* later indices name the changed model */
+    }
+    return 0;
+}
+
 bool runner_changes_model(const proto_pipeline *p)
 {
     for (size_t i = 0; i < p->nops; i++)
@@ -601,6 +667,9 @@ static int run_pipeline(const proto_pipeline *p, const geo_frep *frep,
         r = ops[op->kind].run_frep
                 ? ops[op->kind].run_frep(op, frep, model, &sub, &report,
                                          summary, err)
+            : op->kind == PROTO_OP_INSPECT
+                ? inspect_checked(op, model, &sub, changed, &report, summary,
+                                  err)
                 : ops[op->kind].run(op, model, &sub, &report, summary, err);
         double secs = mono_seconds() - t0;
         if (timer)

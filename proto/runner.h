@@ -50,10 +50,23 @@ bool runner_changes_model(const proto_pipeline *p);
  * with 'triangulate'"). */
 int runner_check_input(const proto_pipeline *p, bool frep, geo_err *err);
 
+/* 0 when p's arguments suit model m as submitted: a vertex or facet an
+ * op names must exist, when every op before it leaves the numbering as it
+ * is (after one that changes the model, only the run can tell). Else
+ * -EINVAL with err naming the place ("pipeline[1].vertex: 99 out of range
+ * (8 vertices)"). */
+int runner_check_model(const proto_pipeline *p, const geo_poly *m,
+                       geo_err *err);
+
 /* Called after each operation with its run time (for metrics). */
 typedef void (*runner_op_timer)(void *user, proto_op_kind op, double seconds);
 
-/* Runs p on *model. Operations may replace *model (the old one is freed);
+/* Validity: an inspect after an op that changed the model fails the run
+ * (-EINVAL, err "pipeline[2] (inspect): the result is not a valid
+ * polyhedron: not closed (4 boundary edges)") unless that inspect has
+ * keep_invalid; an inspect of the unchanged input only reports.
+ *
+ * Runs p on *model. Operations may replace *model (the old one is freed);
  * on success *model is the result and *ret_stats, *ret_summary are new
  * JSON objects the caller owns. On failure returns a negative errno
  * (-ECANCELED when ctx canceled) with err naming the operation

@@ -6,6 +6,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
+#include <time.h>
 
 int geo_err_set(geo_err *err, int code, const char *fmt, ...)
 {
@@ -36,10 +37,21 @@ void geo_err_prefix(geo_err *err, const char *prefix)
     memcpy(err->msg, tmp, sizeof tmp);
 }
 
+int64_t geo_ctx_now_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
+}
+
 bool geo_ctx_canceled(const geo_ctx *ctx)
 {
-    return ctx && ctx->cancel &&
-           atomic_load_explicit(ctx->cancel, memory_order_acquire) != 0;
+    if (!ctx)
+        return false;
+    if (ctx->cancel &&
+        atomic_load_explicit(ctx->cancel, memory_order_acquire) != 0)
+        return true;
+    return ctx->deadline_ns && geo_ctx_now_ns() >= ctx->deadline_ns;
 }
 
 int geo_ctx_progress(const geo_ctx *ctx, double fraction)

@@ -43,6 +43,10 @@ typedef struct geo_ctx {
     void *user;
     /* Set to non-zero by another thread to cancel; read with acquire. */
     const atomic_int *cancel;
+    /* CLOCK_MONOTONIC time (ns) after which the run counts as canceled;
+     * 0 = none. Lets a kernel stop at a time limit by itself, without a
+     * thread to raise the flag (geo_ctx_now_ns gives the clock). */
+    int64_t deadline_ns;
     /* Seed for kernels that draw random numbers (deterministic per seed). */
     uint64_t seed;
     /* Parallel loop, NULL means run sequentially. */
@@ -50,8 +54,18 @@ typedef struct geo_ctx {
     void *pf_user;
 } geo_ctx;
 
-/* True when the caller asked to stop (cancel flag set). ctx may be NULL. */
+/* True when the caller asked to stop (cancel flag set) or the deadline
+ * passed. ctx may be NULL. Cheap (an atomic load, a vDSO clock read with
+ * a deadline): a long loop calls it every few thousand iterations
+ * (GEO_CTX_CHECK_EVERY), so that cancellation lands within milliseconds. */
 bool geo_ctx_canceled(const geo_ctx *ctx);
+
+/* Iterations between two geo_ctx_canceled checks in a kernel's loop:
+ * `if ((i & GEO_CTX_CHECK_MASK) == 0 && geo_ctx_canceled(ctx))`. */
+#define GEO_CTX_CHECK_MASK 1023u
+
+/* CLOCK_MONOTONIC in nanoseconds (the clock of deadline_ns). */
+int64_t geo_ctx_now_ns(void);
 
 /* Reports progress; returns -ECANCELED when the run should stop, else 0.
  * ctx may be NULL. */

@@ -138,7 +138,8 @@ int geo_correct(geo_poly *p, const geo_correct_opts *opts,
         goto done;
     }
     if (o.merge.noise == 0 &&
-        (r = geo_merge_surface_noise(q, &o.merge, &o.merge.noise, err)) < 0)
+        (r = geo_merge_surface_noise(q, &o.merge, ctx, &o.merge.noise,
+                                     err)) < 0)
         goto done;
     if (o.merge.noise == 0)
         o.merge.noise = -1; /* nothing to measure it on: no noise test */

@@ -576,7 +576,7 @@ double geo_merge_max_deviation(const geo_merge_opts *o, const geo_poly *p)
 
 
 int geo_merge_surface_noise(const geo_poly *p, const geo_merge_opts *opts,
-                            double *ret, geo_err *err)
+                            const geo_ctx *ctx, double *ret, geo_err *err)
 {
     geo_merge_opts o;
     geo_merge_report rep;
@@ -585,9 +585,9 @@ int geo_merge_surface_noise(const geo_poly *p, const geo_merge_opts *opts,
     int r = session_begin(&s, p, opts, true, &o, &rep, &c, err);
     if (r < 0)
         return r;
-    r = geo_mw_surface_noise(s.w, &c, ret);
+    r = geo_mw_surface_noise(s.w, &c, ctx, ret);
     if (r < 0)
-        geo_err_set(err, r, "out of memory");
+        geo_err_set(err, r, r == -ECANCELED ? "canceled" : "out of memory");
     session_close(&s);
     geo_merge_report_clear(&rep);
     return r;
@@ -606,8 +606,10 @@ int geo_merge_auto(geo_poly *p, const geo_merge_opts *opts,
         return r;
     if (o.noise > 0)
         c.noise = o.noise;
-    else if (o.noise == 0 && (r = geo_mw_surface_noise(s.w, &c, &c.noise)) < 0)
-        r = geo_err_set(err, r, "out of memory");
+    else if (o.noise == 0 &&
+             (r = geo_mw_surface_noise(s.w, &c, ctx, &c.noise)) < 0)
+        r = geo_err_set(err, r, r == -ECANCELED ? "merge canceled"
+                                                : "out of memory");
     rep->noise = c.noise;
     uint32_t rounds = o.max_rounds ? o.max_rounds : 1;
     bool bevel_done = !o.bevels;

@@ -150,6 +150,7 @@ int geo_mw_bevel_pass(geo_mw *w, const geo_group_crit *c, const geo_ctx *ctx,
                       geo_merge_report *rep, uint32_t *ret_merged,
                       geo_err *err)
 {
+    w->ctx = ctx;
     geo_edit *e = w->e;
     *ret_merged = 0;
     int r = geo_mw_world_build(w, err);

@@ -363,12 +363,22 @@ int geo_mw_check(geo_mw *w, geo_err *err)
             cbox[j] = c.tbox[j];
         else
             geo_poly_facet_bbox(mini, j, &cbox[j]);
+    uint64_t work = 0; /* vertices tested since the last cancel check */
     for (uint32_t i = 0; i < c.ntf; i++) {
         for (uint32_t j = 0; j < c.ncand; j++) {
             if (j == i || (j < c.ntf && j < i))
                 continue;
             if (!geo_bbox_overlap(&c.tbox[i], &cbox[j]))
                 continue;
+            /* a pair with a facet of 10,000s of vertices costs as much */
+            work += geo_poly_facet_size(mini, i) + geo_poly_facet_size(mini, j);
+            if (work >= (1u << 18)) {
+                work = 0;
+                if (geo_ctx_canceled(w->ctx)) {
+                    r = geo_err_set(err, -ECANCELED, "canceled");
+                    goto done;
+                }
+            }
             if (!shaped[j]) {
                 geo_facet_shape_of(mini, j, &shapes[j]);
                 shaped[j] = 1;

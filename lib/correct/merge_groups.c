@@ -279,29 +279,28 @@ static int add_member(grower *g, uint32_t f, uint8_t *taken)
             g->hi[k] = fmax(g->hi[k], e->verts[v][k]);
         }
     }
-    /* its neighbours become candidates */
+    /* its neighbours become candidates, each once per group: the stamp
+     * marks a facet that was a candidate (or member) of this group, so a
+     * facet of 60,000 edges adds its neighbours in linear time */
     for (uint32_t i = 0; i < n; i++) {
         const uint32_t *fv = geo_edit_fv(e, f);
         uint32_t a = fv[i], b = fv[i + 1 < n ? i + 1 : 0];
         uint32_t h = geo_edit_across(e, f, a, b);
         if (h == GEO_NONE || taken[h] || w->fmark[h] == w->gen)
             continue;
-        bool have = false;
-        for (uint32_t j = 0; j < g->ncand && !have; j++)
-            have = g->cand[j] == h;
-        if (have)
-            continue;
         if (geo_mw_grow(&g->cand, &g->capcand, (size_t)g->ncand + 1) < 0)
             return -ENOMEM;
+        w->fmark[h] = w->gen;
         g->cand[g->ncand++] = h;
     }
     return 0;
 }
 
-int geo_mw_find_groups(geo_mw *w, const geo_group_crit *c,
+int geo_mw_find_groups(geo_mw *w, const geo_group_crit *c, const geo_ctx *ctx,
                        uint32_t **ret_start, uint32_t **ret_facets,
                        uint32_t *ret_n)
 {
+    uint64_t work = 0; /* candidate visits since the last cancel check */
     geo_edit *e = w->e;
     uint32_t nf = e->nfacets, nlive = 0;
     area_id *order = malloc(((size_t)nf + 1) * sizeof *order);
@@ -345,6 +344,14 @@ int geo_mw_find_groups(geo_mw *w, const geo_group_crit *c,
             goto oom;
         memcpy(g.plane, e->planes[seed], sizeof g.plane);
         for (;;) {
+            work += g.ncand + 1;
+            if (work >= (1u << 20)) {
+                work = 0;
+                if (geo_ctx_canceled(ctx)) {
+                    r = -ECANCELED;
+                    goto done;
+                }
+            }
             /* the candidate closest in normal to the plane */
             uint32_t bi = GEO_NONE;
             double bd = -2;
@@ -360,12 +367,11 @@ int geo_mw_find_groups(geo_mw *w, const geo_group_crit *c,
                 break;
             uint32_t h = g.cand[bi];
             g.cand[bi] = g.cand[--g.ncand];
-            if (taken[h] || w->fmark[h] == w->gen)
+            if (taken[h])
                 continue;
             double pl[4];
             if (bd < c->cosmax || !fits(&g, h, pl)) {
-                w->fmark[h] = w->gen; /* rejected for this group */
-                continue;
+                continue; /* rejected; its stamp keeps it out */
             }
             if (add_member(&g, h, taken) < 0)
                 goto oom;
@@ -442,11 +448,13 @@ int geo_mw_auto_round(geo_mw *w, const geo_group_crit *c, const geo_ctx *ctx,
                       uint32_t *ret_merged, geo_err *err)
 {
     uint32_t *start = NULL, *facets = NULL, ng = 0, merged = 0;
+    w->ctx = ctx;
     int r = geo_mw_world_build(w, err);
     if (r < 0)
         return r;
-    if (geo_mw_find_groups(w, c, &start, &facets, &ng) < 0)
-        return geo_err_set(err, -ENOMEM, "out of memory");
+    if ((r = geo_mw_find_groups(w, c, ctx, &start, &facets, &ng)) < 0)
+        return geo_err_set(err, r, r == -ECANCELED ? "merge canceled"
+                                                   : "out of memory");
     uint32_t *live = NULL, caplive = 0;
     for (uint32_t g = 0; g < ng; g++) {
         if ((g & 15) == 0 &&

@@ -111,14 +111,16 @@ int geo_merge_view_grid(const geo_poly *p, uint32_t *ret_views,
     return 0;
 }
 
-int geo_mw_surface_noise(geo_mw *w, const geo_group_crit *c, double *ret)
+int geo_mw_surface_noise(geo_mw *w, const geo_group_crit *c,
+                         const geo_ctx *ctx, double *ret)
 {
     geo_group_crit c0 = *c;
     c0.noise = 0;
     uint32_t *start = NULL, *facets = NULL, ng = 0;
     *ret = 0;
-    if (geo_mw_find_groups(w, &c0, &start, &facets, &ng) < 0)
-        return -ENOMEM;
+    int r = geo_mw_find_groups(w, &c0, ctx, &start, &facets, &ng);
+    if (r < 0)
+        return r;
     double *rms = malloc(((size_t)ng + 1) * sizeof *rms);
     if (!rms) {
         free(start), free(facets);

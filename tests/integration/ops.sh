@@ -36,9 +36,8 @@ req GET "/v1/jobs/$ID/stats"
 check "its report has the result" grep -q '"result":{[^}]*"converged":true' "$BODY"
 check "and the iteration log" grep -q '"log":\[{"step":0' "$BODY"
 submit brilliant.truth.json '[{"op":"move","vertex":9999,"to":[0,0,0]}]'
-wait_job "$ID"
-expect_eq "a vertex out of range fails the job" failed "$STATE_OF"
-check "naming the op and the vertex" grep -q 'pipeline\[0\] (move): vertex: 9999 out of range (238 vertices)' "$BODY"
+expect_eq "a vertex out of range is refused at submission" 422 "$CODE"
+check "naming the op and the vertex" grep -q '"path":"pipeline\[0\].vertex","message":"9999 out of range (238 vertices)"' "$BODY"
 submit brilliant.truth.json '[{"op":"move","vertex":5,"by":[0.01,0,0],"max_steps":2}]'
 wait_job "$ID"
 expect_eq "a move that cannot converge fails the job" failed "$STATE_OF"

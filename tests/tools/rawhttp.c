@@ -8,11 +8,18 @@
  *       opens N connections from BIND_ADDR (a 127.x.y.z address), sends
  *       the start of a request and then one header byte per second on
  *       each for SECONDS; prints "connected N closed C open O
- *       first_close_s X last_close_s Y" (closed = by the server). */
+ *       first_close_s X last_close_s Y" (closed = by the server).
+ *   rawhttp replay PORT FILE COUNT THREADS
+ *       sends COUNT requests, cycling through the raw requests of FILE
+ *       (separated by lines "%%"), each on its own connection, from
+ *       THREADS threads; prints "requests N seconds S" and one line per
+ *       status "status 404 N" (000: no answer within 5 s). */
 #include <arpa/inet.h>
 #include <errno.h>
 #include <netinet/in.h>
 #include <poll.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -156,14 +163,119 @@ static int cmd_slow(int port, const char *bind_addr, int n, int secs)
     return 0;
 }
 
+typedef struct replay {
+    int port;
+    char **req;
+    size_t *len;
+    size_t nreq;
+    long count;
+    atomic_long next;
+    atomic_long status[1000];
+} replay;
+
+/* One request on a new connection: its status, 0 without an answer. */
+static int one(int port, const char *req, size_t len)
+{
+    int fd = dial(port, NULL);
+    if (fd < 0)
+        return 0;
+    size_t off = 0;
+    while (off < len) {
+        ssize_t w = send(fd, req + off, len - off, MSG_NOSIGNAL);
+        if (w <= 0)
+            break;
+        off += (size_t)w;
+    }
+    char buf[16384];
+    size_t got = 0;
+    double t0 = now_s();
+    /* the status line is all that counts; the server closes or we stop */
+    while (got < 12 && now_s() - t0 < 5) {
+        struct pollfd p = {fd, POLLIN, 0};
+        if (poll(&p, 1, 200) <= 0)
+            continue;
+        ssize_t r = recv(fd, buf + got, sizeof buf - got - 1, 0);
+        if (r <= 0)
+            break;
+        got += (size_t)r;
+    }
+    close(fd);
+    buf[got] = '\0';
+    int st = 0;
+    if (got >= 12 && strncmp(buf, "HTTP/1.", 7) == 0)
+        st = atoi(buf + 9);
+    return st > 0 && st < 1000 ? st : 0;
+}
+
+static void *replay_thread(void *arg)
+{
+    replay *rp = arg;
+    long i;
+    while ((i = atomic_fetch_add(&rp->next, 1)) < rp->count) {
+        size_t k = (size_t)i % rp->nreq;
+        atomic_fetch_add(&rp->status[one(rp->port, rp->req[k], rp->len[k])],
+                         1);
+    }
+    return NULL;
+}
+
+static int cmd_replay(int port, const char *file, long count, int threads)
+{
+    FILE *f = fopen(file, "rb");
+    if (!f) {
+        perror(file);
+        return 1;
+    }
+    static char data[8 << 20];
+    size_t n = fread(data, 1, sizeof data - 1, f);
+    fclose(f);
+    data[n] = '\0';
+    static replay rp;
+    rp.port = port;
+    rp.count = count;
+    rp.req = calloc(4096, sizeof *rp.req);
+    rp.len = calloc(4096, sizeof *rp.len);
+    if (!rp.req || !rp.len)
+        return 1;
+    char *p = data;
+    while (*p && rp.nreq < 4096) {
+        char *sep = strstr(p, "\n%%\n");
+        size_t l = sep ? (size_t)(sep - p) : strlen(p);
+        rp.req[rp.nreq] = p;
+        rp.len[rp.nreq++] = l;
+        if (!sep)
+            break;
+        p = sep + 4;
+    }
+    if (!rp.nreq)
+        return 1;
+    pthread_t th[64];
+    if (threads > 64)
+        threads = 64;
+    double t0 = now_s();
+    for (int i = 0; i < threads; i++)
+        pthread_create(&th[i], NULL, replay_thread, &rp);
+    for (int i = 0; i < threads; i++)
+        pthread_join(th[i], NULL);
+    printf("requests %ld seconds %.1f\n", count, now_s() - t0);
+    for (int s = 0; s < 1000; s++)
+        if (atomic_load(&rp.status[s]))
+            printf("status %03d %ld\n", s, atomic_load(&rp.status[s]));
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
+    if (argc == 6 && strcmp(argv[1], "replay") == 0)
+        return cmd_replay(atoi(argv[2]), argv[3], atol(argv[4]),
+                          atoi(argv[5]));
     if (argc == 4 && strcmp(argv[1], "send") == 0)
         return cmd_send(atoi(argv[2]), atoi(argv[3]));
     if (argc == 6 && strcmp(argv[1], "slow") == 0)
         return cmd_slow(atoi(argv[2]), argv[3], atoi(argv[4]),
                         atoi(argv[5]));
     fprintf(stderr, "usage: rawhttp send PORT MS < request\n"
-                    "       rawhttp slow PORT BIND_ADDR N SECONDS\n");
+                    "       rawhttp slow PORT BIND_ADDR N SECONDS\n"
+                    "       rawhttp replay PORT FILE COUNT THREADS\n");
     return 2;
 }

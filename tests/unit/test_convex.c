@@ -27,7 +27,7 @@ static void scan_scale(const geo_poly *scan, uint32_t *views, double *noise)
     geo_merge_opts_default(&mo);
     geo_err err;
     assert_int_equal(geo_merge_view_grid(scan, views, NULL), 0);
-    assert_int_equal(geo_merge_surface_noise(scan, &mo, noise, &err), 0);
+    assert_int_equal(geo_merge_surface_noise(scan, &mo, NULL, noise, &err), 0);
 }
 
 static geo_poly *convex_correct(const geo_poly *scan, enum geo_convex_fit fit,

@@ -46,6 +46,8 @@ typedef struct geo_mw {
     uint32_t *fmark, *vmark, *vmark2;
     uint32_t capf, capv;
     uint32_t gen;          /* current stamp; bumped by geo_mw_stamp */
+    const geo_ctx *ctx;    /* the run's, while a round merges (NULL
+                              otherwise): geo_mw_check asks it */
     /* sides of vertices against the current plane, valid where
      * vside_at[v] == sgen (bumped by geo_mw_side_reset) */
     uint32_t *vside_at;
@@ -170,8 +172,9 @@ typedef struct geo_group_crit {
 
 /* Automatic groups of the current edit (merge_groups.c): CSR lists
  * (*ret_start: *ret_n + 1 offsets; *ret_facets) malloc'd for the caller,
- * largest seed first. 0 or -ENOMEM. */
-int geo_mw_find_groups(geo_mw *w, const geo_group_crit *c,
+ * largest seed first. 0, -ENOMEM or -ECANCELED (ctx, may be NULL, is
+ * asked as the groups grow: growing one is quadratic in its candidates). */
+int geo_mw_find_groups(geo_mw *w, const geo_group_crit *c, const geo_ctx *ctx,
                        uint32_t **ret_start, uint32_t **ret_facets,
                        uint32_t *ret_n);
 
@@ -194,9 +197,10 @@ void geo_mw_facet_moments(const geo_edit *e, uint32_t f, const double o[3],
 /* The surface noise of the scan (merge_scale.c): the median, over the
  * groups of at least two facets the criterion c finds (with c->noise
  * ignored), of the area RMS distance of the group's surface from its
- * area least-squares plane; 0 when there is no such group. 0 or
- * -ENOMEM. */
-int geo_mw_surface_noise(geo_mw *w, const geo_group_crit *c, double *ret);
+ * area least-squares plane; 0 when there is no such group. 0, -ENOMEM or
+ * -ECANCELED. */
+int geo_mw_surface_noise(geo_mw *w, const geo_group_crit *c,
+                         const geo_ctx *ctx, double *ret);
 
 /* One pass removing bevel strips (merge_bevel.c): each facet that is a
  * strip along the edge of two larger neighbours, within a few times
