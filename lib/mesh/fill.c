@@ -44,6 +44,8 @@ const char *geo_fill_attempt_name(enum geo_fill_attempt a)
         return "lift";
     case GEO_ATTEMPT_LOWER:
         return "lower";
+    case GEO_ATTEMPT_FAN:
+        return "fan";
     }
     return "unknown";
 }
@@ -866,7 +868,7 @@ static int try_lift(mfill *M, const geo_mesh_fill_opts *mo, const loop_ref *L,
     for (uint32_t v = 0; v < nnew; v++)
         if (depth[v] != UINT32_MAX && depth[v] > maxd)
             maxd = depth[v];
-    static const double amps[] = {0.1, 0.25, 0.5, 1.0, 2.0, 4.0,
+    static const double amps[] = {0.0, 0.1, 0.25, 0.5, 1.0, 2.0, 4.0,
                                   -0.1, -0.25, -0.5, -1.0, -2.0, -4.0};
     rc = 0;
     for (size_t a = 0; a < sizeof amps / sizeof amps[0] && elen > 0; a++) {
@@ -885,7 +887,10 @@ static int try_lift(mfill *M, const geo_mesh_fill_opts *mo, const loop_ref *L,
             break;
         }
         if (r == 0) {
-            h->attempt = amps[a] > 0 ? GEO_ATTEMPT_LIFT : GEO_ATTEMPT_LOWER;
+            h->attempt = amps[a] > 0   ? GEO_ATTEMPT_LIFT
+                         : amps[a] < 0 ? GEO_ATTEMPT_LOWER
+                         : rim_only    ? GEO_ATTEMPT_FAN
+                                       : GEO_ATTEMPT_AS_ASKED;
             rc = 1;
             break;
         }
@@ -932,6 +937,9 @@ static int fill_one(mfill *M, const geo_mesh_fill_opts *mo, const loop_ref *L,
             if (r < 0)
                 return r;
             h->status = st;
+            if (st == GEO_HOLE_NO_TRIANGULATION && mo->check &&
+                mo->fallback)
+                goto dome; /* a new vertex repeats no edge of the mesh */
             if (st != GEO_HOLE_FILLED)
                 return 0; /* nothing another weight could change */
             if (!mo->check)
@@ -948,14 +956,22 @@ static int fill_one(mfill *M, const geo_mesh_fill_opts *mo, const loop_ref *L,
     }
     if (h->status == GEO_HOLE_INTERSECTS && mo->fallback) {
         int r = try_avoid(M, mo, L, h, rep, err);
-        if (r == 0)
-            r = try_lift(M, mo, L, h, rep, err);
         if (r < 0)
             return r;
         if (r == 1) {
             h->status = GEO_HOLE_FILLED;
             goto kept;
         }
+dome:;
+        uint8_t before = h->status;
+        r = try_lift(M, mo, L, h, rep, err);
+        if (r < 0)
+            return r;
+        if (r == 1) {
+            h->status = GEO_HOLE_FILLED;
+            goto kept;
+        }
+        h->status = before;
         h->attempt = GEO_ATTEMPT_LOWER;
     }
     return 0;

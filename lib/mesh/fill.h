@@ -78,10 +78,14 @@ enum geo_fill_attempt {
      * bent into a dome along the loop's normal, outward or inward */
     GEO_ATTEMPT_LIFT = 8,
     GEO_ATTEMPT_LOWER = 9,
+    /* a flat fan from the loop's centroid: the one new vertex makes no
+     * chord that repeats an edge of the mesh, so it closes loops every
+     * triangulation of whose vertices would (GEO_HOLE_NO_TRIANGULATION) */
+    GEO_ATTEMPT_FAN = 10,
 };
 
 /* A stable name ("planar", "as_asked", "angle", "no_fair", "plain",
- * "avoid_faired", "avoid_refined", "avoid", "lift", "lower"). */
+ * "avoid_faired", "avoid_refined", "avoid", "lift", "lower", "fan"). */
 const char *geo_fill_attempt_name(enum geo_fill_attempt a);
 
 typedef struct geo_mesh_fill_opts {

@@ -298,6 +298,45 @@ static void test_open_sheet_is_closed_by_a_dome(void **s)
     geo_poly_free(p);
 }
 
+/* A flat square cut into a diamond between its edge midpoints and four
+ * corner triangles: the loop is the square's rim (eight vertices), the
+ * diamond's sides are chords of it and edges of the mesh, so every
+ * triangulation of the loop's vertices repeats one or lies on the sheet.
+ * A fan from the loop's centre has no such chord; bent into a dome it
+ * closes a valid solid. */
+static void test_rim_whose_chords_are_mesh_edges_gets_a_dome(void **s)
+{
+    (void)s;
+    static const double v[8][3] = {{-1, -1, 0}, {0, -1, 0}, {1, -1, 0},
+                                   {1, 0, 0},   {1, 1, 0},  {0, 1, 0},
+                                   {-1, 1, 0},  {-1, 0, 0}};
+    static const uint32_t t[4][3] = {{0, 1, 7}, {1, 2, 3}, {3, 4, 5},
+                                     {5, 6, 7}};
+    static const uint32_t diamond[4] = {1, 3, 5, 7};
+    geo_poly *p = geo_poly_new();
+    for (int i = 0; i < 8; i++)
+        geo_poly_add_vertex(p, v[i]);
+    for (int f = 0; f < 4; f++)
+        geo_poly_add_facet(p, t[f], 3);
+    geo_poly_add_facet(p, diamond, 4);
+    geo_poly_compute_planes(p, GEO_PLANE_UNWEIGHTED);
+    geo_mesh_fill_report rep;
+    assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(rep.nopen, 0);
+    for (uint32_t h = 0; h < rep.nloops; h++) {
+        uint8_t a = rep.holes[h].attempt;
+        assert_true(rep.holes[h].status == GEO_HOLE_FILLED_PLANAR ||
+                    a == GEO_ATTEMPT_FAN || a == GEO_ATTEMPT_LIFT ||
+                    a == GEO_ATTEMPT_LOWER);
+    }
+    geo_stats st;
+    assert_int_equal(geo_inspect(p, NULL, NULL, &st, NULL), 0);
+    assert_true(st.valid);
+    geo_stats_clear(&st);
+    geo_mesh_fill_report_clear(&rep);
+    geo_poly_free(p);
+}
+
 /* An open cone: apex below, a ring of n points on the unit circle around
  * it, waving up and down (a saddle-shaped loop: convex seen from above). */
 static geo_poly *open_cone(uint32_t n, double phase)
@@ -367,6 +406,7 @@ int main(void)
         cmocka_unit_test(test_large_curved_hole_filled_validly_at_mesh_density),
         cmocka_unit_test(test_unfillable_hole_stays_open_with_reason),
         cmocka_unit_test(test_open_sheet_is_closed_by_a_dome),
+        cmocka_unit_test(test_rim_whose_chords_are_mesh_edges_gets_a_dome),
         cmocka_unit_test(test_every_weight_fills_a_nonplanar_hole_validly),
         cmocka_unit_test(test_closed_mesh_is_left_alone),
         cmocka_unit_test(
