@@ -75,6 +75,8 @@ void proto_jpull_clear(proto_jpull *j)
     free(j->sbuf);
     free(j->keys);
     free(j->arena);
+    free(j->log);
+    free(j->marks);
     memset(j, 0, sizeof *j);
     j->state = ST_FAILED;
 }
@@ -708,12 +710,56 @@ static bool key_insert(proto_jpull *j, uint32_t serial, const char *s,
         j->arena = a;
         j->acap = cap;
     }
+    if (j->nlog == j->cap_log) {
+        size_t cap = j->cap_log ? j->cap_log * 2 : 64;
+        proto_jkey *l = realloc(j->log, cap * sizeof *l);
+        if (!l) {
+            *oom = true;
+            return false;
+        }
+        j->log = l;
+        j->cap_log = cap;
+    }
     if (len)
         memcpy(j->arena + j->alen, s, len);
     j->keys[k] = (proto_jkey){h, serial, (uint32_t)len, j->alen};
+    j->log[j->nlog++] = j->keys[k];
     j->alen += len;
     j->nkeys++;
     return true;
+}
+
+/* Forgets the names of the object that ends: they can no longer clash,
+ * and a table holding only the open objects' names stays in cache where
+ * one holding every name read grows with the document (a model's
+ * facets are an object each). Its names are the log's last (those of
+ * the objects inside it went when they ended); each leaves the table by
+ * backward-shift deletion, which keeps every probe sequence unbroken. */
+static void keys_drop(proto_jpull *j, size_t mark)
+{
+    size_t mask = j->cap_keys - 1;
+    for (size_t n = j->nlog; n > mark; n--) {
+        const proto_jkey *e = &j->log[n - 1];
+        size_t i = e->hash & mask;
+        while (!(j->keys[i].hash == e->hash && j->keys[i].serial == e->serial &&
+                 j->keys[i].off == e->off))
+            i = (i + 1) & mask;
+        for (size_t k = (i + 1) & mask; j->keys[k].hash; k = (k + 1) & mask) {
+            size_t home = j->keys[k].hash & mask;
+            /* k's entry stays unless the hole at i lies on its probe path
+             * (its home cyclically outside (i, k]) */
+            bool stays = i <= k ? home > i && home <= k : home > i || home <= k;
+            if (!stays) {
+                j->keys[i] = j->keys[k];
+                i = k;
+            }
+        }
+        j->keys[i].hash = 0;
+        j->nkeys--;
+    }
+    if (j->nlog > mark)
+        j->alen = j->log[mark].off;
+    j->nlog = mark;
 }
 
 static bool push(proto_jpull *j, unsigned char kind)
@@ -728,8 +774,13 @@ static bool push(proto_jpull *j, unsigned char kind)
         if (!s)
             return false;
         j->serials = s;
+        size_t *m = realloc(j->marks, cap * sizeof *m);
+        if (!m)
+            return false;
+        j->marks = m;
         j->cap_depth = cap;
     }
+    j->marks[j->depth] = j->nlog;
     j->kinds[j->depth] = kind;
     j->serials[j->depth] = kind == K_OBJECT ? ++j->next_serial : 0;
     j->depth++;
@@ -810,6 +861,8 @@ static proto_jtok begin_member(proto_jpull *j, int tk)
 
 static proto_jtok end_container(proto_jpull *j, proto_jtok t)
 {
+    if (t == PROTO_JT_OBJECT_END)
+        keys_drop(j, j->marks[j->depth - 1]);
     j->depth--;
     j->state = ST_AFTER;
     return t;

@@ -89,10 +89,14 @@ typedef struct proto_jpull {
     uint32_t next_serial;
     char *sbuf;           /* decoded string */
     size_t slen, scap;
-    struct proto_jkey *keys; /* member names of the objects read so far */
+    struct proto_jkey *keys; /* member names of the open objects */
     size_t nkeys, cap_keys;
-    char *arena;          /* their bytes */
+    char *arena;          /* their bytes, in reading order */
     size_t alen, acap;
+    struct proto_jkey *log; /* the same names in reading order, so that
+                             an object's own are the last when it ends */
+    size_t nlog, cap_log;
+    size_t *marks;        /* per open container: nlog when it opened */
 } proto_jpull;
 
 /* Starts reading len bytes at data (data may be NULL when len is 0). */

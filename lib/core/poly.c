@@ -253,6 +253,19 @@ void geo_poly_facet_fit_plane(const geo_poly *p, uint32_t f,
     const uint32_t *v = geo_poly_facet(p, f);
     double area[3];
     geo_poly_facet_area_vector(p, f, area);
+    if (n == 3) {
+        /* three points lie exactly on one plane: the least-squares plane
+         * (weighted or not) is the plane through them, whose normal is
+         * their cross product, the Newell vector, and which passes
+         * through their centroid, as the fit's does; no eigenproblem.
+         * A zero cross product (collinear) gives the zero plane, as the
+         * fallback below would. */
+        double c[3];
+        geo_poly_facet_center(p, f, c);
+        if (geo_plane_from_point_normal(c, area, ret) < 0)
+            memset(ret, 0, 4 * sizeof *ret);
+        return;
+    }
 
     enum { STACK = 64 };
     double pts_stack[STACK][3], w_stack[STACK];

@@ -295,6 +295,21 @@ void geo_facet_shape_of(const geo_poly *p, uint32_t f, geo_facet_shape *ret)
         if (fabs(nrm[k]) > fabs(nrm[axis]))
             axis = k;
     ret->axis = (int8_t)axis;
+    if (n == 3) {
+        /* a triangle's three corners turn alike (cyclic rotations of
+         * one orient2d); three non-collinear points bound a convex
+         * polygon that cannot touch itself: no corner and no edge tests,
+         * the answers the general path gives */
+        ret->turn = (int8_t)geo_orient2d_proj(V(p, fv[0]), V(p, fv[1]),
+                                              V(p, fv[2]), axis);
+        if (ret->turn == 0) {
+            double nw[3];
+            geo_poly_facet_area_vector(p, f, nw);
+            ret->turn = nw[axis] < 0 ? -1 : 1;
+        }
+        ret->simple = ret->convex = true;
+        return;
+    }
 
     /* each corner's exact turn, once: the polygon's turn (at its lowest
      * projected vertex, as turn_in_axis), the convexity test and the
@@ -1102,6 +1117,90 @@ typedef struct visit_state {
     uint32_t since_check;
 } visit_state;
 
+/* Triangles x and y share one vertex, and y's two others c, d lie
+ * strictly on either side of x's plane: true when segment cd misses
+ * closed triangle x (the line cd passes on one side of all three of its
+ * edges, exact signs). */
+static bool free_edge_misses(const geo_poly *p, const uint32_t *x,
+                             const uint32_t *y)
+{
+    int k = 0;
+    while (y[k] == x[0] || y[k] == x[1] || y[k] == x[2])
+        k++;
+    const double *c = V(p, y[k]), *d = V(p, y[(k + 1) % 3]);
+    if (y[(k + 1) % 3] == x[0] || y[(k + 1) % 3] == x[1] ||
+        y[(k + 1) % 3] == x[2])
+        d = V(p, y[(k + 2) % 3]);
+    bool pos = false, neg = false;
+    for (int i = 0; i < 3; i++) {
+        int o = geo_orient3d(c, d, V(p, x[i]), V(p, x[(i + 1) % 3]));
+        pos |= o > 0;
+        neg |= o < 0;
+    }
+    return pos && neg;
+}
+
+/* Two triangles x, y (distinct, non-degenerate): false when one or two
+ * exact signs show them apart, true when pair_test must decide. A
+ * triangle is exactly planar and its reference plane is its own, so:
+ * sharing an edge uw and not coplanar, the planes meet only in the line
+ * uw, which each triangle meets only in uw itself — the shared edge;
+ * sharing one vertex v, or none, with the other's remaining vertices
+ * strictly on one side of a triangle's plane, they can meet only at v —
+ * a shared vertex — or not at all; sharing v and each across the other's
+ * plane, by where their free edges cross (free_edge_misses). These are
+ * pair_test's own answers, reached without its general bookkeeping;
+ * every other case (coplanar, touching a plane, straddling without a
+ * shared vertex, a triangle listed twice) goes to it. */
+static bool triangles_need_test(const geo_poly *p, const uint32_t *x,
+                                const uint32_t *y)
+{
+    /* which of y's vertices x lists, as a bit per position */
+    unsigned in_x = 0, nshared = 0;
+    for (int j = 0; j < 3; j++) {
+        unsigned hit = (y[j] == x[0]) | (y[j] == x[1]) | (y[j] == x[2]);
+        in_x |= hit << j;
+        nshared += hit;
+    }
+    if (nshared == 2) {
+        int c = in_x == 3 ? 2 : in_x == 5 ? 1 : 0; /* y's own vertex */
+        int a = 0; /* x's own vertex */
+        while (x[a] == y[(c + 1) % 3] || x[a] == y[(c + 2) % 3])
+            a++;
+        return geo_orient3d(V(p, y[(c + 1) % 3]), V(p, y[(c + 2) % 3]),
+                            V(p, x[a]), V(p, y[c])) == 0;
+    }
+    if (nshared == 3)
+        return true;
+    geo_orient3d_plane pl;
+    bool straddle = true;
+    for (int pass = 0; pass < 2; pass++) {
+        const uint32_t *f = pass ? y : x, *g = pass ? x : y;
+        geo_orient3d_plane_init(&pl, V(p, f[0]), V(p, f[1]), V(p, f[2]));
+        bool pos = false, neg = false, zero = false;
+        for (int j = 0; j < 3; j++) {
+            if (g[j] == f[0] || g[j] == f[1] || g[j] == f[2])
+                continue; /* the shared vertex: on the plane */
+            int sg = geo_orient3d_plane_sign(&pl, V(p, g[j]));
+            pos |= sg > 0;
+            neg |= sg < 0;
+            zero |= sg == 0;
+        }
+        if (!zero && !(pos && neg))
+            return false; /* strictly on one side */
+        straddle &= !zero;
+    }
+    if (nshared == 0 || !straddle)
+        return true;
+    /* one shared vertex v, each triangle's free edge strictly across the
+     * other's plane: each meets the planes' common line (through v) in a
+     * segment from v, and they overlap beyond v exactly when the shorter
+     * one's far end — where a free edge crosses the other plane — lies
+     * in the other triangle; a contact anywhere on it counts (v is not on
+     * a free edge: the triangles are not degenerate) */
+    return !(free_edge_misses(p, x, y) && free_edge_misses(p, y, x));
+}
+
 static bool visit_pair(void *user, uint32_t a, uint32_t b)
 {
     visit_state *vs = user;
@@ -1124,6 +1223,11 @@ static bool visit_pair(void *user, uint32_t a, uint32_t b)
     }
     const geo_facet_shape *sa = &s->shapes[a], *sb = &s->shapes[b];
     if (sa->degenerate || sb->degenerate)
+        return true;
+    if (geo_poly_facet_size(s->p, a) == 3 &&
+        geo_poly_facet_size(s->p, b) == 3 &&
+        !triangles_need_test(s->p, geo_poly_facet(s->p, a),
+                             geo_poly_facet(s->p, b)))
         return true;
     facet_ref F = {a, geo_poly_facet_size(s->p, a), geo_poly_facet(s->p, a),
                    sa, s->masks[a], s->sorted[a]};

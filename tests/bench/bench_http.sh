@@ -49,8 +49,15 @@ echo "inspect_k400_job_p50: $(sed -n 's/^job_p50_ms: //p' "$T/flow") ms"
 echo "inspect_k400_job_p99: $(sed -n 's/^job_p99_ms: //p' "$T/flow") ms"
 echo "inspect_k400_errors: $(sed -n 's/^errors: //p' "$T/flow") count"
 # CPU time facetd spent per job, independent of what else the machine runs.
-echo "inspect_k400_facetd_cpu_per_job: $(awk -v c=$((c1 - c0)) -v n="$njobs" -v hz="$(getconf CLK_TCK)" \
-    'BEGIN {printf "%.1f", n ? c * 1000 / hz / n : 0}') ms"
+per_job=$(awk -v c=$((c1 - c0)) -v n="$njobs" -v hz="$(getconf CLK_TCK)" \
+    'BEGIN {printf "%.2f", n ? c * 1000 / hz / n : 0}')
+echo "inspect_k400_facetd_cpu_per_job: $per_job ms"
+# against parsing and inspecting the same model in-process (target <= 1.5)
+if [ -x "$B/bench/bench_inspect" ]; then
+    inproc=$("$B/bench/bench_inspect" --parse-inspect-cpu)
+    echo "inspect_k400_facetd_cpu_vs_in_process: $(awk -v a="$per_job" -v b="$inproc" \
+        'BEGIN {printf "%.2f", b > 0 ? a / b : 0}') (facetd $per_job ms, in-process parse+inspect $inproc ms CPU)"
+fi
 
 id=$(curl -s "$URL/v1/jobs?limit=1" | grep -o '"id":"[0-9A-Z]*"' | head -n 1 | cut -d'"' -f4)
 if command -v wrk >/dev/null; then

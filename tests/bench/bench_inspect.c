@@ -1,5 +1,6 @@
-/* bench_inspect.c — inspection speed: geo_inspect and the whole
- * `facet inspect` command on the K=400 scan (target < 10 ms), and the
+/* bench_inspect.c — inspection speed: parse + geo_inspect (CPU time),
+ * geo_inspect and the whole `facet inspect` command on the K=400 scan
+ * (target < 10 ms), and the
  * self-intersection search on a 1,000,000-triangle sphere with the BVH
  * build counted (target < 1.5 s), clean and with one vertex pushed
  * through, on 1 and 2 threads. Best of several runs (the machine may be
@@ -7,6 +8,7 @@
 #include <spawn.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <sys/wait.h>
 #include <time.h>
 
@@ -112,8 +114,56 @@ static double best_selfint(const geo_poly *p, int threads, int runs,
     return best;
 }
 
-int main(void)
+/* CPU time of parsing the model's bytes and inspecting it on the calling
+ * thread (what a daemon job does at least), best of runs. */
+static double best_parse_inspect_cpu(const char *path, int runs)
 {
+    char *text = NULL;
+    size_t len = 0;
+    geo_err err = {{0}};
+    FILE *f = fopen(path, "rb");
+    if (f) {
+        fseek(f, 0, SEEK_END);
+        long n = ftell(f);
+        fseek(f, 0, SEEK_SET);
+        text = n > 0 ? malloc((size_t)n) : NULL;
+        len = text ? fread(text, 1, (size_t)n, f) : 0;
+        fclose(f);
+    }
+    if (!text || len == 0) {
+        fprintf(stderr, "bench_inspect: %s: cannot read\n", path);
+        exit(1);
+    }
+    double best = 1e30;
+    for (int r = 0; r < runs; r++) {
+        double c0 = cpu_now();
+        geo_poly *p = proto_model_read_mem(text, len, PROTO_FMT_JSON, NULL,
+                                           &err);
+        geo_stats s;
+        if (!p || geo_inspect(p, NULL, NULL, &s, &err) != 0) {
+            fprintf(stderr, "bench_inspect: %s: %s\n", path, err.msg);
+            exit(1);
+        }
+        double dc = cpu_now() - c0;
+        geo_stats_clear(&s);
+        geo_poly_free(p);
+        if (dc < best)
+            best = dc;
+    }
+    free(text);
+    return best;
+}
+
+int main(int argc, char **argv)
+{
+    /* --parse-inspect-cpu: only that figure for the K=400 scan, in ms
+     * (bench_http.sh sets facetd's CPU per job against it) */
+    if (argc == 2 && strcmp(argv[1], "--parse-inspect-cpu") == 0) {
+        printf("%.3f\n", 1e3 * best_parse_inspect_cpu(
+                                    tu_model_path("brilliant.scan-k400.json"),
+                                    30));
+        return 0;
+    }
     const char *b = getenv("FACET_BUILD");
     char facet[4096];
     snprintf(facet, sizeof facet, "%s/facet", b && *b ? b : "build");
@@ -124,6 +174,8 @@ int main(void)
         fprintf(stderr, "bench_inspect: %s\n", err.msg);
         return 1;
     }
+    printf("inspect_k400_parse_inspect_cpu_1thread: %.2f ms\n",
+           1e3 * best_parse_inspect_cpu(model, 30));
     printf("inspect_k400_geo_inspect_1thread: %.2f ms\n",
            1e3 * best_inspect(p, 1, 30));
     printf("inspect_k400_geo_inspect_2threads: %.2f ms\n",

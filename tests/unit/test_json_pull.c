@@ -547,6 +547,28 @@ static void test_duplicate_keys_are_refused_per_object(void **state)
     snprintf(s + n - 1, cap - n + 1, ",\"k123456\":0}");
     assert_non_null(strstr(error_of(s), "duplicate object key near "
                                         "'\"k123456\"'"));
+    /* an object's names are forgotten when it ends: the outer names,
+     * mixed in the table with thousands of inner ones dropped since, are
+     * all still found, and the inner names may come back in siblings */
+    n = (size_t)snprintf(s, cap, "{");
+    for (int i = 0; i < 300; i++) {
+        n += (size_t)snprintf(s + n, cap - n, "%s\"o%d\":{", i ? "," : "", i);
+        /* one inner object large enough to grow (rehash) the table
+         * while the outer names are in it */
+        for (int k = 0; k < (i == 150 ? 3000 : 20); k++)
+            n += (size_t)snprintf(s + n, cap - n, "%s\"o%d\":%d", k ? "," : "",
+                                  (i * 7 + k * 13) % 3001, k);
+        n += (size_t)snprintf(s + n, cap - n, "}");
+    }
+    n += (size_t)snprintf(s + n, cap - n, "}");
+    assert_string_equal(error_of(s), "");
+    for (int i = 0; i < 300; i++) {
+        char want[64];
+        snprintf(s + n - 1, cap - n + 1, ",\"o%d\":0}", i);
+        snprintf(want, sizeof want, "duplicate object key near '\"o%d\"'", i);
+        if (!strstr(error_of(s), want))
+            fail_msg("o%d repeated in the outer object is not refused", i);
+    }
     free(s);
 }
 
