@@ -605,10 +605,12 @@ enum MHD_Result http_get_model(http_req *r)
 {
     const char *name = http_arg(r, "format");
     proto_format fmt = name ? proto_format_from_name(name) : PROTO_FMT_JSON;
-    if (fmt == PROTO_FMT_UNKNOWN)
+    if (fmt == PROTO_FMT_UNKNOWN) {
+        char list[256];
+        proto_format_list(list, sizeof list);
         return http_problem(r, 400, "bad-argument", "Bad Request", NULL, NULL,
-                            "format: expected json, poly, obj, stl, "
-                            "stl-ascii, ply, ply-ascii, ase, fmb1 or off");
+                            "format: expected %s", list);
+    }
     job_rec j;
     enum MHD_Result res;
     if (need_result(r, &j, &res) < 0)
