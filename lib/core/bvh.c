@@ -216,8 +216,7 @@ static uint32_t spread10(uint32_t x)
 }
 
 typedef struct morton_builder {
-    geo_bvh *h;
-    const geo_bbox *in;   /* input boxes by item index */
+    geo_bvh *h;           /* boxes in leaf order */
     const uint32_t *code; /* Morton code by item index */
 } morton_builder;
 
@@ -229,7 +228,7 @@ static void build_morton_node(const morton_builder *b, uint32_t node,
     geo_bbox_empty(&n->box);
     if (hi - lo <= GEO_BVH_LEAF) {
         for (uint32_t i = lo; i < hi; i++)
-            geo_bbox_union(&n->box, &b->in[h->items[i]]);
+            geo_bbox_union(&n->box, &h->boxes[i]);
         n->child = lo;
         n->count = hi - lo;
         return;
@@ -261,26 +260,27 @@ static void build_morton_node(const morton_builder *b, uint32_t node,
     geo_bbox_union(&n->box, &h->nodes[child + 1].box);
 }
 
-geo_bvh *geo_bvh_build_morton(const geo_bbox *boxes, uint32_t n, geo_err *err)
+/* The Morton build over h->boxes, given by item index (h->nitems of
+ * them, the other arrays allocated): sorts the items, moves the boxes
+ * into leaf order in place (one cycle walk of the permutation, so no
+ * second array of boxes: they are the largest part of the tree) and
+ * builds the nodes. -ENOMEM. */
+static int morton_core(geo_bvh *h)
 {
-    geo_bvh *h = calloc(1, sizeof *h);
-    uint32_t *code = NULL, *tmp = NULL;
-    if (!h)
-        goto oom;
-    h->nitems = n;
-    h->nodes = malloc((2 * (size_t)n + 1) * sizeof *h->nodes);
-    h->items = malloc(((size_t)n + 1) * sizeof *h->items);
-    h->boxes = malloc(((size_t)n + 1) * sizeof *h->boxes);
-    code = malloc(((size_t)n + 1) * sizeof *code);
-    tmp = malloc(((size_t)n + 1) * sizeof *tmp);
-    if (!h->nodes || !h->items || !h->boxes || !code || !tmp)
-        goto oom;
+    uint32_t n = h->nitems;
+    uint32_t *code = malloc(((size_t)n + 1) * sizeof *code);
+    uint32_t *tmp = malloc(((size_t)n + 1) * sizeof *tmp);
+    if (!code || !tmp) {
+        free(code);
+        free(tmp);
+        return -ENOMEM;
+    }
     geo_bbox cb;
     geo_bbox_empty(&cb);
     for (uint32_t i = 0; i < n; i++) {
         double c[3];
         for (int k = 0; k < 3; k++)
-            c[k] = 0.5 * (boxes[i].lo[k] + boxes[i].hi[k]);
+            c[k] = 0.5 * (h->boxes[i].lo[k] + h->boxes[i].hi[k]);
         geo_bbox_add(&cb, c);
     }
     double scale[3];
@@ -289,8 +289,9 @@ geo_bvh *geo_bvh_build_morton(const geo_bbox *boxes, uint32_t n, geo_err *err)
     for (uint32_t i = 0; i < n; i++) {
         uint32_t q[3];
         for (int k = 0; k < 3; k++) {
-            double x = (0.5 * (boxes[i].lo[k] + boxes[i].hi[k]) - cb.lo[k]) *
-                       scale[k];
+            double x =
+                (0.5 * (h->boxes[i].lo[k] + h->boxes[i].hi[k]) - cb.lo[k]) *
+                scale[k];
             q[k] = x >= 0 ? (x < 1023 ? (uint32_t)x : 1023) : 0;
         }
         code[i] = spread10(q[0]) << 2 | spread10(q[1]) << 1 | spread10(q[2]);
@@ -309,26 +310,76 @@ geo_bvh *geo_bvh_build_morton(const geo_bbox *boxes, uint32_t n, geo_err *err)
         }
         memcpy(h->items, tmp, (size_t)n * sizeof *tmp);
     }
+    /* boxes[k] := old boxes[items[k]]: tmp becomes the inverse map
+     * (where each item goes), then each cycle is walked once */
+    for (uint32_t k = 0; k < n; k++)
+        tmp[h->items[k]] = k;
+    for (uint32_t i = 0; i < n; i++) {
+        if (tmp[i] == i)
+            continue;
+        geo_bbox carry = h->boxes[i];
+        uint32_t at = i;
+        while (tmp[at] != i) {
+            /* the box now at `at` belongs at tmp[at] */
+            uint32_t to = tmp[at];
+            geo_bbox next = h->boxes[to];
+            h->boxes[to] = carry;
+            tmp[at] = at;
+            carry = next;
+            at = to;
+        }
+        h->boxes[i] = carry;
+        tmp[at] = at;
+    }
     if (n > 0) {
-        morton_builder b = {h, boxes, code};
+        morton_builder b = {h, code};
         h->nnodes = 1;
         build_morton_node(&b, 0, 0, n);
     }
-    for (uint32_t i = 0; i < n; i++)
-        h->boxes[i] = boxes[h->items[i]];
     free(code);
     free(tmp);
+    return 0;
+}
+
+/* A tree with room for n items and its nodes, or NULL. */
+static geo_bvh *bvh_alloc(uint32_t n)
+{
+    geo_bvh *h = calloc(1, sizeof *h);
+    if (!h)
+        return NULL;
+    h->nitems = n;
+    h->nodes = malloc((2 * (size_t)n + 1) * sizeof *h->nodes);
+    h->items = malloc(((size_t)n + 1) * sizeof *h->items);
+    h->boxes = malloc(((size_t)n + 1) * sizeof *h->boxes);
+    if (!h->nodes || !h->items || !h->boxes)
+        return geo_bvh_free(h);
     return h;
-oom:
-    free(code);
-    free(tmp);
-    geo_err_set(err, -ENOMEM, "out of memory building the BVH");
-    return geo_bvh_free(h);
+}
+
+geo_bvh *geo_bvh_build_morton(const geo_bbox *boxes, uint32_t n, geo_err *err)
+{
+    geo_bvh *h = bvh_alloc(n);
+    if (h && n)
+        memcpy(h->boxes, boxes, (size_t)n * sizeof *boxes);
+    if (!h || morton_core(h) < 0) {
+        geo_err_set(err, -ENOMEM, "out of memory building the BVH");
+        return geo_bvh_free(h);
+    }
+    return h;
 }
 
 geo_bvh *geo_bvh_build_facets_morton(const geo_poly *p, geo_err *err)
 {
-    return build_over_facets(p, err, geo_bvh_build_morton);
+    /* the facet boxes go straight into the tree's own array */
+    geo_bvh *h = bvh_alloc(p->nfacets);
+    if (h)
+        for (uint32_t f = 0; f < p->nfacets; f++)
+            geo_poly_facet_bbox(p, f, &h->boxes[f]);
+    if (!h || morton_core(h) < 0) {
+        geo_err_set(err, -ENOMEM, "out of memory building the BVH");
+        return geo_bvh_free(h);
+    }
+    return h;
 }
 
 /* An explicit stack: depth is bounded by the tree height (median splits:
