@@ -260,12 +260,29 @@ static void build_morton_node(const morton_builder *b, uint32_t node,
     geo_bbox_union(&n->box, &h->nodes[child + 1].box);
 }
 
-/* The Morton build over h->boxes, given by item index (h->nitems of
- * them, the other arrays allocated): sorts the items, moves the boxes
- * into leaf order in place (one cycle walk of the permutation, so no
- * second array of boxes: they are the largest part of the tree) and
- * builds the nodes. -ENOMEM. */
-static int morton_core(geo_bvh *h)
+/* Where a Morton build takes its items' boxes from: an array by item
+ * index, or the facets of a polyhedron (computed where needed, from the
+ * vertices, rather than kept in a second array of boxes: they are the
+ * tree's largest part). */
+typedef struct box_source {
+    const geo_bbox *boxes;
+    const geo_poly *p;
+} box_source;
+
+static inline void source_box(const box_source *src, uint32_t i,
+                              geo_bbox *ret)
+{
+    if (src->boxes)
+        *ret = src->boxes[i];
+    else
+        geo_poly_facet_bbox(src->p, i, ret);
+}
+
+/* The Morton build of h (h->nitems items, arrays allocated) over the
+ * boxes of src: codes from the box centres, a radix sort of the items,
+ * the boxes written in leaf order (a gather: independent reads, unlike
+ * a permutation in place), then the nodes. -ENOMEM. */
+static int morton_core(geo_bvh *h, const box_source *src)
 {
     uint32_t n = h->nitems;
     uint32_t *code = malloc(((size_t)n + 1) * sizeof *code);
@@ -275,12 +292,13 @@ static int morton_core(geo_bvh *h)
         free(tmp);
         return -ENOMEM;
     }
-    geo_bbox cb;
+    geo_bbox cb, b;
     geo_bbox_empty(&cb);
     for (uint32_t i = 0; i < n; i++) {
         double c[3];
+        source_box(src, i, &b);
         for (int k = 0; k < 3; k++)
-            c[k] = 0.5 * (h->boxes[i].lo[k] + h->boxes[i].hi[k]);
+            c[k] = 0.5 * (b.lo[k] + b.hi[k]);
         geo_bbox_add(&cb, c);
     }
     double scale[3];
@@ -288,10 +306,9 @@ static int morton_core(geo_bvh *h)
         scale[k] = cb.hi[k] > cb.lo[k] ? 1024.0 / (cb.hi[k] - cb.lo[k]) : 0;
     for (uint32_t i = 0; i < n; i++) {
         uint32_t q[3];
+        source_box(src, i, &b);
         for (int k = 0; k < 3; k++) {
-            double x =
-                (0.5 * (h->boxes[i].lo[k] + h->boxes[i].hi[k]) - cb.lo[k]) *
-                scale[k];
+            double x = (0.5 * (b.lo[k] + b.hi[k]) - cb.lo[k]) * scale[k];
             q[k] = x >= 0 ? (x < 1023 ? (uint32_t)x : 1023) : 0;
         }
         code[i] = spread10(q[0]) << 2 | spread10(q[1]) << 1 | spread10(q[2]);
@@ -310,34 +327,15 @@ static int morton_core(geo_bvh *h)
         }
         memcpy(h->items, tmp, (size_t)n * sizeof *tmp);
     }
-    /* boxes[k] := old boxes[items[k]]: tmp becomes the inverse map
-     * (where each item goes), then each cycle is walked once */
+    free(tmp);
     for (uint32_t k = 0; k < n; k++)
-        tmp[h->items[k]] = k;
-    for (uint32_t i = 0; i < n; i++) {
-        if (tmp[i] == i)
-            continue;
-        geo_bbox carry = h->boxes[i];
-        uint32_t at = i;
-        while (tmp[at] != i) {
-            /* the box now at `at` belongs at tmp[at] */
-            uint32_t to = tmp[at];
-            geo_bbox next = h->boxes[to];
-            h->boxes[to] = carry;
-            tmp[at] = at;
-            carry = next;
-            at = to;
-        }
-        h->boxes[i] = carry;
-        tmp[at] = at;
-    }
+        source_box(src, h->items[k], &h->boxes[k]);
     if (n > 0) {
-        morton_builder b = {h, code};
+        morton_builder mb = {h, code};
         h->nnodes = 1;
-        build_morton_node(&b, 0, 0, n);
+        build_morton_node(&mb, 0, 0, n);
     }
     free(code);
-    free(tmp);
     return 0;
 }
 
@@ -358,10 +356,9 @@ static geo_bvh *bvh_alloc(uint32_t n)
 
 geo_bvh *geo_bvh_build_morton(const geo_bbox *boxes, uint32_t n, geo_err *err)
 {
+    box_source src = {boxes, NULL};
     geo_bvh *h = bvh_alloc(n);
-    if (h && n)
-        memcpy(h->boxes, boxes, (size_t)n * sizeof *boxes);
-    if (!h || morton_core(h) < 0) {
+    if (!h || morton_core(h, &src) < 0) {
         geo_err_set(err, -ENOMEM, "out of memory building the BVH");
         return geo_bvh_free(h);
     }
@@ -370,12 +367,9 @@ geo_bvh *geo_bvh_build_morton(const geo_bbox *boxes, uint32_t n, geo_err *err)
 
 geo_bvh *geo_bvh_build_facets_morton(const geo_poly *p, geo_err *err)
 {
-    /* the facet boxes go straight into the tree's own array */
+    box_source src = {NULL, p};
     geo_bvh *h = bvh_alloc(p->nfacets);
-    if (h)
-        for (uint32_t f = 0; f < p->nfacets; f++)
-            geo_poly_facet_bbox(p, f, &h->boxes[f]);
-    if (!h || morton_core(h) < 0) {
+    if (!h || morton_core(h, &src) < 0) {
         geo_err_set(err, -ENOMEM, "out of memory building the BVH");
         return geo_bvh_free(h);
     }

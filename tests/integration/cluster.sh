@@ -103,12 +103,19 @@ for i in 1 2 3; do
 done
 t0=$(date +%s%N)
 
-# kill node 3 while it runs a job
+# kill node 3 while it runs a job: frozen first (SIGSTOP) and the job
+# seen still running, so that it cannot finish between the look and the
+# kill (a job of tens of milliseconds often did)
 victim=""
 for _ in $(seq 1 100); do
     victim=$(curl -s "${NURL[1]}/v1/jobs?status=running&limit=100" |
         jq -r '.jobs[] | select(.node == "node3") | .id' | head -n 1)
-    [ -n "$victim" ] && break
+    if [ -n "$victim" ]; then
+        kill -STOP "${NPID[3]}"
+        [ "$(curl -s "${NURL[1]}/v1/jobs/$victim" | jq -r '.state')" = running ] && break
+        kill -CONT "${NPID[3]}"
+        victim=""
+    fi
     sleep 0.05
 done
 kill -9 "${NPID[3]}"
