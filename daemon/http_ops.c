@@ -62,6 +62,7 @@ enum MHD_Result http_metrics(http_req *r)
     g.waiters = http_hub_count(r->srv->hub);
     g.queue_size = atomic_load(&env->queue_size);
     g.ready = atomic_load(&env->ready);
+    g.node = store_node(env->s);
     scanners_get_metrics(env->sc, &g.scan);
     char *text;
     size_t len;

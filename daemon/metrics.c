@@ -288,6 +288,12 @@ int metrics_render(metrics *m, const metrics_gauges *g, char **ret,
     put(&o, "# HELP facetd_queue_capacity Queued jobs accepted before 503.\n"
             "# TYPE facetd_queue_capacity gauge\nfacetd_queue_capacity %u\n",
         g->queue_size);
+    if (g->node)
+        put(&o, "# HELP facetd_cluster_node This node of a cluster sharing "
+                "one store (the job counts and queue depth are the "
+                "cluster's; the counters and workers this node's).\n"
+                "# TYPE facetd_cluster_node gauge\n"
+                "facetd_cluster_node{node=\"%s\"} 1\n", g->node);
     put(&o, "# HELP facetd_workers Worker threads.\n# TYPE facetd_workers "
             "gauge\nfacetd_workers %u\n", g->workers);
     put(&o, "# HELP facetd_workers_paused 1 while workers take no new job "

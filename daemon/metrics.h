@@ -75,6 +75,7 @@ typedef struct metrics_gauges {
     unsigned queue_size;     /* configured bound */
     int ready;
     metrics_scanners scan;
+    const char *node;        /* cluster node name, NULL when not shared */
 } metrics_gauges;
 
 /* Renders every metric into a malloc'd, NUL-terminated buffer (*ret, its

@@ -124,6 +124,11 @@ void store_set_events(store *s, const store_events *ev)
         s->ops->set_events(s, ev);
 }
 
+const char *store_node(store *s)
+{
+    return s->ops->node ? s->ops->node(s) : NULL;
+}
+
 store *store_close(store *s)
 {
     if (s)

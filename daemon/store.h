@@ -98,6 +98,7 @@ typedef struct store_ops {
     void (*close)(store *s);
     /* Optional (NULL: the store sees only this process's changes). */
     void (*set_events)(store *s, const struct store_events *ev);
+    const char *(*node)(store *s);
 } store_ops;
 
 /* Every backend's handle starts with this. */
@@ -147,6 +148,10 @@ store *store_pg_open(const store_pg_config *c, geo_err *err);
 /* Routes the cluster's job changes to ev (copied); a no-op for a store
  * that only sees this process. */
 void store_set_events(store *s, const store_events *ev);
+
+/* This node's name in a shared store's cluster, or NULL for a store that
+ * only this process uses. */
+const char *store_node(store *s);
 
 /* Adds a queued job. 0 when committed. -EAGAIN when max_queued jobs are
  * already queued (nothing written). -EEXIST when j->idem_key was used

@@ -980,6 +980,11 @@ static void pg_set_events(store *s, const store_events *ev)
     pthread_mutex_unlock(&P(s)->ev_lock);
 }
 
+static const char *pg_node(store *s)
+{
+    return P(s)->node;
+}
+
 /* ---- the events thread: leases, expiry, notifications --------------- */
 
 static void emit(pg_store *s, store_event ev, const char *id,
@@ -1200,6 +1205,7 @@ static const store_ops pg_ops = {
     .ping = pg_ping,
     .close = pg_close,
     .set_events = pg_set_events,
+    .node = pg_node,
 };
 
 /* Creates or migrates the schema; the advisory lock makes a second node
@@ -1257,6 +1263,13 @@ store *store_pg_open(const store_pg_config *c, geo_err *err)
         geo_err_set(err, -EINVAL, "store: URL, node name and lease needed");
         return NULL;
     }
+    for (const char *p = c->node; *p; p++)
+        if (!strchr("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                    "0123456789._:-", *p)) {
+            geo_err_set(err, -EINVAL, "[Cluster] NodeName: '%s': letters, "
+                        "digits and . _ : - only", c->node);
+            return NULL;
+        }
     char *perr = NULL;
     PQconninfoOption *opts = PQconninfoParse(c->url, &perr);
     if (!opts) {
