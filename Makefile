@@ -175,19 +175,20 @@ bench: all $(BENCH_BINS) $(TOOL_BINS)
 	@sh tests/bench/run.sh $(B)
 
 # Side-by-side benchmarks against CGAL (tests/bench/cgal_*.cpp): built only
-# where libcgal-dev is installed (make bench-deps); CGAL is never linked
-# into facet or facetd.
+# where libcgal-dev is installed (make bench-deps, which adds Eigen for
+# CGAL's fairing); CGAL is never linked into facet or facetd.
 CGAL_SRCS := $(sort $(wildcard tests/bench/cgal_*.cpp))
 CGAL_BINS := $(if $(wildcard /usr/include/CGAL/version.h),\
     $(patsubst tests/bench/%.cpp,$(B)/bench/%,$(CGAL_SRCS)))
 CXX ?= g++
 $(B)/bench/cgal_%: tests/bench/cgal_%.cpp
 	@mkdir -p $(dir $@)
-	$(CXX) -std=c++17 -O2 -DNDEBUG -o $@ $< -lgmp -lmpfr $(LDLIBS_BASE)
+	$(CXX) -std=c++17 -O2 -DNDEBUG -DCGAL_EIGEN3_ENABLED \
+	    -I/usr/include/eigen3 -o $@ $< -lgmp -lmpfr $(LDLIBS_BASE)
 bench: $(CGAL_BINS)
 .PHONY: bench-deps
 bench-deps: deps
-	@sh tests/tools/install-deps.sh libcgal-dev g++
+	@sh tests/tools/install-deps.sh libcgal-dev libeigen3-dev g++
 
 # fsp-mock, the mocked USB scanner harness of the tests (tests/mock/, the
 # only code that links GLib and umockdev): a testbed playing FSP/1 devices.

@@ -608,7 +608,7 @@ enum MHD_Result http_get_model(http_req *r)
     if (fmt == PROTO_FMT_UNKNOWN)
         return http_problem(r, 400, "bad-argument", "Bad Request", NULL, NULL,
                             "format: expected json, poly, obj, stl, "
-                            "stl-ascii, ply, ply-ascii, ase or fmb1");
+                            "stl-ascii, ply, ply-ascii, ase, fmb1 or off");
     job_rec j;
     enum MHD_Result res;
     if (need_result(r, &j, &res) < 0)

@@ -82,7 +82,7 @@ enum MHD_Result http_version(http_req *r)
                                   json_string(proto_op_name((proto_op_kind)k)));
     static const char *const formats[] = {"json", "poly", "obj", "stl",
                                           "stl-ascii", "ply", "ply-ascii",
-                                          "ase", "fmb1"};
+                                          "ase", "fmb1", "off"};
     for (size_t i = 0; i < sizeof formats / sizeof formats[0]; i++)
         json_array_append_new(fmts, json_string(formats[i]));
     json_t *o = json_pack("{s:s, s:s, s:s, s:s, s:o, s:o}", "name", "facetd",

@@ -36,6 +36,7 @@ static const struct {
     {PROTO_FMT_PLY_ASCII, "ply-ascii", NULL, "application/x-ply"},
     {PROTO_FMT_ASE, "ase", "ase", "text/plain"},
     {PROTO_FMT_FMB1, "fmb1", "fmb", "application/octet-stream"},
+    {PROTO_FMT_OFF, "off", "off", "text/plain"},
 };
 enum { NFORMATS = sizeof formats / sizeof formats[0] };
 
@@ -123,6 +124,9 @@ geo_poly *proto_model_read_mem_ex(const void *data, size_t len,
     case PROTO_FMT_FMB1:
         p = proto_fmb1_read(data, len, lim, &rep, err);
         break;
+    case PROTO_FMT_OFF:
+        p = proto_off_read(data, len, lim, &rep, err);
+        break;
     case PROTO_FMT_ASE:
         geo_err_set(err, -EINVAL, "ASE files can be written, not read");
         break;
@@ -200,7 +204,7 @@ int proto_read_fd_all(int fd, size_t max, char **ret, size_t *ret_len,
     return 0;
 }
 
-static const char *EXTENSIONS = ".json .poly .obj .stl .ply .ase .fmb";
+static const char *EXTENSIONS = ".json .poly .obj .stl .ply .ase .fmb .off";
 
 geo_poly *proto_model_read_file_ex(const char *path, proto_format fmt,
                                    const proto_limits *lim,
@@ -294,6 +298,9 @@ int proto_model_write_mem(const geo_poly *p, proto_format fmt, char **ret_buf,
         break;
     case PROTO_FMT_FMB1:
         r = proto_fmb1_write(p, &b, err);
+        break;
+    case PROTO_FMT_OFF:
+        r = proto_off_write(p, &b, err);
         break;
     case PROTO_FMT_UNKNOWN:
     default:

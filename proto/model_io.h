@@ -2,7 +2,8 @@
  * facet-model/1 JSON, the paper's text format (Palachev 2012, §1.3, ".poly"),
  * OBJ, STL (ASCII and binary), PLY (ASCII and binary little- and
  * big-endian on reading, binary little-endian and ASCII on writing), ASE
- * (write only) and FMB1 (the scanner's binary model). Coordinates are
+ * (write only), FMB1 (the scanner's binary model) and OFF (text, with
+ * the COFF/NOFF/4OFF/nOFF variants on reading). Coordinates are
  * millimetres; facets are listed counter-clockwise seen from outside.
  *
  * Every reader validates strictly and reports the first error with its
@@ -42,6 +43,7 @@ typedef enum proto_format {
     PROTO_FMT_PLY_ASCII, /* ASCII on write */
     PROTO_FMT_ASE,       /* write only */
     PROTO_FMT_FMB1,      /* scanner binary model */
+    PROTO_FMT_OFF,       /* Geomview OFF (text) */
 } proto_format;
 
 /* Size limits applied by every reader. */
@@ -56,8 +58,8 @@ typedef struct proto_limits {
 void proto_limits_default(proto_limits *lim);
 
 /* The format named by a file's extension (.json .poly .obj .stl .ply .ase
- * .fmb), or by a name ("json", "poly", "obj", "stl", "stl-ascii", "ply",
- * "ply-ascii", "ase", "fmb1"); PROTO_FMT_UNKNOWN otherwise. */
+ * .fmb .off), or by a name ("json", "poly", "obj", "stl", "stl-ascii",
+ * "ply", "ply-ascii", "ase", "fmb1", "off"); PROTO_FMT_UNKNOWN otherwise. */
 proto_format proto_format_from_path(const char *path);
 proto_format proto_format_from_name(const char *name);
 /* The canonical name of fmt ("json", …) and its MIME type. */

@@ -190,7 +190,37 @@ static int run_auto(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
     return give_report(j, ret_report, err);
 }
 
-/* fill_holes (lib/mesh/fill.h): every hole closed and checked, or reported. */
+/* 0 when p is a valid closed solid (lib/inspect/stats.h), else -EINVAL
+ * with err "OP: the result is not a valid closed solid: REASONS" — the
+ * ops that close meshes fail their job rather than pass an invalid model
+ * on as a success. */
+static int require_valid(const geo_poly *p, const char *op,
+                         const geo_ctx *ctx, geo_err *err)
+{
+    geo_stats st;
+    int r = geo_inspect(p, NULL, ctx, &st, err);
+    if (r < 0)
+        return r;
+    bool valid = st.valid;
+    json_t *vj = valid ? NULL : proto_validity_to_json(&st);
+    geo_stats_clear(&st);
+    if (valid)
+        return 0;
+    char text[400] = "";
+    size_t n = 0;
+    json_t *why = vj ? json_object_get(vj, "reasons") : NULL;
+    for (size_t i = 0; why && i < json_array_size(why) && n < sizeof text;
+         i++)
+        n += (size_t)snprintf(text + n, sizeof text - n, "%s%s",
+                              i ? "; " : "",
+                              json_string_value(json_array_get(why, i)));
+    json_decref(vj);
+    return geo_err_set(err, -EINVAL, "%s: the result is not a valid closed "
+                       "solid: %s", op, text);
+}
+
+/* fill (lib/mesh/fill.h): every hole closed and checked; a result that is
+ * not valid (a hole left open: the report's reason) fails the job. */
 static int run_fill_holes(const proto_op *op, geo_poly **model,
                           const geo_ctx *ctx, json_t **ret_report,
                           json_t *summary, geo_err *err)
@@ -210,10 +240,33 @@ static int run_fill_holes(const proto_op *op, geo_poly **model,
     e |= json_object_set_new(summary, "holes_filled", json_integer(rep.nfilled));
     e |= json_object_set_new(summary, "holes_left_open",
                              json_integer(rep.nopen));
+    uint32_t nopen = rep.nopen;
+    char first[96] = "";
+    for (uint32_t i = 0; i < rep.nloops && !first[0]; i++) {
+        const geo_mesh_hole *h = &rep.holes[i];
+        if (h->status != GEO_HOLE_FILLED &&
+            h->status != GEO_HOLE_FILLED_PLANAR)
+            snprintf(first, sizeof first, " (hole %u, %u vertices at vertex "
+                     "%u: %s)", i, h->nverts, h->first_vertex,
+                     geo_hole_status_name(h->status));
+    }
     geo_mesh_fill_report_clear(&rep);
     if (e) {
         json_decref(j);
         return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    if ((r = require_valid(*model, "fill", ctx, err)) < 0) {
+        json_decref(j);
+        if (r == -EINVAL && nopen) {
+            char tail[160];
+            snprintf(tail, sizeof tail, "; %u holes left open%s", nopen,
+                     first);
+            size_t have = strlen(err->msg);
+            if (have + 1 < sizeof err->msg)
+                snprintf(err->msg + have, sizeof err->msg - have, "%.*s",
+                         (int)(sizeof err->msg - have - 1), tail);
+        }
+        return r;
     }
     *ret_report = j;
     return 0;
@@ -242,6 +295,11 @@ static int run_stitch(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
         json_decref(j);
         geo_poly_free(out);
         return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    if ((r = require_valid(out, "stitch", ctx, err)) < 0) {
+        json_decref(j);
+        geo_poly_free(out);
+        return r;
     }
     geo_poly_free(*model);
     *model = out;

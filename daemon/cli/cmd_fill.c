@@ -1,9 +1,12 @@
 /* cmd_fill.c — `facet fill MODEL -o OUT [--weight area|edges|angle]
- * [--no-refine] [--no-fair] [--report FILE]`: closes the holes of a mesh
- * (lib/mesh/fill.h), writes it, prints a one-line JSON summary and, with
- * --report, the whole report (every hole with its outcome, the validity
- * of the result with the reasons when it is not valid, the time). Holes
- * left open are results, not errors: exit 0 whenever OUT was written. */
+ * [--no-refine] [--no-fair] [--report FILE] [--keep-invalid]`: closes
+ * the holes of a mesh (lib/mesh/fill.h), writes it, prints a one-line
+ * JSON summary and, with --report, the whole report (every hole with the
+ * strategy that closed it or why it is open, the validity of the result
+ * with the reasons when it is not valid, the time). OUT is written and
+ * the exit status is 0 only when the result is a valid closed solid; any
+ * other result exits 1 with the reasons (and is written only with
+ * --keep-invalid, for inspection). */
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -18,15 +21,16 @@
 
 static const char USAGE[] =
     "usage: facet fill MODEL -o OUT [--weight area|edges|angle] [--no-refine]\n"
-    "                  [--no-fair] [--report FILE]\n"
+    "                  [--no-fair] [--report FILE] [--keep-invalid]\n"
     "\n"
     "Closes every hole (boundary loop) of MODEL and writes OUT. A planar hole\n"
     "(a missing facet) gets one planar facet; any other is triangulated with\n"
     "Liepa's minimum-weight triangulation, refined to the density of the\n"
     "mesh around it and faired (U² = 0, the mesh around kept fixed). Every\n"
     "patch is checked: one that would intersect the mesh is taken back and\n"
-    "tried again (angle weight, no fairing, no refinement); a hole that\n"
-    "cannot be filled validly stays open and the report says why.\n"
+    "tried again (angle weight, no fairing, no refinement, then the search\n"
+    "steered around the triangles that crossed); a hole that cannot be\n"
+    "filled validly stays open and the report says why.\n"
     "\n"
     "  -o, --output OUT  the result (format from the extension)\n"
     "  --weight W        area (least area, default), edges (least edge\n"
@@ -34,11 +38,15 @@ static const char USAGE[] =
     "  --no-refine       keep the bare triangulation\n"
     "  --no-fair         do not fair the refined patches\n"
     "  --report FILE     write the full JSON report to FILE\n"
+    "  --keep-invalid    write OUT even when the result is not valid (the\n"
+    "                    exit status is still 1)\n"
     "\n"
     "Prints one line of JSON: loops, filled, planar, left_open,\n"
     "vertices_added, facets_added, max_dihedral_deg, valid, vertices, facets,\n"
-    "ms. exit status: 0 OUT written (holes may be left open: see left_open),\n"
-    "1 bad input, 2 usage error\n";
+    "ms. exit status: 0 OUT written and valid (closed, manifold, outward,\n"
+    "no self-intersection), 1 bad input or a result that is not valid (the\n"
+    "reasons on stderr; OUT not written unless --keep-invalid), 2 usage\n"
+    "error\n";
 
 static double mono_ms(void)
 {
@@ -54,6 +62,7 @@ int cmd_fill(int argc, char **argv)
         return CLI_OK;
     }
     const char *in = NULL, *outpath = NULL, *report = NULL;
+    bool keep_invalid = false;
     geo_mesh_fill_opts o;
     geo_mesh_fill_opts_default(&o);
     for (int i = 1; i < argc; i++) {
@@ -82,6 +91,8 @@ int cmd_fill(int argc, char **argv)
             o.fill.refine = false;
         } else if (strcmp(a, "--no-fair") == 0) {
             o.fill.fair = GEO_FAIR_NONE;
+        } else if (strcmp(a, "--keep-invalid") == 0) {
+            keep_invalid = true;
         } else if (a[0] == '-' && a[1] != '\0') {
             return cli_usage_error("fill", "unknown option '%s'", a);
         } else if (!in) {
@@ -126,7 +137,21 @@ int cmd_fill(int argc, char **argv)
         rc = cli_input_error("fill", "out of memory");
         goto out;
     }
-    if (proto_model_write_file(p, outpath, PROTO_FMT_UNKNOWN, &err) < 0) {
+    /* an invalid result is never written as a success: with
+     * --keep-invalid it is written for inspection, and the exit status is
+     * still 1 */
+    if (!st.valid) {
+        json_t *why = json_object_get(vj, "reasons");
+        char *text = why ? json_dumps(why, JSON_COMPACT) : NULL;
+        rc = cli_input_error("fill", "%s: the result is not a valid closed "
+                             "solid%s: %s", in,
+                             keep_invalid ? " (written anyway)" : ", not "
+                                                                 "written",
+                             text ? text : "[]");
+        free(text);
+    }
+    if ((st.valid || keep_invalid) &&
+        proto_model_write_file(p, outpath, PROTO_FMT_UNKNOWN, &err) < 0) {
         rc = cli_input_error("fill", "%s", err.msg);
         goto out;
     }

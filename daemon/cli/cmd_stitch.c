@@ -1,11 +1,14 @@
-/* cmd_stitch.c — `facet stitch A B -o OUT [--report FILE]`: joins two
- * open meshes into one closed mesh (lib/mesh/stitch.h, Nesterenko), writes it,
- * prints a one-line JSON summary and, with --report, the whole report
- * (the loops and vertices chosen, the bridge, the openings closed, the
- * validity of the result with the reasons when it is not valid, the
- * time). */
+/* cmd_stitch.c — `facet stitch A B -o OUT [--report FILE]
+ * [--keep-invalid]`: joins two open meshes into one closed mesh
+ * (lib/mesh/stitch.h, Nesterenko), writes it, prints a one-line JSON
+ * summary and, with --report, the whole report (the loops and vertices
+ * chosen, the bridge, the openings closed, the validity of the result
+ * with the reasons when it is not valid, the time). A result that is not
+ * a valid closed solid exits 1 with the reasons and is not written
+ * (unless --keep-invalid, for inspection). */
 #include <errno.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
@@ -16,7 +19,7 @@
 #include "stitch.h"
 
 static const char USAGE[] =
-    "usage: facet stitch A B -o OUT [--report FILE]\n"
+    "usage: facet stitch A B -o OUT [--report FILE] [--keep-invalid]\n"
     "\n"
     "Joins the open meshes A and B (Nesterenko): the free-edge loops of the\n"
     "two with the closest centres are bridged by a mesh of meridians between\n"
@@ -26,12 +29,16 @@ static const char USAGE[] =
     "\n"
     "  -o, --output OUT  the result (format from the extension)\n"
     "  --report FILE     write the full JSON report to FILE\n"
+    "  --keep-invalid    write OUT even when the result is not valid (the\n"
+    "                    exit status is still 1)\n"
     "\n"
     "Prints one line of JSON: band (loops joined whole), flipped, meridians,\n"
     "rows, band_vertices, band_facets, welded (loop vertices joined where\n"
     "the loops coincide), openings_filled, left_open, valid,\n"
-    "vertices, facets, ms. exit status: 0 OUT written, 1 bad input (also\n"
-    "meshes without free edges), 2 usage error\n";
+    "vertices, facets, ms. exit status: 0 OUT written and valid, 1 bad\n"
+    "input (also meshes without free edges) or a result that is not a\n"
+    "valid closed solid (the reasons on stderr; OUT not written unless\n"
+    "--keep-invalid), 2 usage error\n";
 
 static double mono_ms(void)
 {
@@ -48,6 +55,7 @@ int cmd_stitch(int argc, char **argv)
     }
     const char *in[2] = {NULL, NULL}, *outpath = NULL, *report = NULL;
     int nin = 0;
+    bool keep_invalid = false;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0 ||
@@ -58,6 +66,8 @@ int cmd_stitch(int argc, char **argv)
                 report = argv[++i];
             else
                 outpath = argv[++i];
+        } else if (strcmp(a, "--keep-invalid") == 0) {
+            keep_invalid = true;
         } else if (a[0] == '-' && a[1] != '\0') {
             return cli_usage_error("stitch", "unknown option '%s'", a);
         } else if (nin < 2) {
@@ -106,9 +116,20 @@ int cmd_stitch(int argc, char **argv)
     doc = sj && vj ? json_pack("{s:O, s:O, s:f}", "stitch", sj, "result", vj,
                                "ms", ms)
                    : NULL;
+    if (doc && !st.valid) {
+        json_t *why = json_object_get(vj, "reasons");
+        char *text = why ? json_dumps(why, JSON_COMPACT) : NULL;
+        rc = cli_input_error("stitch", "%s, %s: the result is not a valid "
+                             "closed solid%s: %s", in[0], in[1],
+                             keep_invalid ? " (written anyway)"
+                                          : ", not written",
+                             text ? text : "[]");
+        free(text);
+    }
     if (!doc) {
         rc = cli_input_error("stitch", "out of memory");
-    } else if (proto_model_write_file(out, outpath, PROTO_FMT_UNKNOWN,
+    } else if ((st.valid || keep_invalid) &&
+               proto_model_write_file(out, outpath, PROTO_FMT_UNKNOWN,
                                       &err) < 0) {
         rc = cli_input_error("stitch", "%s", err.msg);
     } else if (report && json_dump_file(doc, report, JSON_INDENT(2)) < 0) {

@@ -14,6 +14,7 @@
 
 #include "bvh.h"
 #include "edgemap.h"
+#include "orient.h"
 #include "plane.h"
 #include "selfint.h"
 #include "topo.h"
@@ -32,6 +33,16 @@ const char *geo_fill_attempt_name(enum geo_fill_attempt a)
         return "no_fair";
     case GEO_ATTEMPT_PLAIN:
         return "plain";
+    case GEO_ATTEMPT_AVOID_FAIRED:
+        return "avoid_faired";
+    case GEO_ATTEMPT_AVOID_REFINED:
+        return "avoid_refined";
+    case GEO_ATTEMPT_AVOID:
+        return "avoid";
+    case GEO_ATTEMPT_LIFT:
+        return "lift";
+    case GEO_ATTEMPT_LOWER:
+        return "lower";
     }
     return "unknown";
 }
@@ -40,7 +51,7 @@ void geo_mesh_fill_opts_default(geo_mesh_fill_opts *o)
 {
     memset(o, 0, sizeof *o);
     geo_fill_opts_default(&o->fill);
-    o->fill.max_dp_vertices = 600;
+    o->fill.max_dp_vertices = 96;
     o->planar = true;
     o->check = true;
     o->fallback = true;
@@ -96,23 +107,33 @@ typedef struct self_probe {
     uint32_t f0;
     const geo_facet_shape *shapes;
     int hit;
+    uint8_t *bad; /* when set: mark both facets of every pair, go on */
 } self_probe;
 
 static bool probe_pair(void *user, uint32_t a, uint32_t b)
 {
     self_probe *sp = user;
+    if (sp->bad && sp->bad[a] && sp->bad[b])
+        return true;
     int r = geo_facets_intersect(sp->out, sp->f0 + a, sp->f0 + b,
                                  &sp->shapes[a], &sp->shapes[b]);
-    if (r != 0) {
-        sp->hit = r < 0 ? r : 1;
+    if (r < 0) {
+        sp->hit = r;
         return false;
+    }
+    if (r > 0) {
+        sp->hit = 1;
+        if (!sp->bad)
+            return false;
+        sp->bad[a] = sp->bad[b] = 1;
     }
     return true;
 }
 
 /* 1 when facets [f0, f1) of out are degenerate, not simple, or intersect
- * the mesh, a kept patch or each other; 0 when clean; -ENOMEM. */
-static int patch_intersects(mfill *M, uint32_t f0, uint32_t f1)
+ * the mesh, a kept patch or each other; 0 when clean; -ENOMEM. With bad
+ * (f1 − f0 bytes), every offending facet is marked, not just the first. */
+static int patch_intersects(mfill *M, uint32_t f0, uint32_t f1, uint8_t *bad)
 {
     uint32_t n = f1 - f0;
     geo_facet_shape *sh = malloc((size_t)n * sizeof *sh);
@@ -125,14 +146,19 @@ static int patch_intersects(mfill *M, uint32_t f0, uint32_t f1)
     }
     geo_bbox all;
     geo_bbox_empty(&all);
-    for (uint32_t k = 0; k < n && !hit; k++) {
+    for (uint32_t k = 0; k < n && (!hit || bad); k++) {
         geo_facet_shape_of(M->out, f0 + k, &sh[k]);
-        if (sh[k].degenerate || !sh[k].simple)
+        if (sh[k].degenerate || !sh[k].simple) {
             hit = 1;
+            if (bad)
+                bad[k] = 1;
+        }
         geo_poly_facet_bbox(M->out, f0 + k, &boxes[k]);
         geo_bbox_union(&all, &boxes[k]);
     }
-    for (uint32_t k = 0; k < n && !hit; k++) {
+    for (uint32_t k = 0; k < n && (!hit || bad); k++) {
+        if (bad && bad[k])
+            continue;
         pair_probe pp = {M->out, f0 + k, &sh[k], 0};
         if (M->bvh)
             geo_bvh_query_box(M->bvh, &boxes[k], probe_facet, &pp);
@@ -147,17 +173,26 @@ static int patch_intersects(mfill *M, uint32_t f0, uint32_t f1)
                     probe_facet(&pp, g);
             }
         }
-        hit = pp.hit;
+        if (pp.hit < 0) {
+            hit = pp.hit;
+            goto out;
+        }
+        if (pp.hit) {
+            hit = 1;
+            if (bad)
+                bad[k] = 1;
+        }
     }
-    if (!hit && n > 1) {
+    if ((!hit || bad) && n > 1) {
         own = geo_bvh_build(boxes, n, NULL);
         if (!own) {
             hit = -ENOMEM;
             goto out;
         }
-        self_probe sp = {M->out, f0, sh, 0};
+        self_probe sp = {M->out, f0, sh, 0, bad};
         geo_bvh_pairs(own, 0, 0, probe_pair, &sp);
-        hit = sp.hit;
+        if (sp.hit)
+            hit = sp.hit;
     }
 out:
     geo_bvh_free(own);
@@ -262,7 +297,7 @@ static int try_planar(mfill *M, const loop_ref *L, bool check)
         bad = s.degenerate || !s.simple;
     }
     if (!bad && check)
-        bad = patch_intersects(M, nf, nf + 1);
+        bad = patch_intersects(M, nf, nf + 1, NULL);
     if (bad) {
         truncate_out(out, out->nverts, nf);
         return bad < 0 ? bad : 0;
@@ -283,10 +318,44 @@ static bool select_edge(void *user, const uint32_t *cycle, uint32_t n)
     return false;
 }
 
+/* A triangle of out's vertices as a key of the forbidden set: exact
+ * below 2²¹ vertices, else a hash (a collision only forbids one more
+ * triangle). Never UINT64_MAX. */
+static uint64_t tri_key(uint32_t a, uint32_t b, uint32_t c)
+{
+    uint32_t t;
+    if (a > b)
+        t = a, a = b, b = t;
+    if (b > c)
+        t = b, b = c, c = t;
+    if (a > b)
+        t = a, a = b, b = t;
+    if (c < (1u << 21))
+        return (uint64_t)a | (uint64_t)b << 21 | (uint64_t)c << 42;
+    uint64_t h = (uint64_t)a * 0x9e3779b97f4a7c15ull ^
+                 (uint64_t)b * 0xc2b2ae3d27d4eb4full ^
+                 (uint64_t)c * 0x165667b19e3779f9ull;
+    return h | (uint64_t)1 << 63;
+}
+
+typedef struct admit_ctx {
+    const uint32_t *glob;      /* sub's vertex → out's */
+    const geo_edgemap *forbid; /* tri_key of the triangles not to use */
+} admit_ctx;
+
+static bool admit_tri(void *user, uint32_t a, uint32_t b, uint32_t c)
+{
+    const admit_ctx *ac = user;
+    return geo_edgemap_get(ac->forbid, tri_key(ac->glob[a], ac->glob[b],
+                                                ac->glob[c])) == UINT32_MAX;
+}
+
 /* Runs the hole filler on the facets around the loop and appends its
- * patch to out. *status gets the outcome; 0 or a negative errno. */
+ * patch to out, avoiding the triangles in forbid (may be NULL). *status
+ * gets the outcome; 0 or a negative errno. */
 static int try_liepa(mfill *M, const loop_ref *L, const geo_fill_opts *fo,
-                     uint8_t *status, geo_err *err)
+                     const geo_edgemap *forbid, uint8_t *status,
+                     geo_err *err)
 {
     geo_poly *out = M->out;
     const geo_topo *t = M->t;
@@ -388,6 +457,11 @@ static int try_liepa(mfill *M, const loop_ref *L, const geo_fill_opts *fo,
     geo_fill_opts o = *fo;
     o.select_loop = select_edge;
     o.select_user = &es;
+    admit_ctx ac = {glob, forbid};
+    if (forbid && forbid->n > 0) {
+        o.admit = admit_tri;
+        o.admit_user = &ac;
+    }
     geo_ctx inner = {0};
     if (M->ctx) {
         inner.cancel = M->ctx->cancel;
@@ -550,6 +624,260 @@ static int plan_attempts(const geo_mesh_fill_opts *mo, uint8_t kinds[4],
     return n;
 }
 
+/* The bare triangulation steered around the mesh: each round forbids the
+ * loop triangles that crossed something (the mesh, a kept patch, the
+ * patch itself) and searches again, so the programme picks other
+ * diagonals — the hole is split into other sub-holes — until a patch
+ * crosses nothing or no triangulation is left. Then the same search is
+ * refined and faired, and the first variant that still crosses nothing
+ * is kept. 1 kept (h->attempt says which), 0 none (out unchanged), or a
+ * negative errno. */
+static int try_avoid(mfill *M, const geo_mesh_fill_opts *mo, const loop_ref *L,
+                     geo_mesh_hole *h, geo_mesh_fill_report *rep,
+                     geo_err *err)
+{
+    geo_poly *out = M->out;
+    uint32_t nv0 = out->nverts, nf0 = out->nfacets;
+    geo_edgemap forbid = {0};
+    uint8_t *bad = NULL;
+    int rc = -ENOMEM;
+    if (geo_edgemap_init(&forbid, 64) < 0)
+        goto done;
+    geo_fill_opts bare = mo->fill;
+    bare.weight = GEO_FILL_ANGLE;
+    bare.refine = false;
+    bare.fair = GEO_FAIR_NONE;
+    /* each round costs one O(n³) search; big holes get fewer rounds */
+    uint32_t rounds = L->n <= 64 ? 200 : L->n <= 200 ? 60 : 16;
+    bool found = false;
+    for (uint32_t r = 0; r < rounds && !found; r++) {
+        uint8_t st = GEO_HOLE_NO_TRIANGULATION;
+        rc = try_liepa(M, L, &bare, &forbid, &st, err);
+        if (rc < 0)
+            goto done;
+        if (st != GEO_HOLE_FILLED)
+            break;
+        uint32_t np = out->nfacets - nf0;
+        uint8_t *nb = realloc(bad, np ? np : 1);
+        if (!nb) {
+            rc = -ENOMEM;
+            goto done;
+        }
+        bad = nb;
+        memset(bad, 0, np);
+        rc = patch_intersects(M, nf0, out->nfacets, bad);
+        if (rc < 0)
+            goto done;
+        if (rc == 0) {
+            found = true;
+            break;
+        }
+        rep->nrejected++;
+        size_t added = 0;
+        for (uint32_t k = 0; k < np; k++) {
+            if (!bad[k] || geo_poly_facet_size(out, nf0 + k) != 3)
+                continue;
+            const uint32_t *tv = geo_poly_facet(out, nf0 + k);
+            uint64_t key = tri_key(tv[0], tv[1], tv[2]);
+            if (geo_edgemap_get(&forbid, key) == UINT32_MAX) {
+                if (geo_edgemap_put(&forbid, key, 1) < 0) {
+                    rc = -ENOMEM;
+                    goto done;
+                }
+                added++;
+            }
+        }
+        truncate_out(out, nv0, nf0);
+        if (added == 0)
+            break; /* nothing left to steer by */
+    }
+    rc = 0;
+    if (!found)
+        goto done;
+    /* the steered triangulation passes: try it refined and faired */
+    static const uint8_t kinds[2] = {GEO_ATTEMPT_AVOID_FAIRED,
+                                     GEO_ATTEMPT_AVOID_REFINED};
+    for (int a = 0; a < 2 && mo->fill.refine; a++) {
+        if (kinds[a] == GEO_ATTEMPT_AVOID_FAIRED &&
+            mo->fill.fair == GEO_FAIR_NONE)
+            continue;
+        truncate_out(out, nv0, nf0);
+        geo_fill_opts o = mo->fill;
+        o.weight = GEO_FILL_ANGLE;
+        if (kinds[a] == GEO_ATTEMPT_AVOID_REFINED)
+            o.fair = GEO_FAIR_NONE;
+        uint8_t st = GEO_HOLE_NO_TRIANGULATION;
+        rc = try_liepa(M, L, &o, &forbid, &st, err);
+        if (rc < 0)
+            goto done;
+        if (st != GEO_HOLE_FILLED)
+            continue;
+        rc = patch_intersects(M, nf0, out->nfacets, NULL);
+        if (rc < 0)
+            goto done;
+        if (rc == 0) {
+            h->attempt = kinds[a];
+            rc = 1;
+            goto done;
+        }
+        rep->nrejected++;
+    }
+    /* the bare steered patch, searched once more (it passed before) */
+    truncate_out(out, nv0, nf0);
+    uint8_t st = GEO_HOLE_NO_TRIANGULATION;
+    rc = try_liepa(M, L, &bare, &forbid, &st, err);
+    if (rc < 0)
+        goto done;
+    h->attempt = GEO_ATTEMPT_AVOID;
+    rc = st == GEO_HOLE_FILLED ? 1 : 0;
+    if (rc == 0)
+        truncate_out(out, nv0, nf0);
+done:
+    if (rc < 0)
+        truncate_out(out, nv0, nf0);
+    if (rc == -ENOMEM)
+        geo_err_set(err, rc, "out of memory steering a patch");
+    geo_edgemap_destroy(&forbid);
+    free(bad);
+    return rc;
+}
+
+/* Unit Newell normal of the patch cycle (zero when it has none). */
+static void cycle_normal(const geo_poly *out, const loop_ref *L, double n[3])
+{
+    n[0] = n[1] = n[2] = 0;
+    for (uint32_t k = 0; k < L->n; k++) {
+        const double *a = out->verts[L->w[k]];
+        const double *b = out->verts[L->w[(k + 1) % L->n]];
+        n[0] += (a[1] - b[1]) * (a[2] + b[2]);
+        n[1] += (a[2] - b[2]) * (a[0] + b[0]);
+        n[2] += (a[0] - b[0]) * (a[1] + b[1]);
+    }
+    if (geo_vnormalize(n) == 0)
+        n[0] = n[1] = n[2] = 0;
+}
+
+/* Appends a fan from the loop's centroid: the patch the lift bends when
+ * refinement added no vertex to bend. */
+static int append_fan(geo_poly *out, const loop_ref *L)
+{
+    double c[3] = {0, 0, 0};
+    for (uint32_t k = 0; k < L->n; k++)
+        for (int d = 0; d < 3; d++)
+            c[d] += out->verts[L->w[k]][d] / L->n;
+    int64_t v = geo_poly_add_vertex(out, c);
+    if (v < 0)
+        return (int)v;
+    for (uint32_t k = 0; k < L->n; k++) {
+        uint32_t t[3] = {L->w[k], L->w[(k + 1) % L->n], (uint32_t)v};
+        int64_t f = geo_poly_add_facet(out, t, 3);
+        if (f < 0)
+            return (int)f;
+    }
+    return 0;
+}
+
+/* The patch lifted or lowered along the loop's normal: the vertices the
+ * patch added move by amp × (mean patch edge) × (their distance in edges
+ * from the loop), a dome instead of a lid, which clears a sheet the lid
+ * would lie on (an open sheet, a hole in a flat region whose only
+ * triangulation overlaps it) or a thin wall next to the hole. Amplitudes
+ * are tried from small to large, lifting first; the first patch that
+ * crosses nothing is kept. 1 kept, 0 none (out unchanged), -ENOMEM. */
+static int try_lift(mfill *M, const geo_mesh_fill_opts *mo, const loop_ref *L,
+                    geo_mesh_hole *h, geo_mesh_fill_report *rep, geo_err *err)
+{
+    geo_poly *out = M->out;
+    uint32_t nv0 = out->nverts, nf0 = out->nfacets;
+    double nrm[3];
+    cycle_normal(out, L, nrm);
+    if (geo_vdot(nrm, nrm) == 0)
+        return 0;
+    geo_fill_opts o = mo->fill;
+    o.weight = GEO_FILL_ANGLE;
+    uint8_t st = GEO_HOLE_NO_TRIANGULATION;
+    int rc = try_liepa(M, L, &o, NULL, &st, err);
+    if (rc < 0)
+        return rc;
+    if (st != GEO_HOLE_FILLED || out->nverts == nv0) {
+        truncate_out(out, nv0, nf0);
+        if ((rc = append_fan(out, L)) < 0) {
+            truncate_out(out, nv0, nf0);
+            return geo_err_set(err, rc, "out of memory lifting a patch");
+        }
+    }
+    uint32_t nnew = out->nverts - nv0;
+    uint32_t *depth = malloc((size_t)nnew * sizeof *depth);
+    double(*base)[3] = malloc((size_t)nnew * sizeof *base);
+    if (!depth || !base) {
+        free(depth), free(base);
+        truncate_out(out, nv0, nf0);
+        return geo_err_set(err, -ENOMEM, "out of memory lifting a patch");
+    }
+    memcpy(base, out->verts + nv0, (size_t)nnew * sizeof *base);
+    for (uint32_t v = 0; v < nnew; v++)
+        depth[v] = UINT32_MAX;
+    /* distances in edges from the loop: relax over the patch's edges */
+    double elen = 0;
+    uint64_t ne = 0;
+    for (bool changed = true; changed;) {
+        changed = false;
+        for (uint32_t f = nf0; f < out->nfacets; f++) {
+            const uint32_t *fv = geo_poly_facet(out, f);
+            uint32_t k = geo_poly_facet_size(out, f);
+            for (uint32_t i = 0; i < k; i++) {
+                uint32_t a = fv[i], b = fv[(i + 1) % k];
+                for (int dir = 0; dir < 2; dir++) {
+                    uint32_t x = dir ? b : a, y = dir ? a : b;
+                    if (y < nv0)
+                        continue;
+                    uint32_t dx = x < nv0 ? 0 : depth[x - nv0];
+                    if (dx != UINT32_MAX && dx + 1 < depth[y - nv0]) {
+                        depth[y - nv0] = dx + 1;
+                        changed = true;
+                    }
+                }
+            }
+        }
+    }
+    for (uint32_t f = nf0; f < out->nfacets; f++) {
+        const uint32_t *fv = geo_poly_facet(out, f);
+        uint32_t k = geo_poly_facet_size(out, f);
+        for (uint32_t i = 0; i < k; i++, ne++)
+            elen += geo_vdist(out->verts[fv[i]], out->verts[fv[(i + 1) % k]]);
+    }
+    elen = ne ? elen / (double)ne : 0;
+    static const double amps[] = {0.25, 0.5, 1.0, 2.0, -0.25, -0.5, -1.0,
+                                  -2.0};
+    rc = 0;
+    for (size_t a = 0; a < sizeof amps / sizeof amps[0] && elen > 0; a++) {
+        for (uint32_t v = 0; v < nnew; v++) {
+            double d = depth[v] == UINT32_MAX ? 1 : depth[v];
+            for (int c = 0; c < 3; c++)
+                out->verts[nv0 + v][c] = base[v][c] + amps[a] * elen * d *
+                                                          nrm[c];
+        }
+        for (uint32_t f = nf0; f < out->nfacets; f++)
+            geo_poly_facet_fit_plane(out, f, GEO_PLANE_UNWEIGHTED,
+                                     out->planes[f]);
+        int r = patch_intersects(M, nf0, out->nfacets, NULL);
+        if (r < 0) {
+            rc = geo_err_set(err, r, "out of memory checking a patch");
+            break;
+        }
+        if (r == 0) {
+            h->attempt = amps[a] > 0 ? GEO_ATTEMPT_LIFT : GEO_ATTEMPT_LOWER;
+            rc = 1;
+            break;
+        }
+        rep->nrejected++;
+    }
+    free(depth), free(base);
+    if (rc != 1)
+        truncate_out(out, nv0, nf0);
+    return rc;
+}
+
 static int fill_one(mfill *M, const geo_mesh_fill_opts *mo, const loop_ref *L,
                     geo_mesh_hole *h, geo_mesh_fill_report *rep, geo_err *err)
 {
@@ -573,23 +901,43 @@ static int fill_one(mfill *M, const geo_mesh_fill_opts *mo, const loop_ref *L,
     h->status = GEO_HOLE_NO_TRIANGULATION;
     for (int a = 0; a < na; a++) {
         h->attempt = kinds[a];
-        uint8_t st = GEO_HOLE_NO_TRIANGULATION;
-        int r = try_liepa(M, L, &fo[a], &st, err);
+        /* refined patches are built first without the per-split checks
+         * (the whole patch is checked below, which is much cheaper), and
+         * only when that patch crosses, again with them */
+        bool fast = mo->check && fo[a].refine && fo[a].check_each;
+        for (int pass = fast ? 0 : 1; pass < 2; pass++) {
+            geo_fill_opts o = fo[a];
+            o.check_each = pass == 1 && fo[a].check_each;
+            uint8_t st = GEO_HOLE_NO_TRIANGULATION;
+            int r = try_liepa(M, L, &o, NULL, &st, err);
+            if (r < 0)
+                return r;
+            h->status = st;
+            if (st != GEO_HOLE_FILLED)
+                return 0; /* nothing another weight could change */
+            if (!mo->check)
+                goto kept;
+            r = patch_intersects(M, nf0, out->nfacets, NULL);
+            if (r < 0)
+                return geo_err_set(err, r, "out of memory checking a patch");
+            if (r == 0)
+                goto kept;
+            rep->nrejected++;
+            truncate_out(out, nv0, nf0);
+            h->status = GEO_HOLE_INTERSECTS;
+        }
+    }
+    if (h->status == GEO_HOLE_INTERSECTS && mo->fallback) {
+        int r = try_avoid(M, mo, L, h, rep, err);
+        if (r == 0)
+            r = try_lift(M, mo, L, h, rep, err);
         if (r < 0)
             return r;
-        h->status = st;
-        if (st != GEO_HOLE_FILLED)
-            return 0; /* nothing another weight could change */
-        if (!mo->check)
+        if (r == 1) {
+            h->status = GEO_HOLE_FILLED;
             goto kept;
-        r = patch_intersects(M, nf0, out->nfacets);
-        if (r < 0)
-            return geo_err_set(err, r, "out of memory checking a patch");
-        if (r == 0)
-            goto kept;
-        rep->nrejected++;
-        truncate_out(out, nv0, nf0);
-        h->status = GEO_HOLE_INTERSECTS;
+        }
+        h->attempt = GEO_ATTEMPT_LOWER;
     }
     return 0;
 kept:
@@ -599,6 +947,32 @@ kept:
         patch_metrics(M, L, nf0, out->nfacets, h) < 0)
         return geo_err_set(err, -ENOMEM, "out of memory");
     return 0;
+}
+
+/* An open mesh has no inside: once every hole is closed, a shell that
+ * came out turned inside out (consistent, negative volume) has all its
+ * facets reversed. A shell with inconsistent facets is left as it is
+ * (that is a defect of the input, for `orient` to repair). */
+static int turn_outward(geo_poly *p, geo_mesh_fill_report *R, geo_err *err)
+{
+    geo_topo *t = geo_topo_build(p, err);
+    uint8_t *flip = malloc(p->nfacets ? p->nfacets : 1);
+    geo_orient_report orep;
+    int rc = -ENOMEM;
+    if (t && flip && geo_orient_analyze(p, t, flip, &orep, err) == 0) {
+        rc = 0;
+        if (orep.ninconsistent == 0 && orep.orientable)
+            for (uint32_t f = 0; f < p->nfacets; f++)
+                if (flip[f]) {
+                    geo_poly_flip_facet(p, f);
+                    R->nreversed++;
+                }
+    }
+    if (rc < 0)
+        geo_err_set(err, rc, "out of memory orienting the result");
+    geo_topo_free(t);
+    free(flip);
+    return rc;
 }
 
 int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
@@ -679,6 +1053,8 @@ int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
     *p = *M.out;
     *M.out = tmp;
     rc = 0;
+    if (R.nfilled > 0 && R.nopen == 0 && (rc = turn_outward(p, &R, err)) < 0)
+        goto fail;
     goto done;
 fail:
     if (rc == -ENOMEM)

@@ -27,9 +27,23 @@
  *    kept patches' boxes, so the check is local. A rejected patch is
  *    taken back and, when opts.fallback, the hole is tried again with
  *    Liepa's dihedral-angle weight, then without fairing, then without
- *    refinement; a hole that no attempt fills validly stays open with
- *    status GEO_HOLE_INTERSECTS. No hole is ever reported filled with
+ *    refinement, then steered (GEO_ATTEMPT_AVOID*): the bare
+ *    triangulation is searched again and again with the triangles that
+ *    crossed forbidden (geo_fill_opts.admit), so it takes other
+ *    diagonals, splitting the hole into other sub-holes, until a patch
+ *    crosses nothing; that triangulation is then refined and faired,
+ *    refined, or kept bare, whichever first crosses nothing. Last, the
+ *    refined patch (or a fan from the loop's centroid) is bent into a
+ *    dome along the loop's normal (GEO_ATTEMPT_LIFT, then _LOWER; the
+ *    added vertices move by a multiple of the mean edge length times
+ *    their distance in edges from the loop), which clears an open sheet
+ *    or a thin wall a flat lid would lie on. A hole that no attempt
+ *    fills validly stays open with status GEO_HOLE_INTERSECTS. No hole is ever reported filled with
  *    nothing added.
+ *
+ * 5. When every hole is closed, a shell that is consistent but turned
+ *    inside out (an open mesh had no inside to face) has all its facets
+ *    reversed (rep->nreversed).
  *
  * Output: vertices and facets of p keep their indices; new vertices and
  * facets are appended, hole after hole. Ownership: p is modified in
@@ -53,9 +67,19 @@ enum geo_fill_attempt {
     GEO_ATTEMPT_ANGLE = 2,    /* Liepa's dihedral-angle weight */
     GEO_ATTEMPT_NO_FAIR = 3,  /* angle weight, refined, not faired */
     GEO_ATTEMPT_PLAIN = 4,    /* angle weight, the bare triangulation */
+    /* the search steered around the triangles that crossed (fill.c,
+     * try_avoid), then refined and faired, refined, or bare */
+    GEO_ATTEMPT_AVOID_FAIRED = 5,
+    GEO_ATTEMPT_AVOID_REFINED = 6,
+    GEO_ATTEMPT_AVOID = 7,
+    /* the patch (or, without added vertices, a fan from the centroid)
+     * bent into a dome along the loop's normal, outward or inward */
+    GEO_ATTEMPT_LIFT = 8,
+    GEO_ATTEMPT_LOWER = 9,
 };
 
-/* A stable name ("planar", "as_asked", "angle", "no_fair", "plain"). */
+/* A stable name ("planar", "as_asked", "angle", "no_fair", "plain",
+ * "avoid_faired", "avoid_refined", "avoid", "lift", "lower"). */
 const char *geo_fill_attempt_name(enum geo_fill_attempt a);
 
 typedef struct geo_mesh_fill_opts {
@@ -97,6 +121,8 @@ typedef struct geo_mesh_fill_report {
     uint32_t nplanar;      /* filled with one planar facet */
     uint32_t nopen;        /* left open, each with its status */
     uint32_t nrejected;    /* patches taken back by the check */
+    uint32_t nreversed;    /* facets reversed because the closed result
+                              was turned inside out (see below) */
     uint32_t verts_added, facets_added;
     double max_dihedral_deg; /* over every filled hole */
     geo_mesh_hole *holes;  /* nloops entries, in loop order */

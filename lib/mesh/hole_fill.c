@@ -52,6 +52,7 @@ void geo_fill_opts_default(geo_fill_opts *o)
     o->max_dp_vertices = 128;
     o->max_hole_vertices = 100000;
     o->fair_iterations = 50;
+    o->check_each = true;
 }
 
 void geo_fill_stats_clear(geo_fill_stats *stats)
@@ -180,10 +181,12 @@ static bool turned_back(const double n1[3], const double n2[3])
 
 /* Whether triangle (w_i, w_m, w_k) of an n-gon, with edge cross product
  * nt (not degenerate), obeys dp's rules at strictness strict. */
-static bool admissible(const filler *F, double (*en)[3], int strict,
-                       uint32_t i, uint32_t m, uint32_t k, uint32_t n,
-                       const double nt[3])
+static bool admissible(const filler *F, const uint32_t *w, double (*en)[3],
+                       int strict, uint32_t i, uint32_t m, uint32_t k,
+                       uint32_t n, const double nt[3])
 {
+    if (F->o.admit && !F->o.admit(F->o.admit_user, w[i], w[m], w[k]))
+        return false;
     if (strict >= 2 && !(geo_vdot(nt, F->up) > 0))
         return false;
     if (strict < 1 || !en)
@@ -216,7 +219,8 @@ static bool edges_coverable(const filler *F, const uint32_t *w, uint32_t n,
                         t = c[b], c[b] = c[b + 1], c[b + 1] = t;
             double nt[3];
             if (isfinite(tri_weight(F, w[c[0]], w[c[1]], w[c[2]], nt)))
-                found = admissible(F, en, strict, c[0], c[1], c[2], n, nt);
+                found = admissible(F, w, en, strict, c[0], c[1], c[2], n,
+                                   nt);
         }
         if (!found)
             return false;
@@ -246,10 +250,25 @@ static int dp(filler *F, const uint32_t *w, uint32_t n,
     uint32_t *M = malloc(nn * sizeof *M);
     uint8_t *ok = malloc(nn);
     uint32_t(*stack)[2] = malloc((size_t)n * sizeof *stack);
+    /* for the area and edge weights: W transposed (WT[k·n + m] =
+     * W[m·n + k], so the inner loop reads both halves contiguously), the
+     * chord lengths and the polygon's points, so a triangle costs one
+     * cross product and at most one square root */
+    double *WT = angle ? NULL : malloc(nn * sizeof *WT);
+    double *LEN = angle ? NULL : malloc(nn * sizeof *LEN);
+    double(*P)[3] = angle ? NULL : malloc((size_t)n * sizeof *P);
     int rc = 0;
-    if (!W || !M || !ok || !stack || (angle && (!A || !TN))) {
+    if (!W || !M || !ok || !stack || (angle && (!A || !TN)) ||
+        (!angle && (!WT || !LEN || !P))) {
         rc = -ENOMEM;
         goto out;
+    }
+    if (!angle) {
+        for (uint32_t i = 0; i < n; i++)
+            memcpy(P[i], F->p->verts[w[i]], sizeof P[i]);
+        for (uint32_t i = 0; i < n; i++)
+            for (uint32_t k = i + 1; k < n; k++)
+                LEN[(size_t)i * n + k] = geo_vdist(P[i], P[k]);
     }
     static const double zero[3] = {0, 0, 0};
     const double *closing = en ? en[n - 1] : zero;
@@ -262,6 +281,8 @@ static int dp(filler *F, const uint32_t *w, uint32_t n,
     for (uint32_t i = 0; i + 1 < n; i++) {
         size_t ik = (size_t)i * n + i + 1;
         W[ik] = 0.0;
+        if (WT)
+            WT[(size_t)(i + 1) * n + i] = 0.0;
         if (angle)
             A[ik] = 0.0;
         if (TN) /* the facet across a loop edge, seen from the patch */
@@ -284,7 +305,8 @@ static int dp(filler *F, const uint32_t *w, uint32_t n,
                     continue;
                 double nt[3];
                 double t = tri_weight(F, w[i], w[m], w[k], nt);
-                if (!isfinite(t) || !admissible(F, en, strict, i, m, k, n, nt))
+                if (!isfinite(t) ||
+                    !admissible(F, w, en, strict, i, m, k, n, nt))
                     continue;
                 geo_vnormalize(nt);
                 a = fmax(a, normal_angle(nt, TN[im]));
@@ -297,13 +319,25 @@ static int dp(filler *F, const uint32_t *w, uint32_t n,
                     bm = m;
                 }
             }
+            const double *Wi = angle ? NULL : W + (size_t)i * n;
+            const double *Wk = angle ? NULL : WT + (size_t)k * n;
             for (uint32_t m = i + 1; m < k && ok[ik] && !angle; m++) {
-                double ws = W[(size_t)i * n + m] + W[(size_t)m * n + k];
+                double ws = Wi[m] + Wk[m];
                 if (ws >= best)
                     continue;
-                double nt[3];
-                double t = ws + tri_weight(F, w[i], w[m], w[k], nt);
-                if (t < best && admissible(F, en, strict, i, m, k, n, nt)) {
+                /* tri_weight on the tables: same rule, same values */
+                double e1[3], e2[3], nt[3];
+                geo_vsub(P[m], P[i], e1);
+                geo_vsub(P[k], P[i], e2);
+                geo_vcross(e1, e2, nt);
+                double n2 = geo_vdot(nt, nt);
+                double per = LEN[(size_t)i * n + m] + LEN[(size_t)m * n + k] +
+                             LEN[ik];
+                double area = 0.5 * sqrt(n2);
+                if (!(area > 1e-14 * per * per))
+                    continue;
+                double t = ws + (F->o.weight == GEO_FILL_EDGES ? per : area);
+                if (t < best && admissible(F, w, en, strict, i, m, k, n, nt)) {
                     best = t;
                     bm = m;
                 }
@@ -315,6 +349,8 @@ static int dp(filler *F, const uint32_t *w, uint32_t n,
             else if (TN)
                 memcpy(TN[ik], zero, sizeof TN[ik]);
             W[ik] = best;
+            if (WT)
+                WT[(size_t)k * n + i] = best;
             M[ik] = bm;
         }
     if (!isfinite(W[n - 1])) {
@@ -350,6 +386,7 @@ static int dp(filler *F, const uint32_t *w, uint32_t n,
         rep->max_angle = A[n - 1];
 out:
     free(W), free(A), free(TN), free(M), free(ok), free(stack);
+    free(WT), free(LEN), free(P);
     return rc;
 }
 
@@ -430,10 +467,29 @@ typedef struct chord {
     uint32_t lo, hi;
 } chord;
 
-static int cmp_chord(const void *a, const void *b)
+/* The order chords are looked at in: by score, ties in the order they
+ * were listed (as a stable sort would give). */
+static bool chord_before(const chord *c, uint32_t x, uint32_t y)
 {
-    double x = ((const chord *)a)->score, y = ((const chord *)b)->score;
-    return x < y ? -1 : x > y;
+    return c[x].score < c[y].score || (c[x].score == c[y].score && x < y);
+}
+
+/* Sifts heap[i] down in the min-heap heap[0..n) of chord indices. */
+static void chord_sift(const chord *c, uint32_t *heap, uint32_t n, uint32_t i)
+{
+    for (;;) {
+        uint32_t l = 2 * i + 1, r = l + 1, m = i;
+        if (l < n && chord_before(c, heap[l], heap[m]))
+            m = l;
+        if (r < n && chord_before(c, heap[r], heap[m]))
+            m = r;
+        if (m == i)
+            return;
+        uint32_t t = heap[i];
+        heap[i] = heap[m];
+        heap[m] = t;
+        i = m;
+    }
 }
 
 /* The bridge of polygon w[0..n): of the chords from ≤ 256 evenly spaced
@@ -477,11 +533,24 @@ static int choose_bridge(const filler *F, const uint32_t *w, uint32_t n,
     free(arc);
     int rc = 1;
     if (nc > 0) {
-        qsort(c, nc, sizeof *c, cmp_chord);
+        /* the chords in order of score, popped from a heap: only the few
+         * looked at are ordered, not all n²/3 */
+        uint32_t *heap = malloc((size_t)nc * sizeof *heap);
+        if (!heap) {
+            free(c);
+            return -ENOMEM;
+        }
+        for (uint32_t k = 0; k < nc; k++)
+            heap[k] = k;
+        for (uint32_t k = nc / 2; k-- > 0;)
+            chord_sift(c, heap, nc, k);
         double nw[3];
         newell_normal(F, w, n, nw);
-        uint32_t pick = 0, tried = 0;
-        for (uint32_t k = 0; k < nc && tried < 64; k++) {
+        uint32_t pick = heap[0], tried = 0, left = nc;
+        while (left > 0 && tried < 64) {
+            uint32_t k = heap[0];
+            heap[0] = heap[--left];
+            chord_sift(c, heap, left, 0);
             if (!within_corner(F, w, n, nw, c[k].lo, c[k].hi) ||
                 !within_corner(F, w, n, nw, c[k].hi, c[k].lo))
                 continue;
@@ -491,6 +560,7 @@ static int choose_bridge(const filler *F, const uint32_t *w, uint32_t n,
                 break;
             }
         }
+        free(heap);
         *ret_a = c[pick].lo;
         *ret_b = c[pick].hi;
         rc = 0;
@@ -667,6 +737,8 @@ static int place_point(const refiner *R, double p[3], const uint32_t *from,
 static int clear_of(refiner *R, const uint32_t *old, uint32_t nold,
                     const uint32_t (*newt)[3], uint32_t nnew, const double x[3])
 {
+    if (!R->o.check_each)
+        return 1; /* the caller checks the finished patch instead */
     int rc = geo_tmesh_clashes(&R->m, &R->probe, old, nold, newt, nnew,
                                UINT32_MAX, x, 2);
     return rc < 0 ? rc : !rc;

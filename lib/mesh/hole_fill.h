@@ -70,7 +70,8 @@
  *    triangle splits. The region's boundary edges and vertices stay fixed.
  *    Every split and flip is checked exactly before it is applied: its
  *    new triangles must not touch or cross any triangle within two rings
- *    (region or not; lib/mesh/trimesh.h geo_tmesh_clashes), else it is skipped.
+ *    (region or not; lib/mesh/trimesh.h geo_tmesh_clashes), else it is
+ *    skipped (unless opts.check_each is false).
  * 4. Fairing (opts.fair) moves only the vertices refinement added. With
  *    U¹(p) = −p + Σ w(p,i)·p_i / Σ w(p,i) and U²(p) = −U¹(p) +
  *    Σ w(p,i)·U¹(p_i) / Σ w(p,i): for w = 1 (GEO_FAIR_UNIFORM) U²(p) = 0 is
@@ -192,6 +193,19 @@ typedef struct geo_fill_opts {
      * loop it rejects is neither filled nor reported. NULL fills all. */
     bool (*select_loop)(void *user, const uint32_t *cycle, uint32_t n);
     void *select_user;
+    /* Whether the minimum-weight triangulation may use triangle (a, b, c)
+     * (vertex indices of p); a rejected triangle is treated like a
+     * degenerate one. It must answer the same for the same triangle
+     * during one call. lib/mesh/fill.c steers the search around the
+     * triangles that crossed the mesh. NULL admits all. */
+    bool (*admit)(void *user, uint32_t a, uint32_t b, uint32_t c);
+    void *admit_user;
+    /* [true] every split and flip is checked exactly against its two
+     * rings before it is applied (step 3). false skips those checks: for
+     * a caller that checks the finished patch itself and retries with
+     * them when it crosses (lib/mesh/fill.c); refinement is then several
+     * times faster. */
+    bool check_each;
 } geo_fill_opts;
 
 /* Fills the defaults above. */

@@ -28,7 +28,7 @@ check "the summary says the scan is valid" grep -q '"valid":true' "$BODY"
 check "the summary counts 1808 facets before" grep -q '"facets_before":1808' "$BODY"
 check "the job links its model and stats" grep -q "\"model\":\"/v1/jobs/$ID/model\"" "$BODY"
 
-for fmt in json poly obj stl stl-ascii ply ply-ascii ase fmb1; do
+for fmt in json poly obj stl stl-ascii ply ply-ascii ase fmb1 off; do
     req GET "/v1/jobs/$ID/model?format=$fmt"
     out="$T/model.$fmt"
     cp "$BODY" "$out"

@@ -23,7 +23,7 @@ check "json to ply exits 0" "$FACET" convert "$src" "$T/x.ply"
 check "ply to json exits 0" "$FACET" convert "$T/x.ply" "$T/y.json"
 check "json -> ply -> json gives back the same file" cmp -s "$src" "$T/y.json"
 
-for f in json poly obj stl stl-ascii ply ply-ascii ase fmb1; do
+for f in json poly obj stl stl-ascii ply ply-ascii ase fmb1 off; do
     check "converts to $f" "$FACET" convert "$MODELS/notch-cube.json" \
         "$T/n.out" --to "$f"
 done

@@ -29,6 +29,31 @@ a, b = vol(sys.argv[1]), vol(sys.argv[2])
 sys.exit(0 if abs(a - b) <= 1e-9 * abs(b) else 1)
 PY
 
+# an open box with a column through its opening and its floor: every
+# lid crosses the column, so fill fails (exit 1), says why, writes nothing
+python3 - "$T/linked.off" <<'PY'
+import sys
+def box(lo, hi, off):
+    v = [(x, y, z) for z in (lo[2], hi[2]) for y in (lo[1], hi[1]) for x in (lo[0], hi[0])]
+    f = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (1, 3, 7, 5), (3, 2, 6, 7), (2, 0, 4, 6)]
+    return v, [tuple(i + off for i in q) for q in f]
+v1, f1 = box((0, 0, 0), (1, 1, 1), 0)
+f1 = [q for q in f1 if q != (4, 5, 7, 6)]  # no top
+v2, f2 = box((0.4, 0.4, -1), (0.6, 0.6, 50), 8)
+with open(sys.argv[1], "w") as o:
+    o.write("OFF\n%d %d 0\n" % (16, len(f1) + len(f2)))
+    for p in v1 + v2: o.write("%g %g %g\n" % p)
+    for q in f1 + f2: o.write("4 %d %d %d %d\n" % q)
+PY
+"$F" fill "$T/linked.off" -o "$T/linked.out.off" >"$T/linked.line" 2>"$T/err"
+expect_eq "an unfillable hole fails the fill (exit 1)" 1 "$?"
+check "the error says the result is not valid" grep -q "not a valid closed solid, not written" "$T/err"
+check "the summary still says what was tried" grep -q '"left_open":1' "$T/linked.line"
+check "no invalid result is written" test ! -e "$T/linked.out.off"
+"$F" fill "$T/linked.off" -o "$T/linked.out.off" --keep-invalid >/dev/null 2>&1
+expect_eq "--keep-invalid still exits 1" 1 "$?"
+check "--keep-invalid writes the result for inspection" test -s "$T/linked.out.off"
+
 # the crown and the pavilion of the true stone, the facets between
 # -0.3 < z < 0.3 (the girdle band) removed
 python3 - "$MODELS/brilliant.truth.json" "$T/top.json" "$T/bot.json" <<'PY'

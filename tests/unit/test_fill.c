@@ -230,8 +230,9 @@ static void test_unfillable_hole_stays_open_with_reason(void **s)
     geo_poly *p = tu_box(lo, hi);
     bool keep[6] = {true, false, true, true, true, true}; /* no top */
     assert_int_equal(geo_poly_compact(p, keep, NULL, NULL), 0);
-    /* a closed block sticking through the opening */
-    const double blo[3] = {0.4, 0.4, 0.8}, bhi[3] = {0.6, 0.6, 1.2};
+    /* a closed column through the opening and the floor, far taller than
+     * any dome the lift tries: every disc spanning the rim crosses it */
+    const double blo[3] = {0.4, 0.4, -1}, bhi[3] = {0.6, 0.6, 50};
     geo_poly *b = tu_box(blo, bhi);
     uint32_t off = p->nverts;
     for (uint32_t v = 0; v < b->nverts; v++)
@@ -255,6 +256,44 @@ static void test_unfillable_hole_stays_open_with_reason(void **s)
     assert_true(rep.nrejected >= 1);
     assert_int_equal(p->nverts, nv);
     assert_int_equal(p->nfacets, nf);
+    geo_mesh_fill_report_clear(&rep);
+    geo_poly_free(p);
+}
+
+/* An open sheet (a flat n × n grid of triangles) has no lid that does
+ * not lie on it: the fill bends one into a dome, and the result is a
+ * valid closed solid. */
+static void test_open_sheet_is_closed_by_a_dome(void **s)
+{
+    (void)s;
+    enum { N = 6 };
+    geo_poly *p = geo_poly_new();
+    for (int j = 0; j <= N; j++)
+        for (int i = 0; i <= N; i++) {
+            double v[3] = {i, j, 0};
+            geo_poly_add_vertex(p, v);
+        }
+    for (int j = 0; j < N; j++)
+        for (int i = 0; i < N; i++) {
+            uint32_t a = (uint32_t)(j * (N + 1) + i), b = a + 1,
+                     c = a + N + 2, d = a + N + 1;
+            uint32_t t1[3] = {a, b, c}, t2[3] = {a, c, d};
+            geo_poly_add_facet(p, t1, 3);
+            geo_poly_add_facet(p, t2, 3);
+        }
+    geo_poly_compute_planes(p, GEO_PLANE_UNWEIGHTED);
+    geo_mesh_fill_report rep;
+    assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(rep.nloops, 1);
+    assert_int_equal(rep.nopen, 0);
+    uint8_t a = rep.holes[0].attempt;
+    assert_true(a == GEO_ATTEMPT_LIFT || a == GEO_ATTEMPT_LOWER);
+    assert_true(rep.nrejected >= 1); /* the flat lids were refused */
+    geo_stats st;
+    assert_int_equal(geo_inspect(p, NULL, NULL, &st, NULL), 0);
+    assert_true(st.valid);
+    assert_true(st.volume > 0);
+    geo_stats_clear(&st);
     geo_mesh_fill_report_clear(&rep);
     geo_poly_free(p);
 }
@@ -327,6 +366,7 @@ int main(void)
         cmocka_unit_test(test_holes_touching_at_a_vertex_are_two_loops),
         cmocka_unit_test(test_large_curved_hole_filled_validly_at_mesh_density),
         cmocka_unit_test(test_unfillable_hole_stays_open_with_reason),
+        cmocka_unit_test(test_open_sheet_is_closed_by_a_dome),
         cmocka_unit_test(test_every_weight_fills_a_nonplanar_hole_validly),
         cmocka_unit_test(test_closed_mesh_is_left_alone),
         cmocka_unit_test(
