@@ -160,7 +160,8 @@ $(B)/tools/%: $(B)/obj/tests/tools/%.o $(call obj,$(TESTLIB_SRCS)) $(ALL_LIBS)
 DEB_PKGS := build-essential pkg-config libjansson-dev libmicrohttpd-dev \
     libsqlite3-dev libsystemd-dev libusb-1.0-0-dev libhidapi-dev libudev-dev \
     libcmocka-dev umockdev libumockdev-dev libglib2.0-dev curl systemd \
-    clang libclang-rt-14-dev wrk jq libpq-dev postgresql-15 man-db groff-base
+    clang libclang-rt-14-dev wrk jq libpq-dev postgresql-15 man-db groff-base \
+    chromium zlib1g-dev
 deps:
 	@sh tests/tools/install-deps.sh $(DEB_PKGS)
 
@@ -266,5 +267,9 @@ clean:
 
 -include $(shell find build -name '*.d' 2>/dev/null)
 
-# The OpenAPI document is embedded with .incbin (no -MMD entry for it).
+# The OpenAPI document and the viewer's files are embedded with .incbin
+# (no -MMD entry for them).
 $(B)/obj/daemon/http_openapi.o: daemon/openapi.json
+$(B)/obj/daemon/http_web.o: $(wildcard daemon/web/*)
+# png_probe reads the browser test's screenshots (zlib's inflate).
+$(B)/tools/png_probe: ALL_LDLIBS += -lz

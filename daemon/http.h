@@ -71,6 +71,7 @@ typedef struct http_req {
     int route;               /* index into the route table, -1 unmatched */
     char id[JOB_ID_LEN + 1]; /* {id} of the path, if any */
     char serial[64];         /* {serial} of the path, if any */
+    char file[64];           /* {file} of the path, if any */
     int64_t t0_us;           /* monotonic start */
     unsigned status;         /* of the queued response */
     uint64_t bytes_in, bytes_out;
@@ -176,6 +177,15 @@ enum MHD_Result http_version(http_req *r);
 enum MHD_Result http_openapi(http_req *r);
 enum MHD_Result http_scanners(http_req *r);
 enum MHD_Result http_scanner_scan(http_req *r);
+enum MHD_Result http_web_index(http_req *r);
+enum MHD_Result http_web_file(http_req *r);
+
+/* True when a POST /v1/jobs?format=fmt_name body may come with
+ * Content-Type ct (http_jobs.c). */
+bool http_model_content_type_ok(const char *fmt_name, const char *ct);
+
+/* The viewer's embedded files (http_web.c): their total size in bytes. */
+size_t http_web_total_bytes(void);
 
 /* The embedded OpenAPI document (http_openapi.c): NUL-terminated, its
  * length in *ret_len; static storage. */

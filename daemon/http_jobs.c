@@ -16,6 +16,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "frep_json.h"
 #include "job_submit.h"
@@ -229,9 +230,240 @@ static geo_poly *meshes_union(const json_t *meshes, proto_read_report *rep,
     return u;
 }
 
-enum MHD_Result http_post_job(http_req *r)
+/* Queues a validated job and answers 202 (or the queue's refusal): the
+ * one tail of both forms of POST /v1/jobs. poly, frep and pl stay the
+ * caller's. */
+static enum MHD_Result submit_and_reply(http_req *r, const geo_poly *poly,
+                                        const json_t *frep,
+                                        const proto_pipeline *pl,
+                                        job_priority prio, const char *label,
+                                        const char *idem, uint64_t idem_hash,
+                                        const proto_read_report *rep)
 {
     http_env *env = r->env;
+    enum MHD_Result res;
+    geo_err err = {{0}};
+    job_request rq = {
+        .model = poly, .frep = frep, .pipeline = pl, .priority = prio,
+        .source = "http", .label = label, .idem_key = idem,
+        /* only a keyed request is ever compared: no other hashes 464 KB */
+        .idem_hash = idem_hash,
+    };
+    job_rec job;
+    bool replayed = false;
+    int rc = job_submit(env->s, env->pool, atomic_load(&env->queue_size), &rq,
+                        &job, &replayed, &err);
+    if (rc == -EAGAIN) {
+        metrics_queue_full(env->m);
+        const char *h[] = {"Retry-After", "1", NULL};
+        res = http_problem(r, 503, "queue-full", "Service Unavailable", NULL,
+                           h, "%s; retry later", err.msg);
+    } else if (rc == -ENOTCONN) {
+        /* nothing accepted: the client retries (with its key, safely) */
+        const char *h[] = {"Retry-After", "2", NULL};
+        res = http_problem(r, 503, "store-unavailable", "Service Unavailable",
+                           NULL, h, "%s; retry later", err.msg);
+    } else if (rc == -EEXIST) {
+        res = http_problem(r, 422, "idempotency-key-reused",
+                           "Unprocessable Content", NULL, NULL, "%s", err.msg);
+    } else if (rc < 0) {
+        log_msg(LOG_ERR, NULL, "submit: %s", err.msg);
+        res = http_problem(r, 500, "submit-failed", "Internal Server Error",
+                           NULL, NULL, "%s", err.msg);
+    } else {
+        memcpy(r->id, job.id, sizeof r->id);
+        char loc[64];
+        snprintf(loc, sizeof loc, "/v1/jobs/%s", job.id);
+        const char *h[] = {"Location", loc,
+                           replayed ? "Idempotent-Replayed" : NULL, "true",
+                           NULL};
+        json_t *extra = NULL;
+        char dep[256];
+        bool deprecated = proto_pipeline_deprecations(pl, dep, sizeof dep);
+        if (rep->plane_mismatches || deprecated) {
+            json_t *w = json_array();
+            if (rep->plane_mismatches)
+                json_array_append_new(w, json_string(rep->first));
+            if (deprecated)
+                json_array_append_new(w, json_string(dep));
+            extra = json_pack("{s:o}", "warnings", w);
+        }
+        if (deprecated && !replayed)
+            log_msg(LOG_WARNING, job.id, "%s", dep);
+        if (!replayed && poly)
+            log_msg(LOG_INFO, job.id, "queued (%u vertices, %u facets, "
+                    "%zu ops, priority %s)", poly->nverts, poly->nfacets,
+                    pl->nops, prio == JOB_PRIO_HIGH ? "high" : "normal");
+        else if (!replayed)
+            log_msg(LOG_INFO, job.id, "queued (frep-object, %zu ops, "
+                    "priority %s)", pl->nops,
+                    prio == JOB_PRIO_HIGH ? "high" : "normal");
+        res = reply_job(r, 202, &job, h, extra);
+        job_rec_clear(&job);
+    }
+    return res;
+}
+
+/* The 422 of a request with errors (stolen): the first in the detail. */
+static enum MHD_Result invalid_job(http_req *r, json_t *errors)
+{
+    const json_t *first = json_array_get(errors, 0);
+    const char *path = json_string_value(json_object_get(first, "path"));
+    const char *msg = json_string_value(json_object_get(first, "message"));
+    size_t n = json_array_size(errors);
+    char detail[768];
+    snprintf(detail, sizeof detail, "%s%s%s%s", path && *path ? path : "",
+             path && *path ? ": " : "", msg ? msg : "invalid",
+             n > 1 ? " (and more, see errors)" : "");
+    return http_problem(r, 422, "invalid-job", "Unprocessable Content",
+                        errors, NULL, "%s", detail);
+}
+
+/* ---- POST /v1/jobs?format=NAME: the model file itself as the body ----
+ * For curl users and the viewer's drop zone: the model in any format
+ * facetd reads, the job's other members as query parameters (pipeline,
+ * priority, label), checked and answered exactly as the JSON form's. */
+
+/* The query's pipeline: a JSON value ('["inspect"]', '"correct"'), or op
+ * names separated by commas ("merge,inspect"). NULL when it is neither
+ * (the caller says why). */
+static json_t *pipeline_query(const char *q)
+{
+    while (*q == ' ')
+        q++;
+    if (*q == '[' || *q == '{' || *q == '"')
+        return json_loads(q, JSON_DECODE_ANY | JSON_REJECT_DUPLICATES, NULL);
+    json_t *a = json_array();
+    const char *p = q;
+    while (a) {
+        size_t n = strcspn(p, ",");
+        if (n == 0 || json_array_append_new(a, json_stringn(p, n)) < 0) {
+            json_decref(a);
+            return NULL;
+        }
+        if (!p[n])
+            break;
+        p += n + 1;
+    }
+    return a;
+}
+
+typedef struct query_check {
+    json_t *errors;
+} query_check;
+
+static enum MHD_Result unknown_arg(void *cls, enum MHD_ValueKind kind,
+                                   const char *key, const char *value)
+{
+    query_check *qc = cls;
+    static const char *const known[] = {"format", "pipeline", "priority",
+                                        "label"};
+    for (size_t i = 0; i < sizeof known / sizeof known[0]; i++)
+        if (strcmp(key, known[i]) == 0)
+            return MHD_YES;
+    add_error(qc->errors, key, "unknown parameter (expected format, "
+              "pipeline, priority, label)");
+    return MHD_YES;
+}
+
+/* True when a file of format fmt may come as ct: the format's own media
+ * type, application/octet-stream, or (no header) nothing said. */
+bool http_model_content_type_ok(const char *fmt_name, const char *ct)
+{
+    proto_format fmt = proto_format_from_name(fmt_name);
+    if (!ct || fmt == PROTO_FMT_UNKNOWN)
+        return true; /* the handler answers a bad format by name */
+    while (*ct == ' ')
+        ct++;
+    size_t n = strcspn(ct, "; ");
+    const char *mime = proto_format_mime(fmt);
+    return (n == strlen(mime) && strncasecmp(ct, mime, n) == 0) ||
+           (n == 24 && strncasecmp(ct, "application/octet-stream", 24) == 0);
+}
+
+static enum MHD_Result post_job_file(http_req *r, const char *fmt_name)
+{
+    proto_format fmt = proto_format_from_name(fmt_name);
+    if (fmt == PROTO_FMT_UNKNOWN || fmt == PROTO_FMT_ASE)
+        return http_problem(r, 400, "bad-argument", "Bad Request", NULL, NULL,
+                            "format: expected json, poly, obj, stl, ply, "
+                            "fmb1 or off (a format facetd reads)");
+    const char *idem = http_header(r, "Idempotency-Key");
+    if (idem && !valid_idem_key(idem))
+        return http_problem(r, 400, "bad-idempotency-key", "Bad Request",
+                            NULL, NULL, "Idempotency-Key must be 1 to 255 "
+                            "visible ASCII characters");
+    query_check qc = {json_array()};
+    MHD_get_connection_values(r->conn, MHD_GET_ARGUMENT_KIND, unknown_arg,
+                              &qc);
+    json_t *errors = qc.errors;
+    geo_err err = {{0}};
+    proto_pipeline pl = {0};
+    bool have_pipeline = false;
+    const char *pq = http_arg(r, "pipeline");
+    json_t *pv = pq ? pipeline_query(pq) : json_string("correct");
+    if (!pv)
+        add_error(errors, "pipeline", "expected op names separated by commas "
+                  "or a JSON pipeline");
+    else if (proto_pipeline_from_json(pv, "pipeline", &pl, &err) < 0)
+        add_geo_error(errors, &err);
+    else if (runner_check_input(&pl, false, &err) < 0)
+        add_geo_error(errors, &err);
+    else
+        have_pipeline = true;
+    json_decref(pv);
+    if (have_pipeline && pl.nops > 0 && pl.ops[0].kind == PROTO_OP_STITCH)
+        add_error(errors, "pipeline", "stitch joins two meshes: post them "
+                  "as 'meshes' in the JSON form");
+    job_priority prio = JOB_PRIO_NORMAL;
+    const char *pr = http_arg(r, "priority");
+    if (pr && strcmp(pr, "high") == 0)
+        prio = JOB_PRIO_HIGH;
+    else if (pr && strcmp(pr, "normal") != 0)
+        add_error(errors, "priority", "expected \"normal\" or \"high\"");
+    const char *label = http_arg(r, "label");
+    if (label && strlen(label) >= JOB_LABEL_MAX)
+        add_error(errors, "label", "longer than %d bytes", JOB_LABEL_MAX - 1);
+    proto_read_report rep = {0};
+    geo_poly *poly = NULL;
+    if (r->len == 0) {
+        add_error(errors, "model", "required: the model file as the body");
+    } else {
+        poly = proto_model_read_mem_ex(r->body, r->len, fmt, NULL, &rep,
+                                       &err);
+        if (!poly) {
+            geo_err_prefix(&err, "model");
+            add_geo_error(errors, &err);
+        }
+    }
+    enum MHD_Result res;
+    if (json_array_size(errors) > 0) {
+        res = invalid_job(r, errors);
+    } else {
+        json_decref(errors);
+        /* the same bytes under another pipeline are another request */
+        uint64_t h = 0;
+        if (idem) {
+            h = job_hash64(r->body, r->len);
+            const char *parts[] = {fmt_name, pq, pr, label};
+            for (size_t i = 0; i < 4; i++)
+                h = h * 1099511628211ull ^
+                    (parts[i] ? job_hash64(parts[i], strlen(parts[i])) : i);
+        }
+        res = submit_and_reply(r, poly, NULL, &pl, prio, label, idem, h,
+                               &rep);
+    }
+    geo_poly_free(poly);
+    if (have_pipeline || pl.ops)
+        proto_pipeline_free(&pl);
+    return res;
+}
+
+enum MHD_Result http_post_job(http_req *r)
+{
+    const char *fmt_name = http_arg(r, "format");
+    if (fmt_name)
+        return post_job_file(r, fmt_name);
     const char *idem = http_header(r, "Idempotency-Key");
     if (idem && !valid_idem_key(idem))
         return http_problem(r, 400, "bad-idempotency-key", "Bad Request",
@@ -333,76 +565,14 @@ enum MHD_Result http_post_job(http_req *r)
         poly = meshes_union(meshes, &rep, errors);
     enum MHD_Result res;
     if (json_array_size(errors) > 0) {
-        const json_t *first = json_array_get(errors, 0);
-        const char *path = json_string_value(json_object_get(first, "path"));
-        const char *msg = json_string_value(json_object_get(first, "message"));
-        size_t n = json_array_size(errors);
-        res = http_problem(r, 422, "invalid-job", "Unprocessable Content",
-                           errors, NULL, "%s%s%s%s", path && *path ? path : "",
-                           path && *path ? ": " : "", msg ? msg : "invalid",
-                           n > 1 ? " (and more, see errors)" : "");
+        res = invalid_job(r, errors);
         errors = NULL;
         goto out;
     }
-    job_request rq = {
-        .model = poly, .frep = frep, .pipeline = &pl, .priority = prio,
-        .source = "http",
-        .label = label, .idem_key = idem,
-        /* only a keyed request is ever compared: no other hashes 464 KB */
-        .idem_hash = idem ? job_hash64(r->body ? r->body : "", r->len) : 0,
-    };
-    job_rec job;
-    bool replayed = false;
-    int rc = job_submit(env->s, env->pool, atomic_load(&env->queue_size), &rq,
-                        &job, &replayed, &err);
-    if (rc == -EAGAIN) {
-        metrics_queue_full(env->m);
-        const char *h[] = {"Retry-After", "1", NULL};
-        res = http_problem(r, 503, "queue-full", "Service Unavailable", NULL,
-                           h, "%s; retry later", err.msg);
-    } else if (rc == -ENOTCONN) {
-        /* nothing accepted: the client retries (with its key, safely) */
-        const char *h[] = {"Retry-After", "2", NULL};
-        res = http_problem(r, 503, "store-unavailable", "Service Unavailable",
-                           NULL, h, "%s; retry later", err.msg);
-    } else if (rc == -EEXIST) {
-        res = http_problem(r, 422, "idempotency-key-reused",
-                           "Unprocessable Content", NULL, NULL, "%s", err.msg);
-    } else if (rc < 0) {
-        log_msg(LOG_ERR, NULL, "submit: %s", err.msg);
-        res = http_problem(r, 500, "submit-failed", "Internal Server Error",
-                           NULL, NULL, "%s", err.msg);
-    } else {
-        memcpy(r->id, job.id, sizeof r->id);
-        char loc[64];
-        snprintf(loc, sizeof loc, "/v1/jobs/%s", job.id);
-        const char *h[] = {"Location", loc,
-                           replayed ? "Idempotent-Replayed" : NULL, "true",
-                           NULL};
-        json_t *extra = NULL;
-        char dep[256];
-        bool deprecated = proto_pipeline_deprecations(&pl, dep, sizeof dep);
-        if (rep.plane_mismatches || deprecated) {
-            json_t *w = json_array();
-            if (rep.plane_mismatches)
-                json_array_append_new(w, json_string(rep.first));
-            if (deprecated)
-                json_array_append_new(w, json_string(dep));
-            extra = json_pack("{s:o}", "warnings", w);
-        }
-        if (deprecated && !replayed)
-            log_msg(LOG_WARNING, job.id, "%s", dep);
-        if (!replayed && poly)
-            log_msg(LOG_INFO, job.id, "queued (%u vertices, %u facets, "
-                    "%zu ops, priority %s)", poly->nverts, poly->nfacets,
-                    pl.nops, prio == JOB_PRIO_HIGH ? "high" : "normal");
-        else if (!replayed)
-            log_msg(LOG_INFO, job.id, "queued (frep-object, %zu ops, "
-                    "priority %s)", pl.nops,
-                    prio == JOB_PRIO_HIGH ? "high" : "normal");
-        res = reply_job(r, 202, &job, h, extra);
-        job_rec_clear(&job);
-    }
+    res = submit_and_reply(r, poly, frep, &pl, prio, label, idem,
+                           idem ? job_hash64(r->body ? r->body : "", r->len)
+                                : 0,
+                           &rep);
 out:
     json_decref(errors);
     geo_poly_free(poly);
@@ -605,22 +775,41 @@ enum MHD_Result http_get_model(http_req *r)
 {
     const char *name = http_arg(r, "format");
     proto_format fmt = name ? proto_format_from_name(name) : PROTO_FMT_JSON;
-    if (fmt == PROTO_FMT_UNKNOWN)
+    if (fmt == PROTO_FMT_UNKNOWN) {
+        char list[256];
+        proto_format_list(list, sizeof list);
         return http_problem(r, 400, "bad-argument", "Bad Request", NULL, NULL,
-                            "format: expected json, poly, obj, stl, "
-                            "stl-ascii, ply, ply-ascii, ase, fmb1 or off");
+                            "format: expected %s", list);
+    }
+    /* which=input: the model as submitted (the viewer's before/after),
+     * there from submission on; the result only once the job succeeded */
+    const char *which = http_arg(r, "which");
+    bool input = which && strcmp(which, "input") == 0;
+    if (which && !input && strcmp(which, "result") != 0)
+        return http_problem(r, 400, "bad-argument", "Bad Request", NULL, NULL,
+                            "which: expected result or input");
     job_rec j;
     enum MHD_Result res;
-    if (need_result(r, &j, &res) < 0)
+    if (input) {
+        geo_err gerr;
+        int grc = store_get(r->env->s, r->id, &j, &gerr);
+        if (grc < 0)
+            return store_failure(r, grc, &gerr);
+    } else if (need_result(r, &j, &res) < 0) {
         return res;
+    }
     char etag[64], disp[96];
-    snprintf(etag, sizeof etag, "\"%016llx-%s\"",
-             (unsigned long long)j.result_hash, proto_format_name(fmt));
+    /* an input never changes: the job's id names it */
+    snprintf(etag, sizeof etag, "\"%016llx-%s%s\"",
+             input ? (unsigned long long)job_hash64(j.id, strlen(j.id))
+                   : (unsigned long long)j.result_hash,
+             input ? "input-" : "", proto_format_name(fmt));
     const char *ext = fmt == PROTO_FMT_STL_ASCII   ? "stl"
                       : fmt == PROTO_FMT_PLY_ASCII ? "ply"
                       : fmt == PROTO_FMT_FMB1      ? "fmb"
                                                    : proto_format_name(fmt);
-    snprintf(disp, sizeof disp, "inline; filename=\"%s.%s\"", j.id, ext);
+    snprintf(disp, sizeof disp, "inline; filename=\"%s%s.%s\"", j.id,
+             input ? "-input" : "", ext);
     job_rec_clear(&j);
     const char *h[] = {"ETag", etag, "Cache-Control", "private, max-age=3600",
                        "Content-Disposition", disp, NULL};
@@ -629,10 +818,18 @@ enum MHD_Result http_get_model(http_req *r)
     void *blob;
     size_t len;
     geo_err err;
-    int rc = store_get_blob(r->env->s, r->id, STORE_BLOB_MODEL, &blob, &len,
-                            &err);
+    int rc = store_get_blob(r->env->s, r->id,
+                            input ? STORE_BLOB_INPUT : STORE_BLOB_MODEL,
+                            &blob, &len, &err);
     if (rc < 0)
         return store_failure(r, rc, &err);
+    if (input && (len < 4 || memcmp(blob, "FMB1", 4) != 0)) {
+        /* a frep-object/1 input is stored as its JSON (job_submit.h) */
+        free(blob);
+        return http_problem(r, 409, "no-input-model", "Conflict", NULL, NULL,
+                            "job %s was given a frep-object, not a model",
+                            r->id);
+    }
     if (fmt == PROTO_FMT_FMB1)
         return http_reply(r, 200, proto_format_mime(fmt), blob, len, true, h);
     geo_poly *p = proto_model_read_mem(blob, len, PROTO_FMT_FMB1, NULL, &err);

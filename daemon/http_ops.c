@@ -80,11 +80,9 @@ enum MHD_Result http_version(http_req *r)
     for (int k = 0; k < PROTO_OP_COUNT; k++)
         json_array_append_new(ops,
                                   json_string(proto_op_name((proto_op_kind)k)));
-    static const char *const formats[] = {"json", "poly", "obj", "stl",
-                                          "stl-ascii", "ply", "ply-ascii",
-                                          "ase", "fmb1", "off"};
-    for (size_t i = 0; i < sizeof formats / sizeof formats[0]; i++)
-        json_array_append_new(fmts, json_string(formats[i]));
+    proto_format f;
+    for (size_t i = 0; (f = proto_format_at(i)) != PROTO_FMT_UNKNOWN; i++)
+        json_array_append_new(fmts, json_string(proto_format_name(f)));
     json_t *o = json_pack("{s:s, s:s, s:s, s:s, s:o, s:o}", "name", "facetd",
                           "version", FACET_VERSION, "api", "v1", "store",
                           r->env->s->ops->name, "ops", ops, "model_formats",

@@ -16,6 +16,7 @@
 #include <time.h>
 
 #include "log.h"
+#include "model_io.h"
 
 typedef struct route {
     const char *name;
@@ -26,6 +27,9 @@ typedef struct route {
 } route;
 
 static const route routes[] = {
+    /* the web viewer (http_web.c): open, it holds no job data */
+    {"/", HTTP_GET, http_web_index, NULL, NULL, true, false},
+    {"/ui/{file}", HTTP_GET, http_web_file, NULL, NULL, true, false},
     {"/livez", HTTP_GET, http_livez, NULL, NULL, true, false},
     {"/readyz", HTTP_GET, http_readyz, NULL, NULL, true, false},
     {"/metrics", HTTP_GET, http_metrics, NULL, NULL, false, false},
@@ -49,6 +53,7 @@ static const route routes[] = {
 enum { NROUTES = sizeof routes / sizeof routes[0] };
 
 const char *const http_route_names[NROUTES] = {
+    "/", "/ui/{file}",
     "/livez", "/readyz", "/metrics", "/v1/version", "/v1/openapi.json",
     "/v1/scanners", "/v1/scanners/{serial}/scan", "/v1/inspect", "/v1/jobs",
     "/v1/jobs/{id}",
@@ -95,9 +100,9 @@ static http_method method_of(const char *m)
     return HTTP_OTHER;
 }
 
-/* Matches url against a template with at most one "{id}" or "{serial}"
- * segment, which goes to r->id or r->serial (cut to fit: a cut value
- * names nothing that exists). */
+/* Matches url against a template with at most one "{id}", "{serial}" or
+ * "{file}" segment, which goes to r->id, r->serial or r->file (cut to
+ * fit: a cut value names nothing that exists). */
 static bool match(const char *tmpl, const char *url, http_req *r)
 {
     const char *brace = strchr(tmpl, '{'), *close;
@@ -110,9 +115,15 @@ static bool match(const char *tmpl, const char *url, http_req *r)
     size_t n = slash ? (size_t)(slash - seg) : strlen(seg);
     if (n == 0 || strcmp(slash ? slash : "", close + 1) != 0)
         return false;
-    bool serial = strncmp(brace, "{serial}", 8) == 0;
-    char *dst = serial ? r->serial : r->id;
-    size_t cap = serial ? sizeof r->serial : sizeof r->id;
+    char *dst = r->id;
+    size_t cap = sizeof r->id;
+    if (strncmp(brace, "{serial}", 8) == 0) {
+        dst = r->serial;
+        cap = sizeof r->serial;
+    } else if (strncmp(brace, "{file}", 6) == 0) {
+        dst = r->file;
+        cap = sizeof r->file;
+    }
     if (n >= cap)
         n = cap - 1;
     memcpy(dst, seg, n);
@@ -194,7 +205,21 @@ static enum MHD_Result admit(http_req *r, const char *url, bool *answered)
                             "(Authorization: Bearer TOKEN)");
     }
     if (m == HTTP_POST && (r->has_body || !rt->body_optional)) {
-        if (!json_content_type(http_header(r, MHD_HTTP_HEADER_CONTENT_TYPE))) {
+        const char *ct = http_header(r, MHD_HTTP_HEADER_CONTENT_TYPE);
+        /* POST /v1/jobs?format=stl takes the model file itself */
+        const char *fmt = rt->post == http_post_job ? http_arg(r, "format")
+                                                    : NULL;
+        if (fmt && !http_model_content_type_ok(fmt, ct)) {
+            const char *h[] = {"Accept-Post", "application/octet-stream",
+                               NULL};
+            return http_problem(r, 415, "unsupported-media-type",
+                                "Unsupported Media Type", NULL, h,
+                                "a format=%.32s body must be %s or "
+                                "application/octet-stream", fmt,
+                                proto_format_mime(
+                                    proto_format_from_name(fmt)));
+        }
+        if (!fmt && !json_content_type(ct)) {
             const char *h[] = {"Accept-Post", "application/json", NULL};
             return http_problem(r, 415, "unsupported-media-type",
                                 "Unsupported Media Type", NULL, h,

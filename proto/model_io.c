@@ -40,6 +40,26 @@ static const struct {
 };
 enum { NFORMATS = sizeof formats / sizeof formats[0] };
 
+proto_format proto_format_at(size_t i)
+{
+    return i < NFORMATS ? formats[i].fmt : PROTO_FMT_UNKNOWN;
+}
+
+void proto_format_list(char *buf, size_t size)
+{
+    size_t len = 0;
+    if (size)
+        buf[0] = 0;
+    for (int i = 0; i < NFORMATS && len < size; i++) {
+        int w = snprintf(buf + len, size - len, "%s%s",
+                         i == 0 ? "" : i + 1 == NFORMATS ? " or " : ", ",
+                         formats[i].name);
+        if (w < 0)
+            break;
+        len += (size_t)w;
+    }
+}
+
 proto_format proto_format_from_path(const char *path)
 {
     const char *slash = strrchr(path, '/');

@@ -64,6 +64,14 @@ proto_format proto_format_from_path(const char *path);
 proto_format proto_format_from_name(const char *name);
 /* The canonical name of fmt ("json", …) and its MIME type. */
 const char *proto_format_name(proto_format fmt);
+
+/* The i-th format of the table every list of formats comes from (the
+ * readers, /v1/version, error messages), or PROTO_FMT_UNKNOWN past its
+ * end: for (i = 0; (f = proto_format_at(i)) != PROTO_FMT_UNKNOWN; i++). */
+proto_format proto_format_at(size_t i);
+
+/* "json, poly, obj, ... or fmb1" into buf (always terminated). */
+void proto_format_list(char *buf, size_t size);
 const char *proto_format_mime(proto_format fmt);
 
 /* What a reader noticed without failing. Formats that carry planes

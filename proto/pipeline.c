@@ -591,11 +591,13 @@ size_t proto_pipeline_deprecations(const proto_pipeline *p, char *buf,
             seen |= p->ops[j].alias && strcmp(p->ops[j].alias, op->alias) == 0;
         if (seen)
             continue;
-        int w = snprintf(buf + len, len < size ? size - len : 0,
-                         "%sop '%s' is deprecated: use '%s'",
-                         count ? "; " : "", op->alias, op_names[op->kind]);
-        if (w > 0 && len + (size_t)w < size)
-            len += (size_t)w;
+        if (len < size) {
+            int w = snprintf(buf + len, size - len,
+                             "%sop '%s' is deprecated: use '%s'",
+                             count ? "; " : "", op->alias, op_names[op->kind]);
+            if (w > 0)
+                len += (size_t)w;
+        }
         count++;
     }
     return count;

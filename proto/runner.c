@@ -121,7 +121,7 @@ static int give_report(json_t *rep, json_t **ret_report, geo_err *err)
     return 0;
 }
 
-/* collapse_clusters (lib/correct/clusters.h): radius 0 means the kernel's
+/* collapse (lib/correct/clusters.h): radius 0 means the kernel's
  * default relative to the model's size. */
 static int run_collapse(const proto_op *op, geo_poly **model,
                         const geo_ctx *ctx, json_t **ret_report,
@@ -140,7 +140,7 @@ static int run_collapse(const proto_op *op, geo_poly **model,
     return give_report(j, ret_report, err);
 }
 
-/* merge_facets (lib/correct/merge.h): the given groups, or automatic ones. */
+/* merge (lib/correct/merge.h): the given groups, or automatic ones. */
 static int run_merge(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
                      json_t **ret_report, json_t *summary, geo_err *err)
 {
@@ -163,9 +163,9 @@ static int run_merge(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
     return give_report(j, ret_report, err);
 }
 
-/* auto (lib/correct/correct.h): the whole post-scan correction, the same call as
+/* correct (lib/correct/correct.h): the whole post-scan correction, the same call as
  * `facet correct`, so the daemon serves the same model. */
-static int run_auto(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
+static int run_correct(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
                     json_t **ret_report, json_t *summary, geo_err *err)
 {
     geo_correct_opts o;
@@ -221,7 +221,7 @@ static int require_valid(const geo_poly *p, const char *op,
 
 /* fill (lib/mesh/fill.h): every hole closed and checked; a result that is
  * not valid (a hole left open: the report's reason) fails the job. */
-static int run_fill_holes(const proto_op *op, geo_poly **model,
+static int run_fill(const proto_op *op, geo_poly **model,
                           const geo_ctx *ctx, json_t **ret_report,
                           json_t *summary, geo_err *err)
 {
@@ -353,12 +353,12 @@ static enum geo_replanar_schedule schedule_of(proto_schedule s)
                                          : GEO_REPLANAR_LOCAL_EXP;
 }
 
-/* move_vertex (lib/replanar/replanar.h, Palachev 2012, §4): places the vertex and
+/* move (lib/replanar/replanar.h, Palachev 2012, §4): places the vertex and
  * re-planarises. A result that is not a valid polyhedron (no convergence
  * within max_steps, a self-intersection, an inverted facet) fails the
  * job, as `facet move` refuses to write it: nothing invalid is passed on.
  * The report has the run's summary and its iteration log. */
-static int run_move_vertex(const proto_op *op, geo_poly **model,
+static int run_move(const proto_op *op, geo_poly **model,
                            const geo_ctx *ctx, json_t **ret_report,
                            json_t *summary, geo_err *err)
 {
@@ -448,11 +448,11 @@ static const op_entry ops[PROTO_OP_COUNT] = {
     [PROTO_OP_COLLAPSE] = {run_collapse, true},
     [PROTO_OP_MERGE] = {run_merge, true},
     [PROTO_OP_TRIANGULATE] = {NULL, true, run_triangulate},
-    [PROTO_OP_FILL] = {run_fill_holes, true},
+    [PROTO_OP_FILL] = {run_fill, true},
     [PROTO_OP_STITCH] = {run_stitch, true},
-    [PROTO_OP_CORRECT] = {run_auto, true},
+    [PROTO_OP_CORRECT] = {run_correct, true},
     [PROTO_OP_CUT] = {run_cut, true},
-    [PROTO_OP_MOVE] = {run_move_vertex, true},
+    [PROTO_OP_MOVE] = {run_move, true},
     [PROTO_OP_INVERSION_STATS] = {run_inversion_stats, false},
 };
 

@@ -23,6 +23,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "grow.h"
 #include "crc32.h"
 
 enum {
@@ -327,14 +328,9 @@ static int add_interval(scan_state *sc, uint32_t lo, uint32_t hi)
     for (size_t k = i; k < j; k++)
         before += sc->ivs[k].hi - sc->ivs[k].lo;
     if (j == i) {
-        if (sc->nivs == sc->civs) {
-            size_t nc = sc->civs ? 2 * sc->civs : 8;
-            interval *n = realloc(sc->ivs, nc * sizeof *n);
-            if (!n)
-                return -ENOMEM;
-            sc->ivs = n;
-            sc->civs = nc;
-        }
+        if (geo_grow((void **)&sc->ivs, &sc->civs, sc->nivs + 1,
+                     sizeof *sc->ivs) < 0)
+            return -ENOMEM;
         memmove(sc->ivs + i + 1, sc->ivs + i, (sc->nivs - i) * sizeof *sc->ivs);
         sc->nivs++;
     } else {

@@ -42,6 +42,7 @@ int cmd_run(int argc, char **argv);
 int cmd_move(int argc, char **argv);
 int cmd_inversion_stats(int argc, char **argv);
 int cmd_merge(int argc, char **argv);
+int cmd_collapse(int argc, char **argv);
 int cmd_correct(int argc, char **argv);
 int cmd_fill(int argc, char **argv);
 int cmd_stitch(int argc, char **argv);

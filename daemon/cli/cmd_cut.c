@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "cli_args.h"
 #include "cut.h"
 #include "model_io.h"
 
@@ -66,37 +67,39 @@ int cmd_cut(int argc, char **argv)
     bool have_plane = false;
     geo_cut_opts opts;
     geo_cut_opts_default(&opts);
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (strcmp(a, "--plane") == 0 || strcmp(a, "-o") == 0 ||
-            strcmp(a, "--output") == 0 || strcmp(a, "--main-facet") == 0) {
-            if (i + 1 == argc)
-                return cli_usage_error("cut", "%s needs a value", a);
-            const char *v = argv[++i];
-            if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0) {
-                outpath = v;
-            } else if (strcmp(a, "--plane") == 0) {
-                if (parse_plane(v, plane) < 0)
-                    return cli_usage_error("cut", "--plane: expected four "
-                                           "finite numbers A,B,C,D, got '%s'", v);
-                have_plane = true;
-            } else {
-                char *end;
-                errno = 0;
-                unsigned long f = strtoul(v, &end, 10);
-                if (*v == '\0' || *end != '\0' || *v == '-' || errno ||
-                    f >= GEO_NONE)
-                    return cli_usage_error("cut", "--main-facet: expected a "
-                                           "facet index, got '%s'", v);
-                opts.main_facet = (uint32_t)f;
-            }
-        } else if (a[0] == '-' && a[1] != '\0') {
-            return cli_usage_error("cut", "unknown option '%s'", a);
-        } else if (!in) {
-            in = a;
-        } else {
-            return cli_usage_error("cut", "unexpected argument '%s'", a);
+    enum { O_PLANE, O_OUT, O_MAIN };
+    static const cli_opt cut_opts[] = {{"--plane", O_PLANE, true},
+                                       {"-o", O_OUT, true},
+                                       {"--output", O_OUT, true},
+                                       {"--main-facet", O_MAIN, true},
+                                       {NULL, 0, false}};
+    cli_args a;
+    const char *v;
+    long f;
+    cli_args_init(&a, "cut", argc, argv, cut_opts);
+    for (int k; (k = cli_args_next(&a, &v)) != CLI_ARGS_END;) {
+        int r = 0;
+        switch (k) {
+        case O_OUT: outpath = v; break;
+        case O_PLANE:
+            if (parse_plane(v, plane) < 0)
+                return cli_usage_error("cut", "--plane: expected four "
+                                       "finite numbers A,B,C,D, got '%s'", v);
+            have_plane = true;
+            break;
+        case O_MAIN:
+            r = cli_args_long(&a, v, 0, GEO_NONE - 1L, &f);
+            opts.main_facet = (uint32_t)f;
+            break;
+        case CLI_ARGS_POSITIONAL:
+            if (in)
+                r = cli_args_unexpected(&a, v);
+            in = v;
+            break;
+        default: r = CLI_ARGS_ERROR;
         }
+        if (r)
+            return CLI_USAGE;
     }
     if (!in)
         return cli_usage_error("cut", "needs a model file");

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "cli_args.h"
 #include "model_io.h"
 #include "parallel.h"
 #include "stats.h"
@@ -34,57 +35,41 @@ static const char USAGE[] =
     "exit status: 0 inspected (whatever the model's state), 1 the model\n"
     "cannot be read, 2 usage error\n";
 
-static int parse_count(const char *opt, const char *s, long max, long *ret)
-{
-    char *end;
-    errno = 0;
-    long v = strtol(s, &end, 10);
-    if (errno || end == s || *end || v < 0 || v > max)
-        return cli_usage_error("inspect", "%s: expected a number 0..%ld, got "
-                                          "'%s'", opt, max, s);
-    *ret = v;
-    return CLI_OK;
-}
-
 int cmd_inspect(int argc, char **argv)
 {
     if (cli_wants_help(argc, argv)) {
         fputs(USAGE, stdout);
         return CLI_OK;
     }
-    const char *path = NULL;
+    const char *path = NULL, *val;
     long pairs = 1000, threads = 0;
     proto_format fmt = PROTO_FMT_UNKNOWN;
-    bool only_files = false;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        int r = CLI_OK;
-        if (!only_files && strcmp(a, "--") == 0) {
-            only_files = true;
-        } else if (!only_files && (strcmp(a, "--pairs") == 0 ||
-                                   strcmp(a, "--threads") == 0 ||
-                                   strcmp(a, "--from") == 0)) {
-            if (i + 1 == argc)
-                return cli_usage_error("inspect", "%s needs a value", a);
-            const char *val = argv[++i];
-            if (a[2] == 'p')
-                r = parse_count(a, val, UINT32_MAX > LONG_MAX ? LONG_MAX
-                                                              : UINT32_MAX,
-                                &pairs);
-            else if (a[2] == 't')
-                r = parse_count(a, val, 1024, &threads);
-            else if ((fmt = proto_format_from_name(val)) == PROTO_FMT_UNKNOWN)
-                r = cli_usage_error("inspect", "--from: unknown format '%s'",
-                                    val);
-        } else if (!only_files && a[0] == '-' && a[1] != '\0') {
-            r = cli_usage_error("inspect", "unknown option '%s'", a);
-        } else if (!path) {
-            path = a;
-        } else {
-            r = cli_usage_error("inspect", "unexpected argument '%s'", a);
+    enum { O_PAIRS, O_THREADS, O_FROM };
+    static const cli_opt opts[] = {{"--pairs", O_PAIRS, true},
+                                   {"--threads", O_THREADS, true},
+                                   {"--from", O_FROM, true},
+                                   {NULL, 0, false}};
+    cli_args a;
+    cli_args_init(&a, "inspect", argc, argv, opts);
+    for (int k; (k = cli_args_next(&a, &val)) != CLI_ARGS_END;) {
+        int r = 0;
+        switch (k) {
+        case O_PAIRS:
+            r = cli_args_long(&a, val, 0, UINT32_MAX > LONG_MAX ? LONG_MAX
+                                                                : UINT32_MAX,
+                              &pairs);
+            break;
+        case O_THREADS: r = cli_args_long(&a, val, 0, 1024, &threads); break;
+        case O_FROM: r = cli_args_format(&a, val, &fmt); break;
+        case CLI_ARGS_POSITIONAL:
+            if (path)
+                r = cli_args_unexpected(&a, val);
+            path = val;
+            break;
+        default: r = CLI_ARGS_ERROR;
         }
-        if (r != CLI_OK)
-            return r;
+        if (r)
+            return CLI_USAGE;
     }
     if (!path)
         return cli_usage_error("inspect", "needs a model file");

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "cli_args.h"
 #include "model_io.h"
 #include "orient.h"
 
@@ -30,35 +31,31 @@ int cmd_orient(int argc, char **argv)
         fputs(USAGE, stdout);
         return CLI_OK;
     }
-    const char *in = NULL, *out = NULL;
+    const char *in = NULL, *out = NULL, *val;
     proto_format from = PROTO_FMT_UNKNOWN, to = PROTO_FMT_UNKNOWN;
-    bool only_files = false;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (!only_files && strcmp(a, "--") == 0) {
-            only_files = true;
-        } else if (!only_files && (strcmp(a, "-o") == 0 ||
-                                   strcmp(a, "--from") == 0 ||
-                                   strcmp(a, "--to") == 0)) {
-            if (i + 1 == argc)
-                return cli_usage_error("orient", "%s needs a value", a);
-            const char *val = argv[++i];
-            if (a[1] == 'o') {
-                out = val;
-            } else {
-                proto_format f = proto_format_from_name(val);
-                if (f == PROTO_FMT_UNKNOWN)
-                    return cli_usage_error("orient", "%s: unknown format "
-                                                     "'%s'", a, val);
-                *(a[2] == 'f' ? &from : &to) = f;
-            }
-        } else if (!only_files && a[0] == '-' && a[1] != '\0') {
-            return cli_usage_error("orient", "unknown option '%s'", a);
-        } else if (!in) {
-            in = a;
-        } else {
-            return cli_usage_error("orient", "unexpected argument '%s'", a);
+    enum { O_OUT, O_FROM, O_TO };
+    static const cli_opt opts[] = {{"-o", O_OUT, true},
+                                   {"--output", O_OUT, true},
+                                   {"--from", O_FROM, true},
+                                   {"--to", O_TO, true},
+                                   {NULL, 0, false}};
+    cli_args a;
+    cli_args_init(&a, "orient", argc, argv, opts);
+    for (int k; (k = cli_args_next(&a, &val)) != CLI_ARGS_END;) {
+        int r = 0;
+        switch (k) {
+        case O_OUT: out = val; break;
+        case O_FROM: r = cli_args_format(&a, val, &from); break;
+        case O_TO: r = cli_args_format(&a, val, &to); break;
+        case CLI_ARGS_POSITIONAL:
+            if (in)
+                r = cli_args_unexpected(&a, val);
+            in = val;
+            break;
+        default: r = CLI_ARGS_ERROR;
         }
+        if (r)
+            return CLI_USAGE;
     }
     if (!in || !out)
         return cli_usage_error("orient", "needs a model file and -o OUT");

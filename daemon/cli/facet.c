@@ -30,6 +30,8 @@ static const cli_command commands[] = {
      cmd_inversion_stats},
     {"merge", "merge groups of nearly coplanar facets (Palachev 2012, §2)",
      cmd_merge},
+    {"collapse", "collapse clusters of vertices joined by very short "
+     "edges", cmd_collapse},
     {"correct", "the automatic post-scan correction", cmd_correct},
     {"fill", "close the holes of a mesh (Vyatkin; Nesterenko)", cmd_fill},
     {"stitch", "join two open meshes into one closed mesh (Nesterenko)",

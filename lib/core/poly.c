@@ -336,9 +336,31 @@ double geo_poly_size(const geo_poly *p)
     return geo_vlen(d);
 }
 
+double geo_eps_of_size(double size)
+{
+    return 1e-10 * (1.0 + size);
+}
+
 double geo_poly_eps(const geo_poly *p)
 {
-    return 1e-10 * (1.0 + geo_poly_size(p));
+    return geo_eps_of_size(geo_poly_size(p));
+}
+
+double geo_fan_volume6(double acc, const double (*x)[3], const uint32_t *v,
+                       uint32_t n, const double o[3])
+{
+    if (n < 3)
+        return acc;
+    double a[3];
+    geo_vsub(x[v[0]], o, a);
+    for (uint32_t i = 1; i + 1 < n; i++) {
+        double b[3], c[3], bc[3];
+        geo_vsub(x[v[i]], o, b);
+        geo_vsub(x[v[i + 1]], o, c);
+        geo_vcross(b, c, bc);
+        acc += geo_vdot(a, bc);
+    }
+    return acc;
 }
 
 double geo_poly_volume(const geo_poly *p)
@@ -350,19 +372,10 @@ double geo_poly_volume(const geo_poly *p)
     geo_vadd(lo, hi, o);
     geo_vscale(o, 0.5, o);
     double vol = 0;
-    for (uint32_t f = 0; f < p->nfacets; f++) {
-        uint32_t n = geo_poly_facet_size(p, f);
-        const uint32_t *v = geo_poly_facet(p, f);
-        double a[3];
-        geo_vsub(p->verts[v[0]], o, a);
-        for (uint32_t i = 1; i + 1 < n; i++) {
-            double b[3], c[3], bc[3];
-            geo_vsub(p->verts[v[i]], o, b);
-            geo_vsub(p->verts[v[i + 1]], o, c);
-            geo_vcross(b, c, bc);
-            vol += geo_vdot(a, bc);
-        }
-    }
+    for (uint32_t f = 0; f < p->nfacets; f++)
+        vol = geo_fan_volume6(vol, (const double(*)[3])p->verts,
+                              geo_poly_facet(p, f), geo_poly_facet_size(p, f),
+                              o);
     return vol / 6.0;
 }
 

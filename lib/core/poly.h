@@ -134,8 +134,18 @@ void geo_poly_bbox(const geo_poly *p, double ret_lo[3], double ret_hi[3]);
 /* Bounding-box diagonal: the model's size for relative tolerances. */
 double geo_poly_size(const geo_poly *p);
 
-/* The planarity tolerance: 1e-10 × (1 + size). */
+/* The planarity tolerance of a model of the given size (bounding-box
+ * diagonal): 1e-10 × (1 + size), the one formula every kernel uses. */
+double geo_eps_of_size(double size);
+
+/* The planarity tolerance of p: geo_eps_of_size(geo_poly_size(p)). */
 double geo_poly_eps(const geo_poly *p);
+
+/* acc + 6 × the signed volume of the fan of the polygon x[v[0..n)] about
+ * o, each triangle's o-relative triple product added to acc in turn (so a
+ * caller summing several polygons gets the same bits as one loop). */
+double geo_fan_volume6(double acc, const double (*x)[3], const uint32_t *v,
+                       uint32_t n, const double o[3]);
 
 /* Signed volume by the divergence theorem (positive for a closed model
  * listed counter-clockwise from outside); meaningful for closed models. */

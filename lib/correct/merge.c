@@ -83,7 +83,7 @@ geo_mw *geo_mw_new(geo_edit *e, const geo_merge_opts *opts, geo_err *err)
         for (int k = 0; k < 3; k++)
             w->origin[k] = 0.5 * (lo[k] + hi[k]);
     }
-    w->eps = 1e-10 * (1 + size);
+    w->eps = geo_eps_of_size(size);
     w->max_cut = opts->max_deviation > 0 ? opts->max_deviation
                                          : opts->rel_deviation * size;
     w->gen = 1;
@@ -469,31 +469,63 @@ static int session_finish(session *s, geo_poly *p, geo_merge_report *rep,
     return 0;
 }
 
+/* The set-up of every entry point: the options (opts, or the defaults)
+ * into *o, *rep zeroed (callers may hand in an uninitialised report), the
+ * session opened on p; for the automatic grouping also the options
+ * checked and the grouping criteria *c (angle, deviation bound, the view
+ * step from o->views or read off the model), recorded in *rep. On error
+ * nothing is left open and *rep holds nothing. */
+static int session_begin(session *s, const geo_poly *p,
+                         const geo_merge_opts *opts, bool automatic,
+                         geo_merge_opts *o, geo_merge_report *rep,
+                         geo_group_crit *c, geo_err *err)
+{
+    if (opts)
+        *o = *opts;
+    else
+        geo_merge_opts_default(o);
+    memset(rep, 0, sizeof *rep);
+    if (automatic &&
+        (!(o->max_angle_deg > 0 && o->max_angle_deg < 90) ||
+         !(o->max_deviation >= 0) || !(o->rel_deviation >= 0) ||
+         isnan(o->noise)))
+        return geo_err_set(err, -EINVAL, "max_angle_deg must be in (0, 90) "
+                           "and the deviations non-negative");
+    int r = session_open(s, p, o, rep, err);
+    if (r < 0 || !automatic) {
+        if (r < 0)
+            geo_merge_report_clear(rep);
+        return r;
+    }
+    *c = (geo_group_crit){cos(o->max_angle_deg * M_PI / 180.0),
+                          geo_merge_max_deviation(o, p), 0, 0};
+    uint32_t views = o->views;
+    if (views == 0 && geo_merge_view_grid(p, &views, NULL) < 0) {
+        session_close(s);
+        geo_merge_report_clear(rep);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    c->step = views ? M_PI / views : 0;
+    rep->views = views;
+    rep->max_dev = c->max_dev;
+    return 0;
+}
+
 int geo_merge_groups(geo_poly *p, uint32_t ngroups, const uint32_t *gstart,
                      const uint32_t *gfacets, const geo_merge_opts *opts,
                      const geo_ctx *ctx, geo_merge_report *report,
                      geo_err *err)
 {
-    geo_merge_opts o;
-    if (opts)
-        o = *opts;
-    else
-        geo_merge_opts_default(&o);
-    geo_merge_report local = {0}, *rep = report ? report : &local;
-    /* an output: callers may hand in an uninitialised report */
-    memset(rep, 0, sizeof *rep);
     for (uint32_t k = 0; k < gstart[ngroups]; k++)
-        if (gfacets[k] >= p->nfacets) {
-            geo_merge_report_clear(&local);
+        if (gfacets[k] >= p->nfacets)
             return geo_err_set(err, -EINVAL, "groups: facet %u out of range "
                                "(%u facets)", gfacets[k], p->nfacets);
-        }
+    geo_merge_opts o;
+    geo_merge_report local = {0}, *rep = report ? report : &local;
     session s;
-    int r = session_open(&s, p, &o, rep, err);
-    if (r < 0) {
-        geo_merge_report_clear(&local);
+    int r = session_begin(&s, p, opts, false, &o, rep, NULL, err);
+    if (r < 0)
         return r;
-    }
     for (uint32_t g = 0; g < ngroups && r == 0; g++) {
         if ((r = geo_ctx_progress(ctx, (double)g / (ngroups ? ngroups : 1))) < 0) {
             r = geo_err_set(err, -ECANCELED, "merge canceled");
@@ -542,32 +574,17 @@ double geo_merge_max_deviation(const geo_merge_opts *o, const geo_poly *p)
                                 : o->rel_deviation * geo_poly_size(p);
 }
 
-static int check_auto_opts(const geo_merge_opts *o, geo_err *err)
-{
-    if (!(o->max_angle_deg > 0 && o->max_angle_deg < 90) || !(o->max_deviation >= 0) ||
-        !(o->rel_deviation >= 0) || isnan(o->noise))
-        return geo_err_set(err, -EINVAL, "max_angle_deg must be in (0, 90) and "
-                           "the deviations non-negative");
-    return 0;
-}
 
 int geo_merge_surface_noise(const geo_poly *p, const geo_merge_opts *opts,
                             double *ret, geo_err *err)
 {
     geo_merge_opts o;
-    if (opts)
-        o = *opts;
-    else
-        geo_merge_opts_default(&o);
-    int r = check_auto_opts(&o, err);
+    geo_merge_report rep;
+    session s;
+    geo_group_crit c;
+    int r = session_begin(&s, p, opts, true, &o, &rep, &c, err);
     if (r < 0)
         return r;
-    geo_merge_report rep = {0};
-    session s;
-    if ((r = session_open(&s, p, &o, &rep, err)) < 0)
-        return r;
-    geo_group_crit c = {cos(o.max_angle_deg * M_PI / 180.0),
-                        geo_merge_max_deviation(&o, p), 0, 0};
     r = geo_mw_surface_noise(s.w, &c, ret);
     if (r < 0)
         geo_err_set(err, r, "out of memory");
@@ -581,35 +598,17 @@ int geo_merge_auto(geo_poly *p, const geo_merge_opts *opts,
                    geo_err *err)
 {
     geo_merge_opts o;
-    if (opts)
-        o = *opts;
-    else
-        geo_merge_opts_default(&o);
-    int r = check_auto_opts(&o, err);
+    geo_merge_report local = {0}, *rep = report ? report : &local;
+    session s;
+    geo_group_crit c;
+    int r = session_begin(&s, p, opts, true, &o, rep, &c, err);
     if (r < 0)
         return r;
-    geo_merge_report local = {0}, *rep = report ? report : &local;
-    /* an output: callers may hand in an uninitialised report */
-    memset(rep, 0, sizeof *rep);
-    session s;
-    r = session_open(&s, p, &o, rep, err);
-    if (r < 0) {
-        geo_merge_report_clear(&local);
-        return r;
-    }
-    geo_group_crit c = {cos(o.max_angle_deg * M_PI / 180.0),
-                        geo_merge_max_deviation(&o, p), 0, 0};
-    uint32_t views = o.views;
-    if (views == 0 && (r = geo_merge_view_grid(p, &views, NULL)) < 0)
-        r = geo_err_set(err, r, "out of memory");
-    c.step = views ? M_PI / views : 0;
-    if (r == 0 && o.noise > 0)
+    if (o.noise > 0)
         c.noise = o.noise;
-    else if (r == 0 && o.noise == 0 && (r = geo_mw_surface_noise(s.w, &c, &c.noise)) < 0)
+    else if (o.noise == 0 && (r = geo_mw_surface_noise(s.w, &c, &c.noise)) < 0)
         r = geo_err_set(err, r, "out of memory");
-    rep->views = views;
     rep->noise = c.noise;
-    rep->max_dev = c.max_dev;
     uint32_t rounds = o.max_rounds ? o.max_rounds : 1;
     bool bevel_done = !o.bevels;
     for (uint32_t k = 0; k < rounds && r == 0; k++) {

@@ -123,8 +123,8 @@ static int cut_facet(cutter *k, uint32_t f, const uint32_t *vs, uint32_t n)
     geo_edit_area_vector(k->e, f, nf);
     if (geo_cutf_frame(&k->cf, nf) < 0)
         return facet_error(k, f, k->cf.why);
-    if (geo_cutf_grow((void **)&k->fside, &k->capfside, n, 1) < 0 ||
-        geo_cutf_grow((void **)&k->fxv, &k->capfxv, n, sizeof *k->fxv) < 0)
+    if (geo_grow((void **)&k->fside, &k->capfside, n, 1) < 0 ||
+        geo_grow((void **)&k->fxv, &k->capfxv, n, sizeof *k->fxv) < 0)
         return -ENOMEM;
     for (uint32_t i = 0; i < n; i++)
         k->fside[i] = (int8_t)geo_mw_side(k->w, vs[i], k->plane);
@@ -309,7 +309,7 @@ int geo_mw_cut(geo_mw *w, uint32_t main, const double plane[4],
                 continue;
             seen.key[s] = ekey(a, b);
             seen.val[s] = 1;
-            if (geo_cutf_grow((void **)&inpl, &capinpl, ninpl + 1, sizeof *inpl) < 0) {
+            if (geo_grow((void **)&inpl, &capinpl, ninpl + 1, sizeof *inpl) < 0) {
                 r = geo_err_set(err, -ENOMEM, "out of memory");
                 goto done;
             }
@@ -332,7 +332,7 @@ int geo_mw_cut(geo_mw *w, uint32_t main, const double plane[4],
             }
             continue;
         }
-        if (geo_cutf_grow((void **)&cyc, &capcyc, n, sizeof *cyc) < 0) {
+        if (geo_grow((void **)&cyc, &capcyc, n, sizeof *cyc) < 0) {
             r = geo_err_set(err, -ENOMEM, "out of memory");
             goto done;
         }
@@ -392,7 +392,7 @@ int geo_mw_cut(geo_mw *w, uint32_t main, const double plane[4],
             next.val[s] = (uint32_t)i;
         }
         size_t len = 0;
-        if (r == 0 && geo_cutf_grow((void **)&cyc, &capcyc, k.cf.nsec, sizeof *cyc) < 0)
+        if (r == 0 && geo_grow((void **)&cyc, &capcyc, k.cf.nsec, sizeof *cyc) < 0)
             r = geo_err_set(err, -ENOMEM, "out of memory");
         for (size_t i = 0; r == 0;) {
             cyc[len++] = k.cf.sec[i][0];

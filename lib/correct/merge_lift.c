@@ -255,48 +255,65 @@ static int64_t newv(geo_edit *e, const double xyz[3])
     return geo_edit_add_vertex(e, xyz);
 }
 
-/* ПОДНЯТЬ_ВЕРШИНУ, left branch (the left neighbour determines the move).
+/* ПОДНЯТЬ_ВЕРШИНУ (Palachev 2012, §2.6.3) for one side: lp->left, the
+ * left branch (the neighbour N = A_{i−1} determines the move), or the
+ * right branch, its mirror image (i−1 ↔ i+1, i−2 ↔ i+2, f_{−k} ↔ f_{+k},
+ * after ↔ before; the paper's text of this branch has the typos named at
+ * the top, this follows the symmetry). In the names below fN2 is f_{∓2}
+ * (beyond N), fN1 f_{∓1} (between A_i and N), fO1 f_{±1} (the other side);
+ * fwd inserts on N's side of a vertex, back on the other. The paper's
+ * eight cases: join with A_i and N of degree > 3, only A_i, only N, or
+ * neither (f_{∓1} a triangle squeezed out, or N taking A_i's place); no
+ * join with both, only A_i, only N, or neither of degree > 3. Where the
+ * two branches anchor an insertion at different ends of an edge, both are
+ * kept as they were (the same polygon, its vertex list rotated).
  * Returns 0 or a negative errno; -EINVAL means an edit position was not
  * found (the neighbourhood is not what the plan saw). */
-static int apply_left(geo_edit *e, uint32_t f, const lift_plan *lp,
+static int apply_side(geo_edit *e, uint32_t f, const lift_plan *lp,
                       uint32_t *ret_new)
 {
-    uint32_t A = lp->a, Am = lp->am;
-    uint32_t fm2 = lp->fm2, fm1 = lp->fm1, fp1 = lp->fp1;
-    bool hiA = geo_edit_vn(e, A) > 3, hiN = geo_edit_vn(e, Am) > 3;
+    bool left = lp->left;
+    uint32_t A = lp->a, N = left ? lp->am : lp->ap;
+    uint32_t fN2 = left ? lp->fm2 : lp->fp2, fN1 = left ? lp->fm1 : lp->fp1,
+             fO1 = left ? lp->fp1 : lp->fm1;
+    int (*fwd)(geo_edit *, uint32_t, uint32_t, uint32_t) =
+        left ? ins_after : ins_before;
+    int (*back)(geo_edit *, uint32_t, uint32_t, uint32_t) =
+        left ? ins_before : ins_after;
+    bool hiA = geo_edit_vn(e, A) > 3, hiN = geo_edit_vn(e, N) > 3;
     const side_plan *s = &lp->s;
     int r = 0;
     if (s->join) {
         if (hiA && hiN) {
-            int64_t N = newv(e, s->v);
-            if (N < 0)
-                return (int)N;
+            int64_t V = newv(e, s->v);
+            if (V < 0)
+                return (int)V;
             (*ret_new)++;
-            uint32_t n = (uint32_t)N;
-            if ((r = ins_after(e, fm2, Am, n)) || (r = ins_after(e, fm1, A, n)) ||
-                (r = ins_before(e, fp1, A, n)) || (r = del(e, f, A)) ||
-                (r = repl(e, f, Am, n)))
+            uint32_t n = (uint32_t)V;
+            if ((r = fwd(e, fN2, N, n)) || (r = fwd(e, fN1, A, n)) ||
+                (r = back(e, fO1, A, n)) || (r = del(e, f, A)) ||
+                (r = repl(e, f, N, n)))
                 return r;
         } else if (hiA) {
-            if ((r = geo_edit_move_vertex(e, Am, s->v)) ||
-                (r = ins_before(e, fp1, A, Am)) || (r = del(e, f, A)))
+            if ((r = geo_edit_move_vertex(e, N, s->v)) ||
+                (r = back(e, fO1, A, N)) || (r = del(e, f, A)))
                 return r;
         } else if (hiN) {
             if ((r = geo_edit_move_vertex(e, A, s->v)) ||
-                (r = ins_after(e, fm2, Am, A)) || (r = del(e, f, Am)))
+                (r = fwd(e, fN2, N, A)) || (r = del(e, f, N)))
                 return r;
-        } else if (geo_edit_fn(e, fm1) == 3) {
-            /* departure: f_{−1} is the triangle A_i A_{i−1} X, so the paths
-             * meet at X itself and f_{−1} is squeezed out whole: A_i and
-             * A_{i−1} become X (the text would leave f_{−1} with two
-             * vertices) */
-            uint32_t X = third_vertex(e, fm1, A, Am);
-            if ((r = geo_edit_kill_facet(e, fm1)) || (r = del(e, fm2, Am)) ||
-                (r = del(e, fp1, A)) || (r = del(e, f, A)) || (r = repl(e, f, Am, X)))
+        } else if (geo_edit_fn(e, fN1) == 3) {
+            /* departure: f_{∓1} is the triangle A_i N X, so the paths meet
+             * at X itself and f_{∓1} is squeezed out whole: A_i and N
+             * become X (the text would leave f_{∓1} with two vertices) */
+            uint32_t X = third_vertex(e, fN1, A, N);
+            if ((r = geo_edit_kill_facet(e, fN1)) || (r = del(e, fN2, N)) ||
+                (r = del(e, fO1, A)) || (r = del(e, f, A)) ||
+                (r = repl(e, f, N, X)))
                 return r;
         } else {
-            if ((r = geo_edit_move_vertex(e, Am, s->v)) || (r = del(e, f, A)) ||
-                (r = del(e, fm1, A)) || (r = repl(e, fp1, A, Am)))
+            if ((r = geo_edit_move_vertex(e, N, s->v)) || (r = del(e, f, A)) ||
+                (r = del(e, fN1, A)) || (r = repl(e, fO1, A, N)))
                 return r;
         }
         return 0;
@@ -306,119 +323,58 @@ static int apply_left(geo_edit *e, uint32_t f, const lift_plan *lp,
     if (s->nb_on)
         hiN = false;
     if (hiA && hiN) {
-        int64_t N2 = newv(e, s->v2), N1 = N2 < 0 ? N2 : newv(e, s->v);
-        if (N1 < 0)
-            return (int)N1;
+        /* v1 on π ∩ π_{−1} ∩ π_{+1} (A_i's), v2 on N's path */
+        int64_t V1, V2;
+        if (left) {
+            V2 = newv(e, s->v2);
+            V1 = V2 < 0 ? V2 : newv(e, s->v);
+        } else {
+            V1 = newv(e, s->v);
+            V2 = V1 < 0 ? V1 : newv(e, s->v2);
+        }
+        if (V1 < 0 || V2 < 0)
+            return (int)(V1 < 0 ? V1 : V2);
         *ret_new += 2;
-        uint32_t v2 = (uint32_t)N2, v1 = (uint32_t)N1;
-        if ((r = ins_after(e, fm2, Am, v2)) || (r = ins_after(e, fm1, A, v1)) ||
-            (r = ins_after(e, fm1, v1, v2)) || (r = ins_before(e, fp1, A, v1)) ||
-            (r = repl(e, f, Am, v2)) || (r = repl(e, f, A, v1)))
-            return r;
-    } else if (hiA) {
-        int64_t N = newv(e, s->v);
-        if (N < 0)
-            return (int)N;
-        (*ret_new)++;
-        uint32_t v1 = (uint32_t)N;
-        if ((!s->nb_on && (r = geo_edit_move_vertex(e, Am, s->v2))) ||
-            (r = ins_after(e, fm1, A, v1)) || (r = ins_before(e, fp1, A, v1)) ||
-            (r = repl(e, f, A, v1)))
-            return r;
-    } else if (hiN) {
-        int64_t N = newv(e, s->v2);
-        if (N < 0)
-            return (int)N;
-        (*ret_new)++;
-        uint32_t v2 = (uint32_t)N;
-        if ((r = geo_edit_move_vertex(e, A, s->v)) ||
-            (r = ins_after(e, fm2, Am, v2)) || (r = ins_after(e, fm1, A, v2)) ||
-            (r = repl(e, f, Am, v2)))
-            return r;
-    } else {
-        if ((!s->nb_on && (r = geo_edit_move_vertex(e, Am, s->v2))) ||
-            (r = geo_edit_move_vertex(e, A, s->v)))
-            return r;
-    }
-    return 0;
-}
-
-/* The right branch: the mirror image of apply_left (i−1 ↔ i+1,
- * i−2 ↔ i+2, f_{−k} ↔ f_{+k}, after ↔ before). The paper's text of this
- * branch has the typos named at the top; this follows the symmetry. */
-static int apply_right(geo_edit *e, uint32_t f, const lift_plan *lp,
-                       uint32_t *ret_new)
-{
-    uint32_t A = lp->a, Ap = lp->ap;
-    uint32_t fp2 = lp->fp2, fp1 = lp->fp1, fm1 = lp->fm1;
-    bool hiA = geo_edit_vn(e, A) > 3, hiN = geo_edit_vn(e, Ap) > 3;
-    const side_plan *s = &lp->s;
-    int r = 0;
-    if (s->join) {
-        if (hiA && hiN) {
-            int64_t N = newv(e, s->v);
-            if (N < 0)
-                return (int)N;
-            (*ret_new)++;
-            uint32_t n = (uint32_t)N;
-            if ((r = ins_before(e, fp2, Ap, n)) || (r = ins_before(e, fp1, A, n)) ||
-                (r = ins_after(e, fm1, A, n)) || (r = del(e, f, A)) ||
-                (r = repl(e, f, Ap, n)))
-                return r;
-        } else if (hiA) {
-            if ((r = geo_edit_move_vertex(e, Ap, s->v)) ||
-                (r = ins_after(e, fm1, A, Ap)) || (r = del(e, f, A)))
-                return r;
-        } else if (hiN) {
-            if ((r = geo_edit_move_vertex(e, A, s->v)) ||
-                (r = ins_before(e, fp2, Ap, A)) || (r = del(e, f, Ap)))
-                return r;
-        } else if (geo_edit_fn(e, fp1) == 3) {
-            uint32_t X = third_vertex(e, fp1, A, Ap);
-            if ((r = geo_edit_kill_facet(e, fp1)) || (r = del(e, fp2, Ap)) ||
-                (r = del(e, fm1, A)) || (r = del(e, f, A)) || (r = repl(e, f, Ap, X)))
+        uint32_t v1 = (uint32_t)V1, v2 = (uint32_t)V2;
+        /* f_{∓1} gets A_i v1 v2 N in its order; the left branch works from
+         * N's side, the right from the other, as the paper writes them */
+        if (left) {
+            if ((r = fwd(e, fN2, N, v2)) || (r = ins_after(e, fN1, A, v1)) ||
+                (r = ins_after(e, fN1, v1, v2)) || (r = back(e, fO1, A, v1)) ||
+                (r = repl(e, f, N, v2)) || (r = repl(e, f, A, v1)))
                 return r;
         } else {
-            if ((r = geo_edit_move_vertex(e, Ap, s->v)) || (r = del(e, f, A)) ||
-                (r = del(e, fp1, A)) || (r = repl(e, fm1, A, Ap)))
+            if ((r = back(e, fO1, A, v1)) || (r = ins_after(e, fN1, N, v2)) ||
+                (r = ins_after(e, fN1, v2, v1)) || (r = fwd(e, fN2, N, v2)) ||
+                (r = repl(e, f, A, v1)) || (r = repl(e, f, N, v2)))
                 return r;
         }
-        return 0;
-    }
-    if (s->nb_on)
-        hiN = false;
-    if (hiA && hiN) {
-        int64_t N1 = newv(e, s->v), N2 = N1 < 0 ? N1 : newv(e, s->v2);
-        if (N2 < 0)
-            return (int)N2;
-        *ret_new += 2;
-        uint32_t v1 = (uint32_t)N1, v2 = (uint32_t)N2;
-        if ((r = ins_after(e, fm1, A, v1)) || (r = ins_after(e, fp1, Ap, v2)) ||
-            (r = ins_after(e, fp1, v2, v1)) || (r = ins_before(e, fp2, Ap, v2)) ||
-            (r = repl(e, f, A, v1)) || (r = repl(e, f, Ap, v2)))
-            return r;
     } else if (hiA) {
-        int64_t N = newv(e, s->v);
-        if (N < 0)
-            return (int)N;
+        int64_t V = newv(e, s->v);
+        if (V < 0)
+            return (int)V;
         (*ret_new)++;
-        uint32_t v1 = (uint32_t)N;
-        if ((!s->nb_on && (r = geo_edit_move_vertex(e, Ap, s->v2))) ||
-            (r = ins_after(e, fm1, A, v1)) || (r = ins_before(e, fp1, A, v1)) ||
+        uint32_t v1 = (uint32_t)V;
+        if ((!s->nb_on && (r = geo_edit_move_vertex(e, N, s->v2))) ||
+            (r = fwd(e, fN1, A, v1)) || (r = back(e, fO1, A, v1)) ||
             (r = repl(e, f, A, v1)))
             return r;
     } else if (hiN) {
-        int64_t N = newv(e, s->v2);
-        if (N < 0)
-            return (int)N;
+        int64_t V = newv(e, s->v2);
+        if (V < 0)
+            return (int)V;
         (*ret_new)++;
-        uint32_t v2 = (uint32_t)N;
-        if ((r = geo_edit_move_vertex(e, A, s->v)) ||
-            (r = ins_after(e, fp1, Ap, v2)) || (r = ins_before(e, fp2, Ap, v2)) ||
-            (r = repl(e, f, Ap, v2)))
+        uint32_t v2 = (uint32_t)V;
+        /* v2 goes between A_i and N in f_{∓1} */
+        if ((r = geo_edit_move_vertex(e, A, s->v)))
+            return r;
+        if (left ? (r = fwd(e, fN2, N, v2)) || (r = ins_after(e, fN1, A, v2))
+                 : (r = ins_after(e, fN1, N, v2)) || (r = fwd(e, fN2, N, v2)))
+            return r;
+        if ((r = repl(e, f, N, v2)))
             return r;
     } else {
-        if ((!s->nb_on && (r = geo_edit_move_vertex(e, Ap, s->v2))) ||
+        if ((!s->nb_on && (r = geo_edit_move_vertex(e, N, s->v2))) ||
             (r = geo_edit_move_vertex(e, A, s->v)))
             return r;
     }
@@ -511,8 +467,7 @@ int geo_mw_lift(geo_mw *w, uint32_t main, const double plane[4],
         for (int k = 0; k < 4; k++)
             convex[k] = facet_convex(e, touched[k]);
         uint32_t made = 0;
-        int r = best.left ? apply_left(e, main, &best, &made)
-                          : apply_right(e, main, &best, &made);
+        int r = apply_side(e, main, &best, &made);
         if (r == -ENOMEM)
             return geo_err_set(err, r, "out of memory");
         if (r < 0)

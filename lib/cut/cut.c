@@ -104,7 +104,7 @@ static int push_kin(cutter *k, uint32_t corner)
 {
     if (k->kept_inplane[corner])
         return 0;
-    if (geo_cutf_grow((void **)&k->kin, &k->capkin, k->nkin + 1, sizeof *k->kin) < 0)
+    if (geo_grow((void **)&k->kin, &k->capkin, k->nkin + 1, sizeof *k->kin) < 0)
         return -ENOMEM;
     k->kept_inplane[corner] = 1;
     k->kin[k->nkin++] = corner;
@@ -133,7 +133,7 @@ static int cut_facet(cutter *k, uint32_t f)
     geo_poly_facet_area_vector(p, f, nf);
     if (geo_cutf_frame(&k->cf, nf) < 0)
         return facet_error(k, f, k->cf.why);
-    if (geo_cutf_grow((void **)&k->fside, &k->capfside, n, 1) < 0)
+    if (geo_grow((void **)&k->fside, &k->capfside, n, 1) < 0)
         return -ENOMEM;
     for (uint32_t j = 0; j < n; j++)
         k->fside[j] = k->side[vs[j]];
@@ -619,7 +619,7 @@ static int check_plane_fans(cutter *k)
             uint32_t v = o->fidx[c];
             if (v >= nold || k->side[v] != 0)
                 continue;
-            if (geo_cutf_grow((void **)&w, &cap, n + 1, sizeof *w) < 0) {
+            if (geo_grow((void **)&w, &cap, n + 1, sizeof *w) < 0) {
                 free(w);
                 return geo_err_set(k->err, -ENOMEM, "out of memory");
             }
@@ -802,7 +802,7 @@ int geo_cut(const geo_poly *p, const double plane[4],
         double x[3];
         double xe = geo_cutf_crossing_point(k.unit, p->verts[a], p->verts[b], x);
         int64_t id = geo_poly_add_vertex(out, x);
-        if (id < 0 || geo_cutf_grow((void **)&k.xerr, &k.capxerr, k.new_vertices + 1,
+        if (id < 0 || geo_grow((void **)&k.xerr, &k.capxerr, k.new_vertices + 1,
                            sizeof *k.xerr) < 0)
             goto oom;
         k.xerr[k.new_vertices] = xe;

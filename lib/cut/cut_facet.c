@@ -39,21 +39,6 @@
 enum ev_type { EV_ENTRY, EV_EXIT, EV_DOUBLE, EV_PASS };
 enum seg_type { SEG_KEPT, SEG_REMOVED };
 
-int geo_cutf_grow(void **buf, size_t *cap, size_t need, size_t elem)
-{
-    if (need <= *cap)
-        return 0;
-    size_t c = *cap ? *cap : 16;
-    while (c < need)
-        c *= 2;
-    void *b = realloc(*buf, c * elem);
-    if (!b)
-        return -ENOMEM;
-    *buf = b;
-    *cap = c;
-    return 0;
-}
-
 int geo_cutf_dominant_axis(const double v[3])
 {
     int k = 0;
@@ -109,7 +94,7 @@ double geo_cutf_crossing_point(const double plane[4], const double a[3],
 
 int geo_cutf_push_section(geo_cutf *k, uint32_t a, uint32_t b)
 {
-    if (geo_cutf_grow((void **)&k->sec, &k->capsec, k->nsec + 1, sizeof *k->sec) < 0)
+    if (geo_grow((void **)&k->sec, &k->capsec, k->nsec + 1, sizeof *k->sec) < 0)
         return -ENOMEM;
     k->sec[k->nsec][0] = a;
     k->sec[k->nsec][1] = b;
@@ -145,7 +130,7 @@ static int along(const geo_cutf *k, const double *a0, const double *a1,
 
 static int insert_event(geo_cutf *k, size_t *nev, const geo_cutf_event *e)
 {
-    if (geo_cutf_grow((void **)&k->ev, &k->capev, *nev + 1, sizeof *k->ev) < 0)
+    if (geo_grow((void **)&k->ev, &k->capev, *nev + 1, sizeof *k->ev) < 0)
         return -ENOMEM;
     /* binary search for the first event after e along l (ties keep the
      * boundary order; a tie means the facet touches itself, which the
@@ -167,7 +152,7 @@ static int insert_event(geo_cutf *k, size_t *nev, const geo_cutf_event *e)
 
 static int piece_push(geo_cutf *k, size_t *np, uint32_t v)
 {
-    if (geo_cutf_grow((void **)&k->piece, &k->cappiece, *np + 1, sizeof *k->piece) < 0)
+    if (geo_grow((void **)&k->piece, &k->cappiece, *np + 1, sizeof *k->piece) < 0)
         return -ENOMEM;
     k->piece[(*np)++] = v;
     return 0;
@@ -179,7 +164,7 @@ int geo_cutf_facet(geo_cutf *k, const double (*verts)[3], const uint32_t *vs,
     k->ninplane = 0;
 
     /* boundary nodes with the kept/removed type of the segments between */
-    if (geo_cutf_grow((void **)&k->nodes, &k->capnodes, 2 * (size_t)n,
+    if (geo_grow((void **)&k->nodes, &k->capnodes, 2 * (size_t)n,
                       sizeof *k->nodes) < 0)
         return -ENOMEM;
     uint32_t nn = 0;
@@ -284,8 +269,8 @@ int geo_cutf_facet(geo_cutf *k, const double (*verts)[3], const uint32_t *vs,
         return refuse(k, "the section does not close");
 
     /* cycles B (boundary, kept side) and A (along l back to the entry) */
-    if (geo_cutf_grow((void **)&k->used, &k->capused, nev, 1) < 0 ||
-        geo_cutf_grow((void **)&k->pstart, &k->cappstart, 1, sizeof *k->pstart) < 0)
+    if (geo_grow((void **)&k->used, &k->capused, nev, 1) < 0 ||
+        geo_grow((void **)&k->pstart, &k->cappstart, 1, sizeof *k->pstart) < 0)
         return -ENOMEM;
     memset(k->used, 0, nev);
     k->pstart[0] = 0;
@@ -315,7 +300,7 @@ int geo_cutf_facet(geo_cutf *k, const double (*verts)[3], const uint32_t *vs,
                 const geo_cutf_node *na = &k->nodes[a];
                 if (!na->crossing && na->out == SEG_KEPT && side[na->i] == 0 &&
                     side[na->i + 1 < n ? na->i + 1 : 0] == 0) {
-                    if (geo_cutf_grow((void **)&k->inplane, &k->capinplane,
+                    if (geo_grow((void **)&k->inplane, &k->capinplane,
                                       k->ninplane + 1, sizeof *k->inplane) < 0)
                         return -ENOMEM;
                     k->inplane[k->ninplane++] = na->i;
@@ -344,7 +329,7 @@ int geo_cutf_facet(geo_cutf *k, const double (*verts)[3], const uint32_t *vs,
         if (np - p0 < 3)
             return refuse(k, "a piece with fewer than 3 vertices");
         pieces++;
-        if (geo_cutf_grow((void **)&k->pstart, &k->cappstart, pieces + 1,
+        if (geo_grow((void **)&k->pstart, &k->cappstart, pieces + 1,
                           sizeof *k->pstart) < 0)
             return -ENOMEM;
         k->pstart[pieces] = (uint32_t)np;

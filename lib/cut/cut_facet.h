@@ -17,6 +17,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "grow.h"
+
 /* A node of the facet's boundary: a vertex, or the crossing point of the
  * edge that follows vertex i. */
 typedef struct geo_cutf_node {
@@ -67,10 +69,6 @@ typedef struct geo_cutf {
     size_t capused;
 } geo_cutf;
 
-/* Grows *buf (elements of elem bytes) to hold at least need elements,
- * doubling from 16; *cap is the capacity in elements. 0 or -ENOMEM (then
- * *buf and *cap are unchanged). */
-int geo_cutf_grow(void **buf, size_t *cap, size_t need, size_t elem);
 
 /* The coordinate axis on which |v| is largest (the first of ties). */
 int geo_cutf_dominant_axis(const double v[3]);

@@ -56,6 +56,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "grow.h"
 #include "predicates.h"
 
 #define NONE UINT32_MAX
@@ -267,29 +268,14 @@ static uint32_t new_epoch(splitter *s)
     return s->epoch;
 }
 
-static int grow(void **buf, size_t *cap, size_t need, size_t elem)
-{
-    if (need <= *cap)
-        return 0;
-    size_t c = *cap ? *cap : 16;
-    while (c < need)
-        c *= 2;
-    void *b = realloc(*buf, c * elem);
-    if (!b)
-        return -ENOMEM;
-    *buf = b;
-    *cap = c;
-    return 0;
-}
-
 static int emit(splitter *s, const uint32_t *v, uint32_t n, uint32_t part)
 {
     geo_region_pieces *o = s->out;
     size_t at = o->npieces ? o->start[o->npieces] : 0;
-    if (grow((void **)&o->idx, &s->capidx, at + n, sizeof *o->idx) < 0 ||
-        grow((void **)&o->part, &s->cappart, (size_t)o->npieces + 1,
+    if (geo_grow((void **)&o->idx, &s->capidx, at + n, sizeof *o->idx) < 0 ||
+        geo_grow((void **)&o->part, &s->cappart, (size_t)o->npieces + 1,
              sizeof *o->part) < 0 ||
-        grow((void **)&o->start, &s->capstart, (size_t)o->npieces + 2,
+        geo_grow((void **)&o->start, &s->capstart, (size_t)o->npieces + 2,
              sizeof *o->start) < 0)
         return geo_err_set(s->err, -ENOMEM, "out of memory");
     memcpy(o->idx + at, v, (size_t)n * sizeof *v);

@@ -10,6 +10,8 @@
  * guarantees it). */
 #include "frep.h"
 
+#include "grow.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
@@ -39,12 +41,15 @@ typedef struct node {
 
 struct geo_frep {
     node *nodes;
-    uint32_t nnodes, cap_nodes;
+    uint32_t nnodes;
+    size_t cap_nodes;
     prim *prims;
-    uint32_t nprims, cap_prims;
+    uint32_t nprims;
+    size_t cap_prims;
     uint32_t *kids; /* child ids; for perturbed: base, then terms */
     double *amps;   /* parallel to kids (perturbation amplitudes) */
-    uint32_t nkids, cap_kids;
+    uint32_t nkids;
+    size_t cap_kids;
     geo_frep_op *ops;
     uint32_t nops;
     uint32_t *pieces; /* roots of the min/max-free subtrees */
@@ -76,21 +81,6 @@ uint32_t geo_frep_nnodes(const geo_frep *f)
     return f->nnodes;
 }
 
-static int grow(void **buf, uint32_t *cap, uint32_t need, size_t elem)
-{
-    if (need <= *cap)
-        return 0;
-    size_t nc = *cap ? (size_t)*cap * 2 : 16;
-    while (nc < need)
-        nc *= 2;
-    void *nb = realloc(*buf, nc * elem);
-    if (!nb)
-        return -ENOMEM;
-    *buf = nb;
-    *cap = (uint32_t)(nc > UINT32_MAX ? UINT32_MAX : nc);
-    return 0;
-}
-
 static bool finite3(const double v[3])
 {
     return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);
@@ -105,7 +95,7 @@ static int64_t add_node(geo_frep *f, uint8_t kind, uint32_t depth,
     if (depth > GEO_FREP_MAX_DEPTH)
         return geo_err_set(err, -ERANGE, "shapes nested deeper than %u",
                            GEO_FREP_MAX_DEPTH);
-    if (grow((void **)&f->nodes, &f->cap_nodes, f->nnodes + 1,
+    if (geo_grow((void **)&f->nodes, &f->cap_nodes, f->nnodes + 1,
              sizeof *f->nodes) < 0)
         return geo_err_set(err, -ENOMEM, "out of memory");
     node *n = &f->nodes[f->nnodes];
@@ -117,7 +107,7 @@ static int64_t add_node(geo_frep *f, uint8_t kind, uint32_t depth,
 
 static int64_t add_prim(geo_frep *f, const prim *pr, geo_err *err)
 {
-    if (grow((void **)&f->prims, &f->cap_prims, f->nprims + 1,
+    if (geo_grow((void **)&f->prims, &f->cap_prims, f->nprims + 1,
              sizeof *f->prims) < 0)
         return geo_err_set(err, -ENOMEM, "out of memory");
     int64_t id = add_node(f, NODE_PRIM, 1, err);
@@ -200,7 +190,7 @@ static int64_t add_combo(geo_frep *f, uint8_t kind, uint32_t n,
     }
     if ((uint64_t)f->nkids + n > UINT32_MAX / 2)
         return geo_err_set(err, -ERANGE, "%s: too many shapes", what);
-    if (grow((void **)&f->kids, &f->cap_kids, f->nkids + n,
+    if (geo_grow((void **)&f->kids, &f->cap_kids, f->nkids + n,
              sizeof *f->kids) < 0)
         return geo_err_set(err, -ENOMEM, "out of memory");
     /* amps always has kids' capacity */
@@ -270,7 +260,8 @@ int64_t geo_frep_difference(geo_frep *f, uint32_t a, uint32_t b,
 
 typedef struct emitter {
     geo_frep_op *ops;
-    uint32_t n, cap;
+    uint32_t n;
+    size_t cap;
 } emitter;
 
 static int emit(emitter *e, uint8_t code, uint32_t arg, double amp,
@@ -278,7 +269,7 @@ static int emit(emitter *e, uint8_t code, uint32_t arg, double amp,
 {
     if (e->n >= GEO_FREP_MAX_OPS)
         return -ERANGE;
-    if (grow((void **)&e->ops, &e->cap, e->n + 1, sizeof *e->ops) < 0)
+    if (geo_grow((void **)&e->ops, &e->cap, e->n + 1, sizeof *e->ops) < 0)
         return -ENOMEM;
     e->ops[e->n] = (geo_frep_op){code, arg, start == UINT32_MAX ? e->n : start,
                                  amp};

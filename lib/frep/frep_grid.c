@@ -4,6 +4,8 @@
  * and half-spaces that matter there are evaluated. */
 #include "frep_grid.h"
 
+#include "grow.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdatomic.h>
@@ -23,17 +25,7 @@ typedef struct arena {
 
 static int arena_reserve(arena *a, size_t need)
 {
-    if (need <= a->cap)
-        return 0;
-    size_t nc = a->cap ? a->cap * 2 : 1024;
-    while (nc < need)
-        nc *= 2;
-    geo_frep_op *n = realloc(a->ops, nc * sizeof *n);
-    if (!n)
-        return -ENOMEM;
-    a->ops = n;
-    a->cap = nc;
-    return 0;
+    return geo_grow((void **)&a->ops, &a->cap, need, sizeof *a->ops);
 }
 
 /* What one chunk of the quadtree found. */

@@ -27,18 +27,9 @@ const char *geo_orientation_name(enum geo_orientation o)
 /* Facet f's share of the signed volume about o (fan of triangles). */
 static double facet_volume(const geo_poly *p, uint32_t f, const double o[3])
 {
-    uint32_t n = geo_poly_facet_size(p, f);
-    const uint32_t *v = geo_poly_facet(p, f);
-    double a[3], vol = 0;
-    geo_vsub(p->verts[v[0]], o, a);
-    for (uint32_t i = 1; i + 1 < n; i++) {
-        double b[3], c[3], bc[3];
-        geo_vsub(p->verts[v[i]], o, b);
-        geo_vsub(p->verts[v[i + 1]], o, c);
-        geo_vcross(b, c, bc);
-        vol += geo_vdot(a, bc);
-    }
-    return vol / 6.0;
+    return geo_fan_volume6(0, (const double(*)[3])p->verts,
+                           geo_poly_facet(p, f), geo_poly_facet_size(p, f),
+                           o) / 6.0;
 }
 
 /* Ray parity state for one query point (a vertex of shell `self`). */

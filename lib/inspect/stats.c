@@ -313,7 +313,7 @@ int geo_inspect(const geo_poly *p, const geo_inspect_opts *opts,
     ret->max_nonplanarity = geo_poly_max_nonplanarity(p);
     /* geo_poly_eps's and the radius' common size, taken once */
     double size = geo_poly_size(p);
-    ret->eps = o.eps > 0 ? o.eps : 1e-10 * (1.0 + size);
+    ret->eps = o.eps > 0 ? o.eps : geo_eps_of_size(size);
     memcpy(ret->coplanar_deg, o.coplanar_deg, sizeof ret->coplanar_deg);
     ret->short_edge_radius =
         o.short_edge_radius > 0 ? o.short_edge_radius : 1e-3 * size;

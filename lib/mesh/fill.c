@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "grow.h"
 #include "bvh.h"
 #include "edgemap.h"
 #include "orient.h"
@@ -202,14 +203,9 @@ out:
 
 static int keep_patch(mfill *M, uint32_t f0, uint32_t f1)
 {
-    if (M->nkept == M->cap_kept) {
-        size_t nc = M->cap_kept ? 2 * M->cap_kept : 16;
-        kept_patch *nk = realloc(M->kept, nc * sizeof *nk);
-        if (!nk)
-            return -ENOMEM;
-        M->kept = nk;
-        M->cap_kept = nc;
-    }
+    if (geo_grow((void **)&M->kept, &M->cap_kept, M->nkept + 1,
+                 sizeof *M->kept) < 0)
+        return -ENOMEM;
     kept_patch *kp = &M->kept[M->nkept++];
     kp->f0 = f0;
     kp->f1 = f1;

@@ -14,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "grow.h"
 #include "edgemap.h"
 #include "spchol.h"
 #include "topo.h"
@@ -81,14 +82,9 @@ static int add_edge(filler *F, uint32_t a, uint32_t b)
     uint64_t key = geo_edge_ukey(a, b);
     if (geo_edgemap_get(&F->edges, key) != UINT32_MAX)
         return 0;
-    if (F->nlog == F->cap_log) {
-        size_t nc = F->cap_log ? 2 * F->cap_log : 256;
-        uint64_t *nl = realloc(F->log, nc * sizeof *nl);
-        if (!nl)
-            return -ENOMEM;
-        F->log = nl;
-        F->cap_log = nc;
-    }
+    if (geo_grow((void **)&F->log, &F->cap_log, F->nlog + 1,
+                 sizeof *F->log) < 0)
+        return -ENOMEM;
     if (geo_edgemap_put(&F->edges, key, 1) < 0)
         return -ENOMEM;
     F->log[F->nlog++] = key;

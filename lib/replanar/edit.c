@@ -561,18 +561,6 @@ void geo_edit_area_vector(const geo_edit *e, uint32_t f, double ret[3])
 
 double geo_edit_facet_volume(const geo_edit *e, uint32_t f, const double o[3])
 {
-    uint32_t n = e->fv[f].n;
-    const uint32_t *v = geo_edit_fv(e, f);
-    if (n < 3)
-        return 0;
-    double a[3], s = 0;
-    geo_vsub(e->verts[v[0]], o, a);
-    for (uint32_t i = 1; i + 1 < n; i++) {
-        double b[3], c[3], x[3];
-        geo_vsub(e->verts[v[i]], o, b);
-        geo_vsub(e->verts[v[i + 1]], o, c);
-        geo_vcross(b, c, x);
-        s += geo_vdot(a, x);
-    }
-    return s / 6.0;
+    return geo_fan_volume6(0, (const double(*)[3])e->verts, geo_edit_fv(e, f),
+                           e->fv[f].n, o) / 6.0;
 }

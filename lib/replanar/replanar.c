@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "grow.h"
 #include "bvh.h"
 #include "plane.h"
 #include "selfint.h"
@@ -543,14 +544,9 @@ static int log_row(geo_replanar_log *log, const run *r, uint32_t stepno,
 {
     if (!log)
         return 0;
-    if (log->n == log->cap) {
-        size_t cap = log->cap ? 2 * log->cap : 64;
-        geo_replanar_step *rows = realloc(log->rows, cap * sizeof *rows);
-        if (!rows)
-            return -ENOMEM;
-        log->rows = rows;
-        log->cap = cap;
-    }
+    if (geo_grow((void **)&log->rows, &log->cap, log->n + 1,
+                 sizeof *log->rows) < 0)
+        return -ENOMEM;
     log->rows[log->n++] = (geo_replanar_step){
         .step = stepno, .outer = outer, .inner = inner, .delta = r->delta,
         .s1 = r->s1, .s2 = r->s2, .s2sum = r->s2sum, .eps0 = eps, .k = k,
@@ -751,18 +747,8 @@ out:
 static double facet_volume6(const geo_poly *p, uint32_t f, double (*x)[3],
                             const double o[3])
 {
-    const uint32_t *v = geo_poly_facet(p, f);
-    uint32_t n = geo_poly_facet_size(p, f);
-    double a[3], s = 0;
-    geo_vsub(x[v[0]], o, a);
-    for (uint32_t i = 1; i + 1 < n; i++) {
-        double b[3], c[3], bc[3];
-        geo_vsub(x[v[i]], o, b);
-        geo_vsub(x[v[i + 1]], o, c);
-        geo_vcross(b, c, bc);
-        s += geo_vdot(a, bc);
-    }
-    return s;
+    return geo_fan_volume6(0, (const double(*)[3])x, geo_poly_facet(p, f),
+                           geo_poly_facet_size(p, f), o);
 }
 
 /* Newell vector of facet f from positions x. */

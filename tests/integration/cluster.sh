@@ -11,46 +11,20 @@
 # no request may hang the test (a frozen node, a database going away)
 export CURL_HOME=$T
 echo 'max-time = 30' >"$T/.curlrc"
-PGBIN=/usr/lib/postgresql/15/bin
-if [ ! -x "$PGBIN/initdb" ] || [ ! -x "$PGBIN/pg_ctl" ]; then
+. tests/support/pg.sh
+if ! pg_available; then
     skip "PostgreSQL 15 is not installed ($PGBIN): make deps installs postgresql-15"
     finish
     exit
 fi
-PGD=$(mktemp -d -t facetd-pg.XXXXXX)
-# PostgreSQL refuses to run as root
-as_pg() {
-    if [ "$(id -u)" = 0 ]; then runuser -u postgres -- "$@"; else "$@"; fi
-}
-[ "$(id -u)" = 0 ] && chown postgres: "$PGD"
-pg_stop() { as_pg "$PGBIN/pg_ctl" -D "$PGD/data" -m immediate stop >/dev/null 2>&1; }
-trap 'cleanup; pg_stop; [ -n "${KEEP:-}" ] || rm -rf "$PGD"' EXIT
-
-free_port() {
-    local p
-    for p in $(shuf -i 20000-60000 -n 50); do
-        (exec 3<>"/dev/tcp/127.0.0.1/$p") 2>/dev/null || { echo "$p"; return; }
-    done
-}
-PGPORT=$(free_port)
-echo secret-pw >"$PGD/pw"
-[ "$(id -u)" = 0 ] && chown postgres: "$PGD/pw"
-pg_start() {
-    as_pg "$PGBIN/pg_ctl" -D "$PGD/data" -l "$PGD/log" -w -t 30 -o \
-        "-c listen_addresses=127.0.0.1 -c port=$PGPORT -c unix_socket_directories=$PGD -c fsync=off -c max_connections=200" \
-        start >/dev/null
-}
-if ! as_pg "$PGBIN/initdb" -D "$PGD/data" -U facetd --pwfile="$PGD/pw" \
-        -A scram-sha-256 -E UTF8 --no-instructions >"$PGD/initdb.log" 2>&1 ||
-        ! pg_start; then
+trap 'cleanup; pg_cleanup' EXIT
+if ! pg_init "$T" off || ! pg_start; then
     not_ok "a throwaway PostgreSQL starts" "$(tail -n 5 "$PGD/initdb.log" "$PGD/log" 2>/dev/null)"
     finish
     exit
 fi
 ok "a throwaway PostgreSQL runs on 127.0.0.1:$PGPORT"
-printf '127.0.0.1:%s:*:facetd:secret-pw\n' "$PGPORT" >"$T/pgpass"
-chmod 600 "$T/pgpass"
-DB="postgresql://facetd@127.0.0.1:$PGPORT/postgres"
+DB=$PG_URL
 
 NODE_FLAGS=(--workers 1 --store-url "$DB" --store-password-file "$T/pgpass"
     --job-lease 2s --no-scanners)

@@ -20,7 +20,7 @@ wait_job "$ID"
 # the keys one level below them.
 paths=$(sed -n 's/^  "\(\/[^"]*\)": {$/\1/p' "$T/doc")
 check "the document has paths" test -n "$paths"
-for p in /livez /readyz /metrics /v1/version /v1/openapi.json /v1/scanners \
+for p in / "/ui/{file}" /livez /readyz /metrics /v1/version /v1/openapi.json /v1/scanners \
          "/v1/scanners/{serial}/scan" \
          /v1/inspect /v1/jobs "/v1/jobs/{id}" "/v1/jobs/{id}/model" \
          "/v1/jobs/{id}/stats" "/v1/jobs/{id}/events"; do

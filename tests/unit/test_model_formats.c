@@ -961,9 +961,35 @@ static void test_mutated_inputs_give_errors_or_valid_models(void **state)
     geo_poly_free(a);
 }
 
+/* Every list of formats comes from the one table: each entry's name maps
+ * back to it, the list names them all in order, and the end is marked. */
+static void test_format_table_is_the_one_list(void **state)
+{
+    (void)state;
+    char list[256], want[256] = "";
+    proto_format_list(list, sizeof list);
+    size_t n = 0;
+    proto_format f;
+    for (; (f = proto_format_at(n)) != PROTO_FMT_UNKNOWN; n++)
+        assert_int_equal(proto_format_from_name(proto_format_name(f)), f);
+    assert_true(n >= 9);
+    for (size_t i = 0; i < n; i++) {
+        size_t len = strlen(want);
+        snprintf(want + len, sizeof want - len, "%s%s",
+                 i == 0 ? "" : i + 1 == n ? " or " : ", ",
+                 proto_format_name(proto_format_at(i)));
+    }
+    assert_string_equal(list, want);
+    assert_non_null(strstr(list, "json, poly, obj"));
+    char tiny[8];
+    proto_format_list(tiny, sizeof tiny);
+    assert_int_equal(strlen(tiny), sizeof tiny - 1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_format_table_is_the_one_list),
         cmocka_unit_test(test_exact_round_trip_through_poly_ply_fmb1),
         cmocka_unit_test(test_obj_round_trip_keeps_positions_and_polygons),
         cmocka_unit_test(test_stl_ascii_round_trip_keeps_positions_exactly),

@@ -1,0 +1,105 @@
+/* cli_args.c — the option parser of every command (cli_args.h). */
+#include "cli_args.h"
+
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+
+void cli_args_init(cli_args *a, const char *cmd, int argc, char **argv,
+                   const cli_opt *opts)
+{
+    *a = (cli_args){.cmd = cmd, .argc = argc, .i = 1, .argv = argv,
+                    .opts = opts};
+}
+
+int cli_args_next(cli_args *a, const char **val)
+{
+    *val = NULL;
+    if (a->i >= a->argc)
+        return CLI_ARGS_END;
+    const char *s = a->argv[a->i++];
+    if (!a->only_positional && strcmp(s, "--") == 0) {
+        a->only_positional = true;
+        return cli_args_next(a, val);
+    }
+    if (a->only_positional || s[0] != '-' || s[1] == '\0') {
+        *val = s;
+        return CLI_ARGS_POSITIONAL;
+    }
+    const char *eq = strncmp(s, "--", 2) == 0 ? strchr(s, '=') : NULL;
+    size_t len = eq ? (size_t)(eq - s) : strlen(s);
+    for (const cli_opt *o = a->opts; o->name; o++) {
+        if (strlen(o->name) != len || strncmp(o->name, s, len) != 0)
+            continue;
+        a->opt = o->name;
+        if (!o->value) {
+            if (eq) {
+                cli_usage_error(a->cmd, "%s takes no value", o->name);
+                return CLI_ARGS_ERROR;
+            }
+            return o->key;
+        }
+        if (eq) {
+            *val = eq + 1;
+        } else if (a->i < a->argc) {
+            *val = a->argv[a->i++];
+        } else {
+            cli_usage_error(a->cmd, "%s needs a value", o->name);
+            return CLI_ARGS_ERROR;
+        }
+        return o->key;
+    }
+    cli_usage_error(a->cmd, "unknown option '%.*s'", (int)len, s);
+    return CLI_ARGS_ERROR;
+}
+
+int cli_args_long(cli_args *a, const char *s, long lo, long hi, long *ret)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (errno || end == s || *end || v < lo || v > hi) {
+        cli_usage_error(a->cmd, "%s: expected a whole number %ld..%ld, got "
+                        "'%s'", a->opt, lo, hi, s);
+        return CLI_ARGS_ERROR;
+    }
+    *ret = v;
+    return 0;
+}
+
+int cli_args_double(cli_args *a, const char *s, double lo, double hi,
+                    bool lo_open, double *ret)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (errno || end == s || *end || !isfinite(v) || v < lo || v > hi ||
+        (lo_open && v == lo)) {
+        cli_usage_error(a->cmd, "%s: expected a number in %s%g, %g], got "
+                        "'%s'", a->opt, lo_open ? "(" : "[", lo, hi, s);
+        return CLI_ARGS_ERROR;
+    }
+    *ret = v;
+    return 0;
+}
+
+int cli_args_format(cli_args *a, const char *s, proto_format *ret)
+{
+    proto_format f = proto_format_from_name(s);
+    if (f == PROTO_FMT_UNKNOWN) {
+        cli_usage_error(a->cmd, "%s: unknown format '%s'", a->opt, s);
+        return CLI_ARGS_ERROR;
+    }
+    *ret = f;
+    return 0;
+}
+
+int cli_args_unexpected(cli_args *a, const char *arg)
+{
+    cli_usage_error(a->cmd, "unexpected argument '%s'", arg);
+    return CLI_ARGS_ERROR;
+}
