@@ -774,8 +774,8 @@ static int append_fan(geo_poly *out, const loop_ref *L)
 }
 
 /* The patch lifted or lowered along the loop's normal: the vertices the
- * patch added move by amp × (mean patch edge) × (their distance in edges
- * from the loop), a dome instead of a lid, which clears a sheet the lid
+ * patch added move by amp × (the loop's mean radius) × (their distance in
+ * edges from the loop, over the largest), a dome instead of a lid, which clears a sheet the lid
  * would lie on (an open sheet, a hole in a flat region whose only
  * triangulation overlaps it) or a thin wall next to the hole. Amplitudes
  * are tried from small to large, lifting first; the first patch that
@@ -795,7 +795,17 @@ static int try_lift(mfill *M, const geo_mesh_fill_opts *mo, const loop_ref *L,
     int rc = try_liepa(M, L, &o, NULL, &st, err);
     if (rc < 0)
         return rc;
-    if (st != GEO_HOLE_FILLED || out->nverts == nv0) {
+    /* a facet with every corner on the loop cannot be lifted: it would
+     * stay where the lid crossed; the fan has none */
+    bool rim_only = st != GEO_HOLE_FILLED || out->nverts == nv0;
+    for (uint32_t f = nf0; f < out->nfacets && !rim_only; f++) {
+        const uint32_t *fv = geo_poly_facet(out, f);
+        uint32_t k = geo_poly_facet_size(out, f), on = 0;
+        for (uint32_t i = 0; i < k; i++)
+            on += fv[i] < nv0;
+        rim_only = on == k;
+    }
+    if (rim_only) {
         truncate_out(out, nv0, nf0);
         if ((rc = append_fan(out, L)) < 0) {
             truncate_out(out, nv0, nf0);
@@ -843,15 +853,28 @@ static int try_lift(mfill *M, const geo_mesh_fill_opts *mo, const loop_ref *L,
             elen += geo_vdist(out->verts[fv[i]], out->verts[fv[(i + 1) % k]]);
     }
     elen = ne ? elen / (double)ne : 0;
-    static const double amps[] = {0.25, 0.5, 1.0, 2.0, -0.25, -0.5, -1.0,
-                                  -2.0};
+    /* heights relative to the loop's radius, the profile a cone over
+     * the distances in edges: a fan's apex and a refined patch's middle
+     * rise alike */
+    double ctr[3] = {0, 0, 0}, rad = 0;
+    uint32_t maxd = 1;
+    for (uint32_t k = 0; k < L->n; k++)
+        geo_vadd(ctr, out->verts[L->w[k]], ctr);
+    geo_vscale(ctr, 1.0 / L->n, ctr);
+    for (uint32_t k = 0; k < L->n; k++)
+        rad += geo_vdist(ctr, out->verts[L->w[k]]) / L->n;
+    for (uint32_t v = 0; v < nnew; v++)
+        if (depth[v] != UINT32_MAX && depth[v] > maxd)
+            maxd = depth[v];
+    static const double amps[] = {0.1, 0.25, 0.5, 1.0, 2.0, 4.0,
+                                  -0.1, -0.25, -0.5, -1.0, -2.0, -4.0};
     rc = 0;
     for (size_t a = 0; a < sizeof amps / sizeof amps[0] && elen > 0; a++) {
         for (uint32_t v = 0; v < nnew; v++) {
             double d = depth[v] == UINT32_MAX ? 1 : depth[v];
             for (int c = 0; c < 3; c++)
-                out->verts[nv0 + v][c] = base[v][c] + amps[a] * elen * d *
-                                                          nrm[c];
+                out->verts[nv0 + v][c] =
+                    base[v][c] + amps[a] * rad * (d / maxd) * nrm[c];
         }
         for (uint32_t f = nf0; f < out->nfacets; f++)
             geo_poly_facet_fit_plane(out, f, GEO_PLANE_UNWEIGHTED,

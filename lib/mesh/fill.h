@@ -33,11 +33,13 @@
  *    diagonals, splitting the hole into other sub-holes, until a patch
  *    crosses nothing; that triangulation is then refined and faired,
  *    refined, or kept bare, whichever first crosses nothing. Last, the
- *    refined patch (or a fan from the loop's centroid) is bent into a
- *    dome along the loop's normal (GEO_ATTEMPT_LIFT, then _LOWER; the
- *    added vertices move by a multiple of the mean edge length times
- *    their distance in edges from the loop), which clears an open sheet
- *    or a thin wall a flat lid would lie on. A hole that no attempt
+ *    refined patch (or a fan from the loop's centroid, when the patch has
+ *    a facet with every corner on the loop, which no lift can move) is
+ *    bent into a dome along the loop's normal (GEO_ATTEMPT_LIFT, then
+ *    _LOWER; the added vertices move by 0.1 to 4 times the loop's mean
+ *    radius, scaled by their distance in edges from the loop over the
+ *    largest), which clears an open sheet or a thin wall a flat lid
+ *    would lie on. A hole that no attempt
  *    fills validly stays open with status GEO_HOLE_INTERSECTS. No hole is ever reported filled with
  *    nothing added.
  *

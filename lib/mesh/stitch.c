@@ -188,23 +188,54 @@ static double mean_edge(const geo_poly *p, uint64_t *count)
     return s;
 }
 
-/* H: the B end of each of the ncol meridians of lines of na and nb
- * points (na ≥ nb), D_ij = |(nb−1)·i − (na−1)·j| minimal, ties to the
- * larger j. D is V-shaped in j, so the search resumes where the last one
- * stopped. */
-static void meridians(uint32_t na, uint32_t nb, uint32_t *jof)
+/* The centre of loop l of p weighted by edge length (the edges'
+ * midpoints); the vertex mean when the loop has no length. */
+static void loop_centroid(const geo_poly *p, const loop *l, double ret[3])
+{
+    double sum = 0, c[3] = {0, 0, 0};
+    for (uint32_t k = 0; k < l->n; k++) {
+        const double *a = p->verts[l->v[k]], *b = p->verts[l->v[(k + 1) % l->n]];
+        double w = geo_vdist(a, b);
+        for (int d = 0; d < 3; d++)
+            c[d] += w * 0.5 * (a[d] + b[d]);
+        sum += w;
+    }
+    if (sum > 0)
+        geo_vscale(c, 1.0 / sum, ret);
+    else
+        memcpy(ret, l->c, sizeof c);
+}
+
+/* Arc-length positions, 0 to 1, of the npts points L[(k + shift) % n] of
+ * a line (a closed band's line repeats its first point last). */
+static void line_arcs(const geo_poly *out, const uint32_t *L, uint32_t n,
+                      uint32_t npts, uint32_t shift, double *s)
+{
+    s[0] = 0;
+    for (uint32_t k = 1; k < npts; k++)
+        s[k] = s[k - 1] + geo_vdist(out->verts[L[(k - 1 + shift) % n]],
+                                    out->verts[L[(k + shift) % n]]);
+    double total = npts > 1 ? s[npts - 1] : 0;
+    for (uint32_t k = 1; k < npts; k++)
+        s[k] = total > 0 ? s[k] / total : (double)k / (npts - 1);
+}
+
+/* H by arc length: the B end of each of the na meridians, j starting at
+ * 0, ending at nb − 1, never falling and rising by at most one per
+ * meridian (the band's facets need that), stepping when the next B
+ * point lies nearer A_i's arc position or when the steps left require
+ * it. Lines sampled unevenly (a cut through many small facets on one
+ * side) are matched by where the points lie, not by their rank. */
+static void meridians_arc(const double *sa, uint32_t na, const double *sb,
+                          uint32_t nb, uint32_t *jof)
 {
     uint32_t j = 0;
-    for (uint32_t i = 0; i < na; i++) {
-        int64_t xa = (int64_t)(nb - 1) * i;
-        while (j + 1 < nb) {
-            int64_t d0 = llabs(xa - (int64_t)(na - 1) * j);
-            int64_t d1 = llabs(xa - (int64_t)(na - 1) * (j + 1));
-            if (d1 <= d0)
-                j++;
-            else
-                break;
-        }
+    jof[0] = 0;
+    for (uint32_t i = 1; i < na; i++) {
+        uint32_t need = nb - 1 - j, left = na - 1 - i;
+        bool step = need > 0 &&
+                    (need > left || fabs(sb[j + 1] - sa[i]) < fabs(sb[j] - sa[i]));
+        j += step;
         jof[i] = j;
     }
 }
@@ -349,8 +380,15 @@ int geo_stitch(const geo_poly *m1, const geo_poly *m2,
     const loop *l1 = &L1.l[R.loop1], *l2 = &L2.l[R.loop2];
     R.nloop1 = l1->n;
     R.nloop2 = l2->n;
-    double a1[3];
+    double a1[3], g1[3], g2[3];
     geo_vsub(l2->c, l1->c, a1);
+    /* the offset test uses the loops' length-weighted centres: a cut
+     * through many small facets on one side crowds its loop's vertices
+     * there and pulls the vertex mean sideways */
+    loop_centroid(m1, l1, g1);
+    loop_centroid(m2, l2, g2);
+    double a1g[3];
+    geo_vsub(g2, g1, a1g);
     /* across a gap: mean planes within 45° of parallel, and each centre
      * off the other's axis by less than half the smaller loop radius */
     double n1 = geo_vlen(l1->nw), n2 = geo_vlen(l2->nw), r1 = 0, r2 = 0;
@@ -360,7 +398,7 @@ int geo_stitch(const geo_poly *m1, const geo_poly *m2,
         r2 += geo_vdist(m2->verts[l2->v[k]], l2->c) / l2->n;
     double lat[3], ax[3];
     geo_vscale(l1->nw, n1 > 0 ? 1.0 / n1 : 0.0, ax);
-    geo_vmadd(a1, -geo_vdot(a1, ax), ax, lat);
+    geo_vmadd(a1g, -geo_vdot(a1g, ax), ax, lat);
     R.band = n1 > 0 && n2 > 0 &&
              fabs(geo_vdot(l1->nw, l2->nw)) >= sqrt(0.5) * n1 * n2 &&
              geo_vlen(lat) < 0.5 * fmin(r1, r2);
@@ -463,23 +501,35 @@ int geo_stitch(const geo_poly *m1, const geo_poly *m2,
     jof = malloc(((size_t)na + 1) * sizeof *jof);
     if (!jof)
         goto oom;
-    meridians(na, nb, jof);
+    double *sa = malloc((size_t)na * sizeof *sa);
+    double *sb = malloc((size_t)nb * sizeof *sb);
+    uint32_t *jt = malloc(((size_t)na + 1) * sizeof *jt);
+    if (!sa || !sb || !jt) {
+        free(sa), free(sb), free(jt);
+        goto oom;
+    }
+    line_arcs(out, A, N, na, 0, sa);
     uint32_t twist = 0;
     double total = INFINITY;
     for (uint32_t s = 0; s < (R.band ? M : 1); s++) {
+        line_arcs(out, B, M, nb, s, sb);
+        meridians_arc(sa, na, sb, nb, jt);
         double sum = 0;
         for (uint32_t i = 0; i < ncol && sum < total; i++)
             sum += geo_vdist(out->verts[A[i]],
-                             out->verts[B[(jof[i] + s) % M]]);
+                             out->verts[B[(jt[i] + s) % M]]);
         if (sum < total) {
             total = sum;
             twist = s;
+            memcpy(jof, jt, (size_t)na * sizeof *jof);
         }
         if ((s & 255) == 255 && geo_ctx_canceled(ctx)) {
+            free(sa), free(sb), free(jt);
             rc = geo_err_set(err, -ECANCELED, "canceled");
             goto fail;
         }
     }
+    free(sa), free(sb), free(jt);
     R.twist = twist;
     R.meridians = ncol;
     R.meridian_length = total;
@@ -527,7 +577,8 @@ int geo_stitch(const geo_poly *m1, const geo_poly *m2,
     double mean_len = total / ncol;
     uint32_t segs = 1;
     if (R.segment > 0 && mean_len / R.segment > 1.5)
-        segs = (uint32_t)fmin(lround(mean_len / R.segment), 10000.0);
+        segs = (uint32_t)lround(fmin(mean_len / R.segment, 10000.0));
+
     uint32_t rows = segs + 1;
     R.rows = rows;
     /* P, rows × ncol; intermediate points appended as new vertices */

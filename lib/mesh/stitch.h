@@ -21,8 +21,10 @@
  *    made for contours lying side by side (the paper's fig. 3). Loops
  *    that face each other across the gap, as the two halves of a body —
  *    mean planes (Newell normals) within 45° of parallel and C2 off
- *    loop 1's axis by less than half the smaller mean loop radius — are
- *    joined whole, as a closed band (every vertex connected).
+ *    loop 1's axis by less than half the smaller mean loop radius (the
+ *    offset taken between length-weighted centres, which crowded
+ *    vertices do not pull aside) — are joined whole, as a closed band
+ *    (every vertex connected).
  * 4. Orientation. Facing loops of consistently oriented meshes run in
  *    opposite directions (side by side: their Newell normals agree;
  *    across a gap: they point away from each other). When they do not,
@@ -30,10 +32,16 @@
  *    line of loop 2 is then taken backwards so both lines run the same
  *    way, as in the paper's fig. 4.
  * 5. Meridians (the matrix H). With A the line of N vertices and B the
- *    line of M ≤ N (the roles swap when needed), A_i joins the B_j
- *    minimising D_ij = |(M−1)(i−1) − (N−1)(j−1)| (ties to the larger j,
- *    as the paper's loop runs): every A_i gets one meridian, each B_j at
- *    least one, consecutive meridians' B ends differ by at most one.
+ *    line of M ≤ N (the roles swap when needed), A_i joins a B_j: every
+ *    A_i gets one meridian, each B_j at least one, consecutive
+ *    meridians' B ends differ by at most one. The paper picks j by rank
+ *    (D_ij = |(M−1)(i−1) − (N−1)(j−1)| minimal); here j steps to the next
+ *    B point when that one lies nearer A_i by arc length along the lines
+ *    (or when the steps left require it), so lines sampled unevenly — a
+ *    cut through many small facets on one side — are matched by where
+ *    their points lie (on 24 brilliants cut at random planes with bands
+ *    of 0.05–0.5 mm removed, the worst Hausdorff distance to the stone
+ *    went from 436 to 262 µm).
  *    For a closed band the lines are the loops closed by their first
  *    vertex, and the start of B is the rotation (twist) that minimises
  *    the total meridian length, tried for every one of the M starts.

@@ -88,6 +88,15 @@ expect_eq "the fill_holes job succeeds" succeeded "$STATE_OF"
 check "its summary says valid, 121 facets" grep -q '"facets_after":121' "$BODY"
 check "no hole is left open" grep -q '"holes_left_open":0' "$BODY"
 
+"$F" convert "$T/linked.off" "$T/linked.json"
+printf '{"pipeline":["fill"],"model":%s}' "$(cat "$T/linked.json")" >"$T/linked.body"
+post_json /v1/jobs "$T/linked.body"
+expect_eq "a fill job on an unfillable hole is accepted" 202 "$CODE"
+ID=$(jstr id)
+wait_job "$ID"
+expect_eq "the fill job fails instead of passing an open model on" failed "$STATE_OF"
+check "the job says why" grep -q "not a valid closed solid.*holes left open.*intersects_mesh" "$BODY"
+
 mk_meshes() { # $1 pipeline member (may be empty) $2.. mesh files
     local f; f=$(mktemp "$T/body.XXXXXX"); local pl=$1; shift
     { printf '{%s"meshes":[' "${pl:+$pl,}"; local sep=""

@@ -113,11 +113,12 @@ static geo_poly *gen_scan(uint64_t seed)
             x[k] *= s;
     }
     uint32_t nh = 4 + (uint32_t)(geo_rand_next(&seed) % 9);
-    for (uint32_t h = 0; h < nh; h++) {
+    for (uint32_t h = 0; h < nh && p->nverts > 0; h++) {
         double c[3];
         memcpy(c, random_point(p, &seed), sizeof c);
-        /* sizes from a couple of facets to a third of the blob */
-        double r = 0.6 * pow(12.0, geo_rand_unit(&seed) * 1.6);
+        /* sizes from a couple of facets (0.6 mm) to a third of the blob
+         * across (7.5 mm of a 10 mm radius) */
+        double r = 0.6 * pow(10.0, geo_rand_unit(&seed) * 1.1);
         punch(p, c, r);
     }
     return p;
