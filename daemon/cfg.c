@@ -467,8 +467,10 @@ static bool known_section(const char *section)
     return false;
 }
 
-int cfg_set(cfg *c, const char *section, const char *name, const char *value,
-            geo_err *err)
+/* Sets one key by its section and name (as in a file) from a string
+ * value; an empty value resets the default. 0 or -EINVAL with err. */
+static int cfg_set(cfg *c, const char *section, const char *name,
+                   const char *value, geo_err *err)
 {
     const key *k = find_key(section, name);
     if (!k)

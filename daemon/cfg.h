@@ -102,10 +102,6 @@ void cfg_defaults(cfg *c);
  * naming the file and line or the flag, and leaves *ret untouched. */
 int cfg_load(cfg *ret, int argc, char **argv, geo_err *err);
 
-/* Sets one key by its section and name (as in a file) from a string
- * value; an empty value resets the default. 0 or -EINVAL with err. */
-int cfg_set(cfg *c, const char *section, const char *key, const char *value,
-            geo_err *err);
 
 /* Checks ranges and combinations (a token file that cannot be read, …)
  * and reads api_token_file into api_token. 0 or -EINVAL with err. */

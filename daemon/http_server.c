@@ -528,11 +528,6 @@ void http_server_job_changed(void *server, const char *id, bool progress_only)
     http_hub_notify(h->hub, id, progress_only);
 }
 
-unsigned http_server_waiters(http_server *h)
-{
-    return http_hub_count(h->hub);
-}
-
 void http_server_quiesce(http_server *h)
 {
     if (h->quiesced)

@@ -81,8 +81,6 @@ http_server *http_server_start(http_env *env, const http_config *c,
  * A job_notify_fn for the worker pool (user = the server). */
 void http_server_job_changed(void *server, const char *id, bool progress_only);
 
-/* Clients suspended right now. */
-unsigned http_server_waiters(http_server *h);
 
 /* Stops accepting connections and answers every waiting client now with
  * what it has (long-polls get the current state, event streams end).

@@ -26,11 +26,6 @@ void log_set_level(int level)
         atomic_store(&max_level, level);
 }
 
-int log_get_level(void)
-{
-    return atomic_load(&max_level);
-}
-
 int log_level_from_name(const char *name)
 {
     if (!name)
@@ -43,11 +38,6 @@ int log_level_from_name(const char *name)
     if (strcasecmp(name, "warn") == 0)
         return LOG_WARNING;
     return -1;
-}
-
-const char *log_level_name(int level)
-{
-    return level >= LOG_EMERG && level <= LOG_DEBUG ? names[level] : "?";
 }
 
 /* Evaluated once: the journal's stream is fixed for the process's life. */

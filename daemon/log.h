@@ -19,12 +19,10 @@
 /* Lines above this level (numerically greater) are dropped; default
  * LOG_INFO. Safe to call at any time from any thread. */
 void log_set_level(int level);
-int log_get_level(void);
 
 /* The level named "err", "warning", "notice", "info" or "debug" (also
  * "error", "warn"); -1 for anything else. */
 int log_level_from_name(const char *name);
-const char *log_level_name(int level);
 
 /* Logs one line. job may be NULL (no job field). A message longer than
  * about 1 KiB is truncated; newlines in it are replaced by spaces so one

@@ -59,7 +59,8 @@ static json_t *moved_to_json(const geo_moved_vertex *m, uint32_t n)
     return arr;
 }
 
-json_t *proto_merge_group_to_json(const geo_merge_report *r, uint32_t gi)
+static json_t *proto_merge_group_to_json(const geo_merge_report *r,
+                                         uint32_t gi)
 {
     const geo_merge_group *g = &r->groups[gi];
     json_t *o = json_object();

@@ -40,7 +40,6 @@
 #include "correct.h"
 #include "merge.h"
 
-json_t *proto_merge_group_to_json(const geo_merge_report *r, uint32_t g);
 
 json_t *proto_merge_report_to_json(const geo_merge_report *r);
 

@@ -30,20 +30,6 @@ void proto_hid_fragment(const uint8_t *frame, size_t len, size_t k,
     memcpy(out + 3, frame + off, n);
 }
 
-const char *proto_hid_status_name(proto_hid_status s)
-{
-    switch (s) {
-    case PROTO_HID_MORE: return "more";
-    case PROTO_HID_FRAME: return "frame";
-    case PROTO_HID_E_REPORT: return "bad-report";
-    case PROTO_HID_E_LENGTH: return "bad-length";
-    case PROTO_HID_E_NO_FIRST: return "no-first";
-    case PROTO_HID_E_OVERLONG: return "overlong";
-    case PROTO_HID_E_RESTART: return "restart";
-    }
-    return "unknown";
-}
-
 struct proto_hid_reasm {
     uint8_t *buf;
     size_t n, max;
@@ -75,7 +61,8 @@ proto_hid_reasm *proto_hid_reasm_free(proto_hid_reasm *r)
     return NULL;
 }
 
-void proto_hid_reasm_reset(proto_hid_reasm *r)
+/* Drops any partial frame. */
+static void proto_hid_reasm_reset(proto_hid_reasm *r)
 {
     r->n = 0;
     r->active = false;

@@ -52,8 +52,6 @@ typedef enum proto_hid_status {
     PROTO_HID_E_RESTART = -5,
 } proto_hid_status;
 
-/* Short name of a status ("frame", "no-first", ...). Static string. */
-const char *proto_hid_status_name(proto_hid_status s);
 
 typedef struct proto_hid_reasm proto_hid_reasm;
 
@@ -64,8 +62,6 @@ proto_hid_reasm *proto_hid_reasm_new(size_t max_frame);
 /* Frees r (NULL accepted); returns NULL. */
 proto_hid_reasm *proto_hid_reasm_free(proto_hid_reasm *r);
 
-/* Drops any partial frame. */
-void proto_hid_reasm_reset(proto_hid_reasm *r);
 
 /* Takes one report of len bytes (a report must be exactly 64 bytes).
  * On PROTO_HID_FRAME, *ret_frame points at *ret_len bytes owned by r,

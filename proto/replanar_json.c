@@ -33,7 +33,7 @@ static json_t *finish(json_t *obj, bool ok)
     return obj;
 }
 
-json_t *proto_replanar_step_to_json(const geo_replanar_step *row)
+static json_t *proto_replanar_step_to_json(const geo_replanar_step *row)
 {
     json_t *o = json_object();
     bool ok = o != NULL;

@@ -28,7 +28,6 @@
 #include "inversion.h"
 #include "replanar.h"
 
-json_t *proto_replanar_step_to_json(const geo_replanar_step *row);
 
 /* The rows of log as an array. */
 json_t *proto_replanar_log_to_json(const geo_replanar_log *log);

@@ -247,7 +247,9 @@ static int resend(scan_session *s, uint16_t seq)
     return -ENOENT;
 }
 
-uint8_t *scan_session_next_frame(scan_session *s, size_t *ret_len)
+/* The next frame to send, malloc'd for the caller to free, or NULL when
+ * none is queued. Counts it in frames_out. */
+static uint8_t *scan_session_next_frame(scan_session *s, size_t *ret_len)
 {
     qframe *q = s->qhead;
     if (!q)

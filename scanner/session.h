@@ -142,9 +142,6 @@ int scan_session_ack_done(scan_session *s, bool kept, uint64_t now_ms);
  * INFO, -ENOMEM. */
 int scan_session_abort(scan_session *s, uint64_t now_ms);
 
-/* The next frame to send, malloc'd for the caller to free, or NULL when
- * none is queued. Counts it in frames_out. */
-uint8_t *scan_session_next_frame(scan_session *s, size_t *ret_len);
 
 /* Sends every queued frame through t, each with timeout_ms. 0, or the
  * transport's negative errno (the failed frame is lost; later frames

@@ -1,20 +1,26 @@
 #!/bin/sh
 # Runs every unit test binary (cmocka, TAP output) and every integration
-# test script (TAP output), then prints "N passed, N failed".
+# test script (TAP output), then prints "N passed, N failed, N skipped"
+# ("ok ... # SKIP reason" is a skip, not a pass; the reasons are listed).
 # Usage: tests/run.sh BUILD_DIR [FILTER]
 set -u
 B=${1:-build}
 FILTER=${2:-}
 pass=0
 fail=0
+skipped=0
 log=$(mktemp)
-trap 'rm -f "$log"' EXIT
+skips=$(mktemp)
+trap 'rm -f "$log" "$skips"' EXIT
 
 count() { # $1 = name; reads TAP from $log
-    p=$(grep -c '^ok ' "$log")
+    p=$(grep '^ok ' "$log" | grep -vc '# *SKIP')
+    k=$(grep '^ok ' "$log" | grep -c '# *SKIP')
     f=$(grep -c '^not ok ' "$log")
     pass=$((pass + p))
+    skipped=$((skipped + k))
     fail=$((fail + f))
+    grep '^ok .*# *SKIP' "$log" | sed "s/^/# $1: /" >>"$skips"
     if [ "$f" -gt 0 ]; then
         grep -B2 -A12 '^not ok ' "$log" | head -n 80
     fi
@@ -53,5 +59,6 @@ for t in tests/integration/*.sh; do
     fi
     printf '# %-40s %6d ms\n' "$name" $((($(date +%s%N) - start) / 1000000))
 done
-echo "$pass passed, $fail failed"
+cat "$skips"
+echo "$pass passed, $fail failed, $skipped skipped"
 [ "$fail" -eq 0 ]

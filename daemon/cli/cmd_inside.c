@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "cli_args.h"
 #include "inside.h"
 #include "model_io.h"
 #include "parallel.h"
@@ -76,38 +77,39 @@ int cmd_inside(int argc, char **argv)
     int nfiles = 0;
     unsigned long threads = 0, seed = 1;
     const char *method = "auto";
-    bool only_files = false;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        bool opt = !only_files && a[0] == '-' && a[1] != '\0';
-        if (opt && strcmp(a, "--") == 0) {
-            only_files = true;
-        } else if (opt && (strcmp(a, "--threads") == 0 ||
-                           strcmp(a, "--seed") == 0 ||
-                           strcmp(a, "--method") == 0)) {
-            if (i + 1 == argc)
-                return cli_usage_error("inside", "%s needs a value", a);
-            const char *val = argv[++i];
-            int r = CLI_OK;
-            if (strcmp(a, "--threads") == 0)
-                r = parse_count(a, val, 1024, &threads);
-            else if (strcmp(a, "--seed") == 0)
-                r = parse_count(a, val, (unsigned long)-1, &seed);
-            else if (strcmp(val, "auto") && strcmp(val, "ray") &&
-                     strcmp(val, "winding"))
+    enum { O_THREADS, O_SEED, O_METHOD };
+    static const cli_opt opts[] = {{"--threads", O_THREADS, true},
+                                   {"--seed", O_SEED, true},
+                                   {"--method", O_METHOD, true},
+                                   {NULL, 0, false}};
+    cli_args args;
+    const char *val;
+    cli_args_init(&args, "inside", argc, argv, opts);
+    for (int k; (k = cli_args_next(&args, &val)) != CLI_ARGS_END;) {
+        int r = CLI_OK;
+        switch (k) {
+        case O_THREADS: r = parse_count(args.opt, val, 1024, &threads); break;
+        case O_SEED:
+            r = parse_count(args.opt, val, (unsigned long)-1, &seed);
+            break;
+        case O_METHOD:
+            if (strcmp(val, "auto") && strcmp(val, "ray") &&
+                strcmp(val, "winding"))
                 r = cli_usage_error("inside", "--method: expected auto, ray "
                                               "or winding, got '%s'", val);
             else
                 method = val;
-            if (r != CLI_OK)
-                return r;
-        } else if (opt) {
-            return cli_usage_error("inside", "unknown option '%s'", a);
-        } else if (nfiles < 2) {
-            files[nfiles++] = a;
-        } else {
-            return cli_usage_error("inside", "unexpected argument '%s'", a);
+            break;
+        case CLI_ARGS_POSITIONAL:
+            if (nfiles == 2)
+                r = cli_usage_error("inside", "unexpected argument '%s'", val);
+            else
+                files[nfiles++] = val;
+            break;
+        default: r = CLI_USAGE;
         }
+        if (r != CLI_OK)
+            return r;
     }
     if (nfiles < 2)
         return cli_usage_error("inside", "needs a model and a points file");

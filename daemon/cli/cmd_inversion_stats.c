@@ -4,13 +4,13 @@
  * on a thread pool (proto/parallel.h); the table is the same for any
  * --threads. */
 #include <errno.h>
-#include <getopt.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
+#include "cli_args.h"
 #include "cmd_replanar_args.h"
 #include "inversion.h"
 #include "model_io.h"
@@ -78,25 +78,29 @@ int cmd_inversion_stats(int argc, char **argv)
         usage(stdout);
         return CLI_OK;
     }
-    static const struct option longopts[] = {
-        {"samples", required_argument, NULL, 'n'},
-        {"seed", required_argument, NULL, 'S'},
-        {"magnitudes", required_argument, NULL, 'm'},
-        {"threads", required_argument, NULL, 'j'},
-        {"runs", no_argument, NULL, 'r'},
-        {"first-selfint", no_argument, NULL, 'F'},
-        CLI_REPLANAR_LONGOPTS,
-        {NULL, 0, NULL, 0},
+    static const cli_opt opts[] = {
+        {"--samples", 'n', true},       {"--seed", 'S', true},
+        {"--magnitudes", 'm', true},    {"--threads", 'j', true},
+        {"--runs", 'r', false},         {"--first-selfint", 'F', false},
+        CLI_REPLANAR_OPTS,              {NULL, 0, false},
     };
     geo_inversion_opts o;
     geo_inversion_opts_default(&o);
     uint64_t seed = 1, samples = o.samples, threads = 0;
     cli_replanar_args rp;
     cli_replanar_args_init(&rp, o.schedule);
-    optind = 1;
-    opterr = 0;
-    int c;
-    while ((c = getopt_long(argc, argv, "", longopts, NULL)) != -1) {
+    const char *optarg, *path = NULL;
+    cli_args a;
+    cli_args_init(&a, CMD, argc, argv, opts);
+    for (int c; (c = cli_args_next(&a, &optarg)) != CLI_ARGS_END;) {
+        if (c == CLI_ARGS_ERROR)
+            return CLI_USAGE;
+        if (c == CLI_ARGS_POSITIONAL) {
+            if (path)
+                return cli_usage_error(CMD, "expected one MODEL");
+            path = optarg;
+            continue;
+        }
         int taken = cli_replanar_option(CMD, c, optarg, &rp);
         if (taken == 1)
             continue;
@@ -132,18 +136,14 @@ int cmd_inversion_stats(int argc, char **argv)
         case 'F':
             o.first_selfint = true;
             break;
-        default:
-            return cli_usage_error(CMD, "unknown or incomplete option '%s'",
-                                   argv[optind - 1]);
         }
     }
-    if (optind != argc - 1)
+    if (!path)
         return cli_usage_error(CMD, "expected one MODEL");
     o.samples = (uint32_t)samples;
     o.schedule = rp.schedule;
     cli_replanar_opts(&rp, &o.replanar);
 
-    const char *path = argv[optind];
     geo_err err = {{0}};
     geo_poly *p = proto_model_read_file(path, PROTO_FMT_UNKNOWN, NULL, &err);
     if (!p)

@@ -10,6 +10,7 @@
 #include <jansson.h>
 
 #include "cli.h"
+#include "cli_args.h"
 #include "correct_json.h"
 #include "merge.h"
 #include "model_io.h"
@@ -111,48 +112,50 @@ int cmd_merge(int argc, char **argv)
     bool automatic = false;
     geo_merge_opts o;
     geo_merge_opts_default(&o);
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (strcmp(a, "--auto") == 0) {
-            automatic = true;
-        } else if (strcmp(a, "--groups") == 0 || strcmp(a, "-o") == 0 ||
-                   strcmp(a, "--output") == 0 || strcmp(a, "--max-angle") == 0 ||
-                   strcmp(a, "--max-deviation") == 0 ||
-                   strcmp(a, "--report") == 0 || strcmp(a, "--plane") == 0) {
-            if (i + 1 == argc)
-                return cli_usage_error("merge", "%s needs a value", a);
-            const char *v = argv[++i];
-            if (strcmp(a, "--groups") == 0)
-                groups = v;
-            else if (strcmp(a, "--report") == 0)
-                report = v;
-            else if (strcmp(a, "--max-angle") == 0) {
-                if (parse_number(v, 0, 89.999, &o.max_angle_deg) < 0)
-                    return cli_usage_error("merge", "--max-angle: expected "
-                                           "degrees in (0, 90), got '%s'", v);
-            } else if (strcmp(a, "--max-deviation") == 0) {
-                if (parse_number(v, 0, 1e9, &o.max_deviation) < 0)
-                    return cli_usage_error("merge", "--max-deviation: expected "
-                                           "a positive length in mm, got '%s'", v);
-            } else if (strcmp(a, "--plane") == 0) {
-                if (strcmp(v, "contour") == 0)
-                    o.plane = GEO_MERGE_PLANE_CONTOUR;
-                else if (strcmp(v, "weighted") == 0)
-                    o.plane = GEO_MERGE_PLANE_CONTOUR_WEIGHTED;
-                else if (strcmp(v, "area") == 0)
-                    o.plane = GEO_MERGE_PLANE_AREA;
-                else
-                    return cli_usage_error("merge", "--plane: expected contour, "
-                                           "weighted or area, got '%s'", v);
-            } else {
-                outpath = v;
-            }
-        } else if (a[0] == '-' && a[1] != '\0') {
-            return cli_usage_error("merge", "unknown option '%s'", a);
-        } else if (!in) {
-            in = a;
-        } else {
-            return cli_usage_error("merge", "unexpected argument '%s'", a);
+    enum { O_AUTO, O_GROUPS, O_OUT, O_ANGLE, O_DEV, O_REPORT, O_PLANE };
+    static const cli_opt opts[] = {
+        {"--auto", O_AUTO, false},        {"--groups", O_GROUPS, true},
+        {"-o", O_OUT, true},              {"--output", O_OUT, true},
+        {"--max-angle", O_ANGLE, true},   {"--max-deviation", O_DEV, true},
+        {"--report", O_REPORT, true},     {"--plane", O_PLANE, true},
+        {NULL, 0, false},
+    };
+    cli_args args;
+    const char *v;
+    cli_args_init(&args, "merge", argc, argv, opts);
+    for (int k; (k = cli_args_next(&args, &v)) != CLI_ARGS_END;) {
+        switch (k) {
+        case O_AUTO: automatic = true; break;
+        case O_GROUPS: groups = v; break;
+        case O_REPORT: report = v; break;
+        case O_OUT: outpath = v; break;
+        case O_ANGLE:
+            if (parse_number(v, 0, 89.999, &o.max_angle_deg) < 0)
+                return cli_usage_error("merge", "--max-angle: expected "
+                                       "degrees in (0, 90), got '%s'", v);
+            break;
+        case O_DEV:
+            if (parse_number(v, 0, 1e9, &o.max_deviation) < 0)
+                return cli_usage_error("merge", "--max-deviation: expected "
+                                       "a positive length in mm, got '%s'", v);
+            break;
+        case O_PLANE:
+            if (strcmp(v, "contour") == 0)
+                o.plane = GEO_MERGE_PLANE_CONTOUR;
+            else if (strcmp(v, "weighted") == 0)
+                o.plane = GEO_MERGE_PLANE_CONTOUR_WEIGHTED;
+            else if (strcmp(v, "area") == 0)
+                o.plane = GEO_MERGE_PLANE_AREA;
+            else
+                return cli_usage_error("merge", "--plane: expected contour, "
+                                       "weighted or area, got '%s'", v);
+            break;
+        case CLI_ARGS_POSITIONAL:
+            if (in)
+                return cli_usage_error("merge", "unexpected argument '%s'", v);
+            in = v;
+            break;
+        default: return CLI_USAGE;
         }
     }
     if (!in)

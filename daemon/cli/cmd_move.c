@@ -3,13 +3,13 @@
  * summary as JSON; writes the model only when the result is valid
  * (converged, no self-intersection, no inverted facet), or with --force. */
 #include <errno.h>
-#include <getopt.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
+#include "cli_args.h"
 #include "cmd_replanar_args.h"
 #include "model_io.h"
 #include "replanar.h"
@@ -103,16 +103,12 @@ int cmd_move(int argc, char **argv)
         usage(stdout);
         return CLI_OK;
     }
-    static const struct option longopts[] = {
-        {"vertex", required_argument, NULL, 'v'},
-        {"to", required_argument, NULL, 't'},
-        {"by", required_argument, NULL, 'b'},
-        {"count-selfint", no_argument, NULL, 'c'},
-        {"log", required_argument, NULL, 'l'},
-        {"force", no_argument, NULL, 'f'},
-        {"output", required_argument, NULL, 'o'},
-        CLI_REPLANAR_LONGOPTS,
-        {NULL, 0, NULL, 0},
+    static const cli_opt opts[] = {
+        {"--vertex", 'v', true},        {"--to", 't', true},
+        {"--by", 'b', true},            {"--count-selfint", 'c', false},
+        {"--log", 'l', true},           {"--force", 'f', false},
+        {"--output", 'o', true},        {"-o", 'o', true},
+        CLI_REPLANAR_OPTS,              {NULL, 0, false},
     };
     uint32_t vertex = 0;
     bool have_vertex = false, have_to = false, have_by = false, force = false;
@@ -121,10 +117,18 @@ int cmd_move(int argc, char **argv)
     bool count_si = false;
     cli_replanar_args rp;
     cli_replanar_args_init(&rp, GEO_REPLANAR_LOCAL_EXP);
-    optind = 1;
-    opterr = 0;
-    int c;
-    while ((c = getopt_long(argc, argv, "o:", longopts, NULL)) != -1) {
+    const char *optarg, *model = NULL;
+    cli_args a;
+    cli_args_init(&a, CMD, argc, argv, opts);
+    for (int c; (c = cli_args_next(&a, &optarg)) != CLI_ARGS_END;) {
+        if (c == CLI_ARGS_ERROR)
+            return CLI_USAGE;
+        if (c == CLI_ARGS_POSITIONAL) {
+            if (model)
+                return cli_usage_error(CMD, "expected one MODEL");
+            model = optarg;
+            continue;
+        }
         int taken = cli_replanar_option(CMD, c, optarg, &rp);
         if (taken == 1)
             continue;
@@ -161,12 +165,9 @@ int cmd_move(int argc, char **argv)
         case 'o':
             out = optarg;
             break;
-        default:
-            return cli_usage_error(CMD, "unknown or incomplete option '%s'",
-                                   argv[optind - 1]);
         }
     }
-    if (optind != argc - 1)
+    if (!model)
         return cli_usage_error(CMD, "expected one MODEL");
     if (!have_vertex)
         return cli_usage_error(CMD, "--vertex is required");
@@ -178,7 +179,7 @@ int cmd_move(int argc, char **argv)
     cli_replanar_opts(&rp, &o);
     o.count_selfint = count_si;
 
-    const char *path = argv[optind];
+    const char *path = model;
     geo_err err = {{0}};
     geo_poly *p = proto_model_read_file(path, PROTO_FMT_UNKNOWN, NULL, &err);
     if (!p)

@@ -5,12 +5,11 @@
 #ifndef FACET_CMD_REPLANAR_ARGS_H
 #define FACET_CMD_REPLANAR_ARGS_H
 
-#include <getopt.h>
 #include <stdint.h>
 
 #include "replanar.h"
 
-/* getopt_long codes of the shared options, above every character. */
+/* cli_args keys of the shared options, above every command's own. */
 enum {
     CLI_RP_SCHEDULE = 0x100,
     CLI_RP_MAX_STEPS,
@@ -18,12 +17,12 @@ enum {
     CLI_RP_SCALED_K,
 };
 
-/* The shared entries of a command's struct option table. */
-#define CLI_REPLANAR_LONGOPTS                                        \
-    {"schedule", required_argument, NULL, CLI_RP_SCHEDULE},          \
-        {"max-steps", required_argument, NULL, CLI_RP_MAX_STEPS},    \
-        {"fit", required_argument, NULL, CLI_RP_FIT},                \
-        {"scaled-k", required_argument, NULL, CLI_RP_SCALED_K}
+/* The shared entries of a command's cli_opt table (cli_args.h). */
+#define CLI_REPLANAR_OPTS                                            \
+    {"--schedule", CLI_RP_SCHEDULE, true},                           \
+        {"--max-steps", CLI_RP_MAX_STEPS, true},                     \
+        {"--fit", CLI_RP_FIT, true},                                 \
+        {"--scaled-k", CLI_RP_SCALED_K, true}
 
 typedef struct cli_replanar_args {
     enum geo_replanar_schedule schedule;
@@ -37,7 +36,7 @@ typedef struct cli_replanar_args {
 void cli_replanar_args_init(cli_replanar_args *a,
                             enum geo_replanar_schedule schedule);
 
-/* Takes getopt_long's code c with its argument when it is one of the
+/* Takes cli_args_next's key c with its value when it is one of the
  * shared options. Returns 1 when taken, 0 when c is not one of them,
  * CLI_USAGE (after printing "facet CMD: --option: ...") on a bad value. */
 int cli_replanar_option(const char *cmd, int c, const char *arg,

@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "cli_args.h"
 #include "model_io.h"
 #include "parallel.h"
 #include "pipeline.h"
@@ -49,19 +50,25 @@ int cmd_run(int argc, char **argv)
     }
     const char *files[2] = {NULL, NULL}, *out = NULL, *stats_path = NULL;
     int nfiles = 0;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (strcmp(a, "-o") == 0 || strcmp(a, "--stats") == 0) {
-            if (i + 1 == argc)
-                return cli_usage_error("run", "%s needs a file", a);
-            *(a[1] == 'o' ? &out : &stats_path) = argv[++i];
-        } else if (a[0] == '-' && a[1]) {
-            return cli_usage_error("run", "unknown option %s", a);
-        } else if (nfiles < 2) {
-            files[nfiles++] = a;
-        } else {
-            return cli_usage_error("run", "unexpected argument %s", a);
-        }
+    enum { O_OUT, O_STATS };
+    static const cli_opt opts[] = {{"-o", O_OUT, true},
+                                   {"--output", O_OUT, true},
+                                   {"--stats", O_STATS, true},
+                                   {NULL, 0, false}};
+    cli_args args;
+    const char *val;
+    cli_args_init(&args, "run", argc, argv, opts);
+    for (int k; (k = cli_args_next(&args, &val)) != CLI_ARGS_END;) {
+        if (k == O_OUT)
+            out = val;
+        else if (k == O_STATS)
+            stats_path = val;
+        else if (k == CLI_ARGS_POSITIONAL && nfiles < 2)
+            files[nfiles++] = val;
+        else if (k == CLI_ARGS_POSITIONAL)
+            return cli_usage_error("run", "unexpected argument %s", val);
+        else
+            return CLI_USAGE;
     }
     if (nfiles != 2 || !out)
         return cli_usage_error("run", "needs PIPELINE.json, MODEL and -o OUT");

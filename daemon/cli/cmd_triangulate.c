@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "cli_args.h"
 #include "frep_json.h"
 #include "model_io.h"
 #include "parallel.h"
@@ -84,30 +85,34 @@ int cmd_triangulate(int argc, char **argv)
     proto_format to = PROTO_FMT_UNKNOWN;
     geo_tri_opts o;
     geo_tri_opts_default(&o);
-    bool only_files = false;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
+    enum { O_OUT, O_QLEV, O_BLEV, O_FILL, O_FAIR, O_THREADS, O_METRICS,
+           O_TO, O_NO_REFINE, O_NO_SHARPEN };
+    static const cli_opt opts[] = {
+        {"-o", O_OUT, true},                {"--output", O_OUT, true},
+        {"--quad-levels", O_QLEV, true},    {"--binary-levels", O_BLEV, true},
+        {"--fill", O_FILL, true},           {"--fair", O_FAIR, true},
+        {"--threads", O_THREADS, true},     {"--metrics", O_METRICS, true},
+        {"--to", O_TO, true},               {"--no-refine", O_NO_REFINE, false},
+        {"--no-sharpen", O_NO_SHARPEN, false},
+        {NULL, 0, false},
+    };
+    cli_args args;
+    const char *val;
+    cli_args_init(&args, "triangulate", argc, argv, opts);
+    for (int k; (k = cli_args_next(&args, &val)) != CLI_ARGS_END;) {
+        const char *a = args.opt;
         int r = CLI_OK;
-        bool takes = !only_files &&
-                     (strcmp(a, "-o") == 0 || strcmp(a, "--quad-levels") == 0 ||
-                      strcmp(a, "--binary-levels") == 0 ||
-                      strcmp(a, "--fill") == 0 || strcmp(a, "--fair") == 0 ||
-                      strcmp(a, "--threads") == 0 ||
-                      strcmp(a, "--metrics") == 0 || strcmp(a, "--to") == 0);
-        if (takes && i + 1 == argc)
-            return cli_usage_error("triangulate", "%s needs a value", a);
-        const char *val = takes ? argv[++i] : NULL;
-        if (!only_files && strcmp(a, "--") == 0) {
-            only_files = true;
-        } else if (takes && strcmp(a, "-o") == 0) {
-            out = val;
-        } else if (takes && strcmp(a, "--quad-levels") == 0) {
+        switch (k) {
+        case O_OUT: out = val; break;
+        case O_QLEV:
             if ((r = parse_long(a, val, 1, GEO_FREP_MAX_QLEV, &v)) == CLI_OK)
                 o.quad_levels = (uint32_t)v;
-        } else if (takes && strcmp(a, "--binary-levels") == 0) {
+            break;
+        case O_BLEV:
             if ((r = parse_long(a, val, 1, GEO_FREP_MAX_BLEV, &v)) == CLI_OK)
                 o.binary_levels = (uint32_t)v;
-        } else if (takes && strcmp(a, "--fill") == 0) {
+            break;
+        case O_FILL:
             if (strcmp(val, "area") == 0)
                 o.fill = GEO_FILL_AREA;
             else if (strcmp(val, "edges") == 0)
@@ -115,7 +120,8 @@ int cmd_triangulate(int argc, char **argv)
             else
                 r = cli_usage_error("triangulate", "--fill: expected area or "
                                                    "edges, got '%s'", val);
-        } else if (takes && strcmp(a, "--fair") == 0) {
+            break;
+        case O_FAIR:
             if (strcmp(val, "uniform") == 0)
                 o.fair = GEO_FAIR_UNIFORM;
             else if (strcmp(val, "length") == 0)
@@ -126,24 +132,23 @@ int cmd_triangulate(int argc, char **argv)
                 r = cli_usage_error("triangulate", "--fair: expected uniform, "
                                                    "length or none, got '%s'",
                                     val);
-        } else if (takes && strcmp(a, "--threads") == 0) {
-            r = parse_long(a, val, 0, 1024, &threads);
-        } else if (takes && strcmp(a, "--metrics") == 0) {
-            metrics = val;
-        } else if (takes && strcmp(a, "--to") == 0) {
+            break;
+        case O_THREADS: r = parse_long(a, val, 0, 1024, &threads); break;
+        case O_METRICS: metrics = val; break;
+        case O_TO:
             if ((to = proto_format_from_name(val)) == PROTO_FMT_UNKNOWN)
                 r = cli_usage_error("triangulate", "--to: unknown format '%s'",
                                     val);
-        } else if (!only_files && strcmp(a, "--no-refine") == 0) {
-            o.refine = false;
-        } else if (!only_files && strcmp(a, "--no-sharpen") == 0) {
-            o.sharpen = false;
-        } else if (!only_files && a[0] == '-' && a[1] != '\0') {
-            r = cli_usage_error("triangulate", "unknown option '%s'", a);
-        } else if (!in) {
-            in = a;
-        } else {
-            r = cli_usage_error("triangulate", "unexpected argument '%s'", a);
+            break;
+        case O_NO_REFINE: o.refine = false; break;
+        case O_NO_SHARPEN: o.sharpen = false; break;
+        case CLI_ARGS_POSITIONAL:
+            if (in)
+                r = cli_usage_error("triangulate", "unexpected argument '%s'",
+                                    val);
+            in = val;
+            break;
+        default: r = CLI_USAGE;
         }
         if (r != CLI_OK)
             return r;

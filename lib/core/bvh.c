@@ -33,7 +33,11 @@ void geo_bbox_union(geo_bbox *b, const geo_bbox *o)
     }
 }
 
-int geo_bbox_plane_side(const geo_bbox *b, const double plane[4])
+/* Which side of the plane (a,b,c,d; any normal length) the box lies on:
+ * +1 entirely where plane(p) > 0, −1 entirely where < 0, 0 when the plane
+ * may touch or cross it. Floating point with a relative margin, so a 0 is
+ * conservative (a box reported ±1 truly is on that side). */
+static int geo_bbox_plane_side(const geo_bbox *b, const double plane[4])
 {
     double val = plane[3], r = 0, mag = fabs(plane[3]);
     for (int k = 0; k < 3; k++) {

@@ -57,11 +57,6 @@ static inline bool geo_bbox_contains(const geo_bbox *b, const double p[3])
            p[1] <= b->hi[1] && b->lo[2] <= p[2] && p[2] <= b->hi[2];
 }
 
-/* Which side of the plane (a,b,c,d; any normal length) the box lies on:
- * +1 entirely where plane(p) > 0, −1 entirely where < 0, 0 when the plane
- * may touch or cross it. Floating point with a relative margin, so a 0 is
- * conservative (a box reported ±1 truly is on that side). */
-int geo_bbox_plane_side(const geo_bbox *b, const double plane[4]);
 
 /* The bounding box of facet f of p. */
 void geo_poly_facet_bbox(const geo_poly *p, uint32_t f, geo_bbox *ret);

@@ -114,16 +114,6 @@ int geo_plane_from_point_normal(const double p[3], const double n[3],
     return 0;
 }
 
-int geo_plane_from_points(const double a[3], const double b[3],
-                          const double c[3], double ret[4])
-{
-    double ab[3], ac[3], n[3];
-    geo_vsub(b, a, ab);
-    geo_vsub(c, a, ac);
-    geo_vcross(ab, ac, n);
-    return geo_plane_from_point_normal(a, n, ret);
-}
-
 bool geo_plane_intersect3(const double p1[4], const double p2[4],
                           const double p3[4], double ret[3])
 {

@@ -22,10 +22,6 @@ int geo_plane_fit(const double *pts, const double *w, size_t n,
 int geo_plane_from_point_normal(const double p[3], const double n[3],
                                 double ret[4]);
 
-/* Plane through a, b, c, normal (b−a)×(c−a) normalised. -EINVAL when
- * collinear. */
-int geo_plane_from_points(const double a[3], const double b[3],
-                          const double c[3], double ret[4]);
 
 /* The common point of three planes. Returns false (ret unchanged) when the
  * normals are linearly dependent: |det| ≤ 1e-12 · |n1|·|n2|·|n3|. */

@@ -76,11 +76,6 @@ geo_frep *geo_frep_free(geo_frep *f)
     return NULL;
 }
 
-uint32_t geo_frep_nnodes(const geo_frep *f)
-{
-    return f->nnodes;
-}
-
 static bool finite3(const double v[3])
 {
     return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);
@@ -694,19 +689,6 @@ uint32_t geo_frep_specialize(const geo_frep *f, const geo_frep_op *ops,
     pruner pr = {ops, rlo, rhi, ret_ops, 0};
     prune(&pr, n - 1);
     return pr.n;
-}
-
-void geo_frep_bound(const geo_frep *f, const double lo[3], const double hi[3],
-                    double ret_range[2])
-{
-    double *s = malloc(2 * (size_t)f->nops * sizeof *s);
-    if (!s) {
-        ret_range[0] = -INFINITY;
-        ret_range[1] = INFINITY;
-        return;
-    }
-    geo_frep_specialize(f, f->ops, f->nops, lo, hi, ret_range, NULL, s);
-    free(s);
 }
 
 double geo_frep_project(const geo_frep *f, double p[3], double tol,

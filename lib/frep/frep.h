@@ -112,8 +112,6 @@ int64_t geo_frep_difference(geo_frep *f, uint32_t a, uint32_t b,
 int geo_frep_finish(geo_frep *f, uint32_t root, const double lo[3],
                     const double hi[3], geo_err *err);
 
-/* Number of nodes added so far. */
-uint32_t geo_frep_nnodes(const geo_frep *f);
 
 /* The compiled program (valid until the next geo_frep_finish or free);
  * NULL with *ret_n = 0 before geo_frep_finish. */
@@ -174,12 +172,6 @@ bool geo_frep_project_pieces(const geo_frep *f, const uint32_t *pieces,
                              uint32_t n, double p[3], double tol,
                              double max_step);
 
-/* An enclosure [ret_range[0], ret_range[1]] of F over the box [lo, hi]
- * with the whole program (after geo_frep_finish). Allocates 16 bytes per
- * instruction of scratch; on out-of-memory the enclosure is (−∞, +∞),
- * which is still an enclosure. */
-void geo_frep_bound(const geo_frep *f, const double lo[3], const double hi[3],
-                    double ret_range[2]);
 
 /* Specialises program ops[0..n) to the box [lo, hi]: ret_range receives
  * an enclosure of F over the box, and, when ret_ops is non-NULL

@@ -117,14 +117,6 @@ static void forget(geo_tmesh *m, uint32_t t)
         geo_edgemap_del(&m->he, geo_edge_key(m->t[t][k], m->t[t][(k + 1) % 3]));
 }
 
-void geo_tmesh_remove(geo_tmesh *m, uint32_t t)
-{
-    if (m->dead[t])
-        return;
-    forget(m, t);
-    m->dead[t] = 1;
-}
-
 int geo_tmesh_split_tri(geo_tmesh *m, uint32_t t, uint32_t x)
 {
     if (reserve_tris(m, 2) < 0 || reserve_edges(m, 6) < 0)

@@ -46,8 +46,6 @@ int64_t geo_tmesh_add_vertex(geo_tmesh *m, const double p[3]);
 int64_t geo_tmesh_add(geo_tmesh *m, uint32_t a, uint32_t b, uint32_t c,
                       uint8_t tag);
 
-/* Removes triangle t (marks it dead, forgets its edges). */
-void geo_tmesh_remove(geo_tmesh *m, uint32_t t);
 
 /* Half-edge id of directed edge a → b, or UINT32_MAX. */
 static inline uint32_t geo_tmesh_find(const geo_tmesh *m, uint32_t a,

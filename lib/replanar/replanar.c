@@ -162,11 +162,6 @@ geo_replanar_prep *geo_replanar_prep_free(geo_replanar_prep *prep)
     return NULL;
 }
 
-const geo_poly *geo_replanar_prep_poly(const geo_replanar_prep *prep)
-{
-    return prep->poly;
-}
-
 static int validate_model(const geo_poly *p, geo_err *err)
 {
     int rc = geo_poly_validate_indices(p, err);

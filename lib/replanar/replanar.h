@@ -200,9 +200,6 @@ geo_replanar_prep *geo_replanar_prepare(const geo_poly *p, geo_err *err);
 /* Releases; accepts NULL; returns NULL. */
 geo_replanar_prep *geo_replanar_prep_free(geo_replanar_prep *prep);
 
-/* The prepared model (its vertices are the start positions, its planes
- * the fitted ones). Borrowed: valid while prep lives. */
-const geo_poly *geo_replanar_prep_poly(const geo_replanar_prep *prep);
 
 /* Re-planarises the prepared model after placing fixed[i] at targets[i]
  * (nfixed ≥ 0 distinct vertex indices; targets NULL keeps them where they
