@@ -159,4 +159,9 @@ geo_poly *proto_off_read(const void *data, size_t len,
                          geo_err *err);
 int proto_off_write(const geo_poly *p, proto_buf *buf, geo_err *err);
 
+geo_poly *proto_asc_read(const void *data, size_t len,
+                         const proto_limits *lim, proto_read_report *rep,
+                         geo_err *err);
+int proto_asc_write(const geo_poly *p, proto_buf *buf, geo_err *err);
+
 #endif

@@ -37,6 +37,7 @@ static const struct {
     {PROTO_FMT_ASE, "ase", "ase", "text/plain"},
     {PROTO_FMT_FMB1, "fmb1", "fmb", "application/octet-stream"},
     {PROTO_FMT_OFF, "off", "off", "text/plain"},
+    {PROTO_FMT_ASC, "asc", "asc", "text/plain"},
 };
 enum { NFORMATS = sizeof formats / sizeof formats[0] };
 
@@ -147,6 +148,9 @@ geo_poly *proto_model_read_mem_ex(const void *data, size_t len,
     case PROTO_FMT_OFF:
         p = proto_off_read(data, len, lim, &rep, err);
         break;
+    case PROTO_FMT_ASC:
+        p = proto_asc_read(data, len, lim, &rep, err);
+        break;
     case PROTO_FMT_ASE:
         geo_err_set(err, -EINVAL, "ASE files can be written, not read");
         break;
@@ -224,7 +228,8 @@ int proto_read_fd_all(int fd, size_t max, char **ret, size_t *ret_len,
     return 0;
 }
 
-static const char *EXTENSIONS = ".json .poly .obj .stl .ply .ase .fmb .off";
+static const char *EXTENSIONS =
+    ".json .poly .obj .stl .ply .ase .fmb .off .asc";
 
 geo_poly *proto_model_read_file_ex(const char *path, proto_format fmt,
                                    const proto_limits *lim,
@@ -321,6 +326,9 @@ int proto_model_write_mem(const geo_poly *p, proto_format fmt, char **ret_buf,
         break;
     case PROTO_FMT_OFF:
         r = proto_off_write(p, &b, err);
+        break;
+    case PROTO_FMT_ASC:
+        r = proto_asc_write(p, &b, err);
         break;
     case PROTO_FMT_UNKNOWN:
     default:

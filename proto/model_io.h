@@ -44,6 +44,9 @@ typedef enum proto_format {
     PROTO_FMT_ASE,       /* write only */
     PROTO_FMT_FMB1,      /* scanner binary model */
     PROTO_FMT_OFF,       /* Geomview OFF (text) */
+    PROTO_FMT_ASC,       /* GemCad .asc design: tiers of facet half-spaces
+                            on reading; a design of a convex model on
+                            writing (docs/formats-asc.md) */
 } proto_format;
 
 /* Size limits applied by every reader. */
@@ -58,8 +61,9 @@ typedef struct proto_limits {
 void proto_limits_default(proto_limits *lim);
 
 /* The format named by a file's extension (.json .poly .obj .stl .ply .ase
- * .fmb .off), or by a name ("json", "poly", "obj", "stl", "stl-ascii",
- * "ply", "ply-ascii", "ase", "fmb1", "off"); PROTO_FMT_UNKNOWN otherwise. */
+ * .fmb .off .asc), or by a name ("json", "poly", "obj", "stl",
+ * "stl-ascii", "ply", "ply-ascii", "ase", "fmb1", "off", "asc");
+ * PROTO_FMT_UNKNOWN otherwise. */
 proto_format proto_format_from_path(const char *path);
 proto_format proto_format_from_name(const char *name);
 /* The canonical name of fmt ("json", …) and its MIME type. */
@@ -161,6 +165,13 @@ geo_poly *proto_model_from_jpull(proto_jpull *j, proto_jtok first,
                                  const char *path_prefix,
                                  proto_read_report *ret_report,
                                  bool *ret_syntax, geo_err *err);
+
+/* Scales p about the origin so that the largest caliper width of its
+ * outline seen along z (the table plane of a design) is width_mm: the
+ * `--width` of a GemCad design, whose units are arbitrary. 0, or -EINVAL
+ * with err set for a width that is not positive or a model with no
+ * extent across z (p unchanged). */
+int proto_model_scale_to_width(geo_poly *p, double width_mm, geo_err *err);
 
 /* facet-model/1 as a new JSON value (planes always written), or NULL on
  * out-of-memory. */

@@ -1,19 +1,23 @@
-/* cmd_convert.c — `facet convert IN OUT [--from FMT] [--to FMT]`: reads a
- * model in one format and writes it in another (proto/model_io.h). The
- * formats come from the file extensions unless given. Given planes that
- * disagree with their vertices are reported on stderr as a warning; the
- * conversion still succeeds. */
+/* cmd_convert.c — `facet convert IN OUT [--from FMT] [--to FMT]
+ * [--width MM]`: reads a model in one format and writes it in another
+ * (proto/model_io.h). The formats come from the file extensions unless
+ * given. Given planes that disagree with their vertices are reported on
+ * stderr as a warning; the conversion still succeeds. --width scales the
+ * model (a GemCad design has no units) to a given outline width. */
+#include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
 #include "model_io.h"
 
 static const char USAGE[] =
-    "usage: facet convert IN OUT [--from FMT] [--to FMT]\n"
+    "usage: facet convert IN OUT [--from FMT] [--to FMT] [--width MM]\n"
     "\n"
     "Converts a polyhedron between file formats. Formats are taken from the\n"
-    "extensions (.json .poly .obj .stl .ply .ase .fmb .off) unless given:\n"
+    "extensions (.json .poly .obj .stl .ply .ase .fmb .off .asc) unless\n"
+    "given:\n"
     "  json       facet-model/1 (read, write)\n"
     "  poly       the paper's text format: counts, vertices, facets with\n"
     "             planes (read, write)\n"
@@ -28,6 +32,12 @@ static const char USAGE[] =
     "  fmb1       the scanner's binary model FMB1 (read, write)\n"
     "  off        Geomview OFF (and COFF, NOFF, 4OFF, nOFF on reading;\n"
     "             colours, normals, comments skipped), polygons kept\n"
+    "  asc        GemCad design: read as the exact intersection of its\n"
+    "             facets' half-spaces; written from a convex model as\n"
+    "             tiers on a 96-tooth gear (fractional indices off it)\n"
+    "\n"
+    "--width MM scales the model about the origin so that the largest\n"
+    "caliper width of its outline seen along z is MM millimetres.\n"
     "\n"
     "The output is written atomically (temporary file, then rename).\n"
     "exit status: 0 success, 1 bad input (the error names file and place),\n"
@@ -52,6 +62,7 @@ int cmd_convert(int argc, char **argv)
     int nfiles = 0;
     proto_format from = PROTO_FMT_UNKNOWN, to = PROTO_FMT_UNKNOWN;
     bool only_files = false;
+    double width = 0.0;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (!only_files && strcmp(a, "--") == 0) {
@@ -63,6 +74,14 @@ int cmd_convert(int argc, char **argv)
             int r = parse_format(a, argv[++i], a[2] == 'f' ? &from : &to);
             if (r != CLI_OK)
                 return r;
+        } else if (!only_files && strcmp(a, "--width") == 0) {
+            char *end = NULL;
+            if (i + 1 == argc)
+                return cli_usage_error("convert", "--width needs MM");
+            width = strtod(argv[++i], &end);
+            if (*end || !(width > 0) || !isfinite(width))
+                return cli_usage_error("convert", "--width: '%s' is not a "
+                                       "positive number of mm", argv[i]);
         } else if (!only_files && a[0] == '-' && a[1] != '\0') {
             return cli_usage_error("convert", "unknown option '%s'", a);
         } else if (nfiles < 2) {
@@ -97,6 +116,10 @@ int cmd_convert(int argc, char **argv)
                         "%.3g mm); first: %s\n",
                 files[0], rep.plane_mismatches, rep.planes_given,
                 rep.worst_deviation, rep.first);
+    if (width > 0 && proto_model_scale_to_width(p, width, &err) < 0) {
+        geo_poly_free(p);
+        return cli_input_error("convert", "%s: %s", files[0], err.msg);
+    }
     int r = proto_model_write_file(p, files[1], to, &err);
     geo_poly_free(p);
     if (r < 0)

@@ -433,3 +433,78 @@ int geo_normal_sign(const double p0[3], const double n[3], const double p[3])
         return sign_of(v);
     return normal_sign_exact(p0, n, p);
 }
+
+/* Exact a·b − c·d of doubles; h has room for 4. */
+static int minor2_double(double a, double b, double c, double d, double *h)
+{
+    double ab[2], cd[2], tmp[4];
+    two_product(a, b, &ab[1], &ab[0]);
+    two_product(c, d, &cd[1], &cd[0]);
+    cd[0] = -cd[0], cd[1] = -cd[1];
+    return expansion_sum(2, ab, 2, cd, h, tmp);
+}
+
+/* The 4 × 4 determinant of the rows r[0..3] exactly, by Laplace expansion
+ * along the first two rows: Σ ± m(r0,r1; i,j) · m(r2,r3; k,l). */
+static int det4_exact(const double *const r[4])
+{
+    static const int pair[6][2] = {{0, 1}, {0, 2}, {0, 3},
+                                   {1, 2}, {1, 3}, {2, 3}};
+    static const int sgn[6] = {1, -1, 1, 1, -1, 1};
+    double acc[6 * 32], tmp[6 * 32], prod[32];
+    int n = 0;
+    for (int t = 0; t < 6; t++) {
+        int i = pair[t][0], j = pair[t][1];
+        int k = pair[5 - t][0], l = pair[5 - t][1];
+        double m[4], w[4];
+        int mn = minor2_double(r[0][i], r[1][j], r[0][j], r[1][i], m);
+        int wn = minor2_double(r[2][k], r[3][l], r[2][l], r[3][k], w);
+        int pn = expansion_product(mn, m, wn, w, prod);
+        if (sgn[t] < 0)
+            negate(pn, prod);
+        if (n == 0) {
+            for (int q = 0; q < pn; q++)
+                acc[q] = prod[q];
+            n = pn;
+        } else {
+            n = expansion_sum(n, acc, pn, prod, acc, tmp);
+        }
+    }
+    return expansion_sign(n, acc);
+}
+
+/* Sign of the 4 × 4 determinant of the rows, filtered: each of its 24
+ * monomials passes at most 8 roundings (two products, a difference, the
+ * product of the minors, four sums), the permanent as many, so 12u·P̂
+ * bounds the error with slack. */
+static int det4_sign(const double *const r[4])
+{
+    static const int pair[6][2] = {{0, 1}, {0, 2}, {0, 3},
+                                   {1, 2}, {1, 3}, {2, 3}};
+    static const int sgn[6] = {1, -1, 1, 1, -1, 1};
+    double det = 0.0, perm = 0.0;
+    for (int t = 0; t < 6; t++) {
+        int i = pair[t][0], j = pair[t][1];
+        int k = pair[5 - t][0], l = pair[5 - t][1];
+        double a = r[0][i] * r[1][j], b = r[0][j] * r[1][i];
+        double c = r[2][k] * r[3][l], d = r[2][l] * r[3][k];
+        double term = (a - b) * (c - d);
+        det += sgn[t] > 0 ? term : -term;
+        perm += (fabs(a) + fabs(b)) * (fabs(c) + fabs(d));
+    }
+    if (fabs(det) > 12.0 * EPS * perm && fabs(det) > TINY)
+        return sign_of(det);
+    return det4_exact(r);
+}
+
+int geo_plane_meet_sign(const double a[4], const double b[4],
+                        const double c[4], const double q[4])
+{
+    static const double zero[3] = {0.0, 0.0, 0.0};
+    /* geo_orient3d(0, a, b, c) = c · (a × b) = det[a; b; c] of the normals */
+    int s3 = geo_orient3d(zero, a, b, c);
+    if (s3 == 0)
+        return 0;
+    const double *rows[4] = {a, b, c, q};
+    return s3 * det4_sign(rows);
+}

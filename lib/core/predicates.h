@@ -161,4 +161,16 @@ int geo_plane_crossing_cmp(const double plane[4], const double x0[3],
  * on the plane through p0 perpendicular to n. n = 0 gives 0. */
 int geo_normal_sign(const double p0[3], const double n[3], const double p[3]);
 
+/* The exact side of plane q of the point where planes a, b and c meet
+ * (each plane a·x+b·y+c·z+d as four doubles taken as exact; normals of
+ * any length): +1 when that point lies on the side q's normal points to,
+ * −1 on the other side, 0 exactly on q; also 0 when the normals of a, b,
+ * c are linearly dependent (they meet in no single point). The point is
+ * never rounded: the answer is sign(det[a; b; c; q]) · sign(det of the
+ * three normals), the first by expansion arithmetic when its filter
+ * fails. Used to decide vertex-plane incidences of half-space
+ * intersections (lib/core/halfspace.h). */
+int geo_plane_meet_sign(const double a[4], const double b[4],
+                        const double c[4], const double q[4]);
+
 #endif

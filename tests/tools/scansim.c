@@ -5,8 +5,11 @@
  *   scansim --cut brilliant|princess|emerald|jubilee|jubilee96 [--k 400]
  *           [--seed 3]
  *           [--noise 0.001] [--truth T.json] [--scan S.json]
+ *   scansim --design D.asc [--width 6.5] ... (the same options)
  *
- * The stone's proportions come from --seed, the scan's silhouette noise
+ * With --design the stone is a GemCad design (tests/support/design.h)
+ * scaled to --width mm across; otherwise the stone's proportions come
+ * from --seed, the scan's silhouette noise
  * (mm, standard deviation) from --noise and the same seed. Prints one line
  * "cut=... seed=... k=... truth=V/F scan=V/F hausdorff_mm=..." (the scan's
  * Hausdorff distance to the stone, sim_hausdorff with 2000 samples per
@@ -16,13 +19,15 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "design.h"
 #include "model_io.h"
 #include "stone_sim.h"
 
 static int usage(const char *msg)
 {
     fprintf(stderr, "scansim: %s\nusage: scansim --cut brilliant|princess|"
-            "emerald|jubilee|jubilee96 [--k 400] [--seed 3] [--noise 0.001] "
+            "emerald|jubilee|jubilee96 | --design D.asc [--width 6.5]] "
+            "[--k 400] [--seed 3] [--noise 0.001] "
             "[--truth T.json] [--scan S.json]\n", msg);
     return 2;
 }
@@ -41,6 +46,8 @@ static int parse_u(const char *s, unsigned long max, unsigned long *ret)
 int main(int argc, char **argv)
 {
     const char *cut = NULL, *truth_path = NULL, *scan_path = NULL;
+    const char *design = NULL;
+    double width = DESIGN_WIDTH_MM;
     unsigned long k = 400, seed = 3;
     double noise = 0.001;
     for (int i = 1; i < argc; i++) {
@@ -50,6 +57,14 @@ int main(int argc, char **argv)
         const char *v = argv[++i];
         if (strcmp(a, "--cut") == 0)
             cut = v;
+        else if (strcmp(a, "--design") == 0)
+            design = v;
+        else if (strcmp(a, "--width") == 0) {
+            char *end;
+            width = strtod(v, &end);
+            if (end == v || *end || !(width > 0) || width > 1000)
+                return usage("--width: expected mm in (0, 1000]");
+        }
         else if (strcmp(a, "--k") == 0) {
             if (parse_u(v, 100000, &k) < 0 || k == 0)
                 return usage("--k: expected a number of views 1..100000");
@@ -68,10 +83,12 @@ int main(int argc, char **argv)
         else
             return usage("unknown option");
     }
-    enum sim_cut c;
-    if (!cut)
-        return usage("--cut is required");
-    if (strcmp(cut, "brilliant") == 0)
+    enum sim_cut c = SIM_BRILLIANT;
+    if (!cut && !design)
+        return usage("--cut or --design is required");
+    if (design)
+        cut = design;
+    else if (strcmp(cut, "brilliant") == 0)
         c = SIM_BRILLIANT;
     else if (strcmp(cut, "princess") == 0)
         c = SIM_PRINCESS;
@@ -85,7 +102,17 @@ int main(int argc, char **argv)
         return usage("--cut: expected brilliant, princess, emerald, jubilee or "
                          "jubilee96");
 
-    geo_poly *stone = sim_stone(c, seed);
+    geo_err err;
+    geo_poly *stone = NULL;
+    if (design) {
+        stone = design_load(design, width, &err);
+        if (!stone) {
+            fprintf(stderr, "scansim: %s\n", err.msg);
+            return 1;
+        }
+    } else {
+        stone = sim_stone(c, seed);
+    }
     geo_poly *scan = stone ? sim_scan(stone, (uint32_t)k, noise, seed) : NULL;
     if (!stone || !scan) {
         fprintf(stderr, "scansim: the simulation failed\n");
@@ -94,7 +121,6 @@ int main(int argc, char **argv)
         return 1;
     }
     int rc = 0;
-    geo_err err;
     if (truth_path && proto_model_write_file(stone, truth_path, PROTO_FMT_JSON, &err) < 0) {
         fprintf(stderr, "scansim: %s\n", err.msg);
         rc = 1;

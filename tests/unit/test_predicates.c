@@ -308,6 +308,55 @@ static void test_orient2d_line_matches_orient2d_proj(void **state)
     }
 }
 
+/* geo_plane_meet_sign on integer planes through an integer point P: the
+ * side of P of a fourth plane q, which is exactly q(P) = δ. Normals and P
+ * near 2^25 (products stay below 2^53) make the 4 × 4 determinant cancel far below the doubles'
+ * resolution, so the exact path decides. Orders of the three planes and
+ * their scaling by powers of two never change the answer. */
+static void test_plane_meet_sign_exact(void **state)
+{
+    (void)state;
+    uint64_t rng = 99;
+    int exact_needed = 0;
+    for (int round = 0; round < 2000; round++) {
+        double big = round % 2 ? 0x1p25 : 3;
+        double P[3], pl[4][4];
+        for (int k = 0; k < 3; k++)
+            P[k] = floor((geo_rand_unit(&rng) - 0.5) * 2 * big);
+        for (int i = 0; i < 4; i++) {
+            for (int k = 0; k < 3; k++)
+                pl[i][k] = floor((geo_rand_unit(&rng) - 0.5) * 2 * big);
+            pl[i][3] = -(pl[i][0] * P[0] + pl[i][1] * P[1] + pl[i][2] * P[2]);
+        }
+        /* integers below 2^53 throughout: every plane passes through P */
+        double delta = (double)(int)(geo_rand_next(&rng) % 3) - 1;
+        pl[3][3] += delta;
+        static const double zero[3] = {0, 0, 0};
+        if (geo_orient3d(zero, pl[0], pl[1], pl[2]) == 0)
+            continue;
+        int want = (delta > 0) - (delta < 0);
+        assert_int_equal(geo_plane_meet_sign(pl[0], pl[1], pl[2], pl[3]),
+                         want);
+        assert_int_equal(geo_plane_meet_sign(pl[2], pl[0], pl[1], pl[3]),
+                         want);
+        assert_int_equal(geo_plane_meet_sign(pl[1], pl[0], pl[2], pl[3]),
+                         want);
+        double half[4], neg[4];
+        for (int k = 0; k < 4; k++)
+            half[k] = pl[0][k] * 0.5, neg[k] = -pl[3][k];
+        assert_int_equal(geo_plane_meet_sign(half, pl[1], pl[2], pl[3]),
+                         want);
+        assert_int_equal(geo_plane_meet_sign(pl[0], pl[1], pl[2], neg),
+                         -want);
+        exact_needed += big > 1e6 && delta != 0;
+    }
+    assert_true(exact_needed > 100);
+    /* parallel normals meet in no point */
+    const double a[4] = {1, 0, 0, 0}, b[4] = {2, 0, 0, -1}, c[4] = {0, 1, 0, 0};
+    const double q[4] = {0, 0, 1, 5};
+    assert_int_equal(geo_plane_meet_sign(a, b, c, q), 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -320,6 +369,7 @@ int main(void)
         cmocka_unit_test(test_orient2d_proj_axes),
         cmocka_unit_test(test_orient2d_proj_and_normal_sign_exact),
         cmocka_unit_test(test_orient2d_line_matches_orient2d_proj),
+        cmocka_unit_test(test_plane_meet_sign_exact),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
