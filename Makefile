@@ -43,7 +43,7 @@ override CFLAGS += -std=c11 -D_GNU_SOURCE -Wall -Wextra -Wpedantic -Werror \
     $(OPT) $(SANFLAGS)
 
 # lib/ groups, lowest first, and the groups each may include.
-LIB_GROUPS       := core inspect cut replanar mesh frep correct
+LIB_GROUPS       := core inspect cut replanar mesh frep correct gem
 LIB_DEPS_core    := core
 LIB_DEPS_inspect := core inspect
 LIB_DEPS_cut     := core inspect cut
@@ -51,6 +51,7 @@ LIB_DEPS_replanar:= core inspect replanar
 LIB_DEPS_mesh    := core inspect mesh
 LIB_DEPS_frep    := core inspect mesh frep
 LIB_DEPS_correct := core inspect cut replanar correct correct/private
+LIB_DEPS_gem     := core inspect gem
 INC_LIB     := $(foreach g,$(LIB_GROUPS),-Ilib/$(g))
 INC_PROTO   := $(INC_LIB) -Iproto
 INC_SCANNER := $(INC_PROTO) -Iscanner

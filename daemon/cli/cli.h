@@ -46,5 +46,6 @@ int cmd_collapse(int argc, char **argv);
 int cmd_correct(int argc, char **argv);
 int cmd_fill(int argc, char **argv);
 int cmd_stitch(int argc, char **argv);
+int cmd_report(int argc, char **argv);
 
 #endif

@@ -21,6 +21,8 @@ static const cli_command commands[] = {
     {"convert", "convert a model between file formats", cmd_convert},
     {"cut", "cut a model by a plane (Palachev 2012, §3)", cmd_cut},
     {"inspect", "print a model's statistics and defects as JSON", cmd_inspect},
+    {"report", "print a stone's proportions and facet table as JSON",
+     cmd_report},
     {"orient", "make a model's facets consistent and outward", cmd_orient},
     {"triangulate", "triangulate a functionally defined object",
      cmd_triangulate},
