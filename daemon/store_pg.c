@@ -250,6 +250,8 @@ static PGconn *conn(pg_store *s, geo_err *err)
     }
     geo_err e;
     pc->pg = pg_connect(s, &e);
+    if (pc->pg)
+        atomic_store(&s->down_until, 0); /* back: nobody fails fast */
     if (!pc->pg) {
         pthread_mutex_lock(&s->conns_lock);
         snprintf(s->down_msg, sizeof s->down_msg, "%s", e.msg);
@@ -283,12 +285,33 @@ static int pg_fail(PGconn *pg, const PGresult *res, const char *what,
 
 /* Runs sql with n parameters (text unless len/fmt say binary); the result
  * when it succeeded, else NULL with *ret and err set. */
+/* A connection the server dropped (it restarted) still looks fine until
+ * it is used: a read or a BEGIN outside a transaction, which changed
+ * nothing if it failed, is tried once more on a new connection. Writes
+ * are not: one may have been done before the connection broke. */
+static bool retry_on_new(PGconn *pg, const char *sql,
+                         PGTransactionStatusType was)
+{
+    if (was != PQTRANS_IDLE || PQstatus(pg) == CONNECTION_OK ||
+        (strncmp(sql, "SELECT", 6) != 0 && strncmp(sql, "BEGIN", 5) != 0))
+        return false;
+    PQreset(pg);
+    return PQstatus(pg) == CONNECTION_OK;
+}
+
 static PGresult *exec(PGconn *pg, const char *what, const char *sql, int n,
                       const char *const *v, const int *len, const int *fmt,
                       int binary, int *ret, geo_err *err)
 {
+    PGTransactionStatusType was = PQtransactionStatus(pg);
     PGresult *res = PQexecParams(pg, sql, n, NULL, v, len, fmt, binary);
     ExecStatusType st = PQresultStatus(res);
+    if (!(res && (st == PGRES_COMMAND_OK || st == PGRES_TUPLES_OK)) &&
+        retry_on_new(pg, sql, was)) {
+        PQclear(res);
+        res = PQexecParams(pg, sql, n, NULL, v, len, fmt, binary);
+        st = PQresultStatus(res);
+    }
     if (res && (st == PGRES_COMMAND_OK || st == PGRES_TUPLES_OK)) {
         *ret = 0;
         return res;
@@ -319,12 +342,18 @@ static int end_tx(PGconn *pg, int r, geo_err *err)
 /* Starts a transaction whose commit waits for the server's disk. */
 static int begin_durable(PGconn *pg, geo_err *err)
 {
-    int r = run(pg, "begin", "BEGIN", 0, NULL, err);
-    if (r == 0) {
-        r = run(pg, "begin", "SET LOCAL synchronous_commit=on", 0, NULL, err);
-        if (r < 0)
-            run(pg, "rollback", "ROLLBACK", 0, NULL, NULL);
+    static const char sql[] = "BEGIN; SET LOCAL synchronous_commit=on";
+    PGTransactionStatusType was = PQtransactionStatus(pg);
+    PGresult *res = PQexec(pg, sql);
+    if (PQresultStatus(res) != PGRES_COMMAND_OK && retry_on_new(pg, sql, was)) {
+        PQclear(res);
+        res = PQexec(pg, sql);
     }
+    int r = PQresultStatus(res) == PGRES_COMMAND_OK ? 0
+            : pg_fail(pg, res, "begin", err);
+    PQclear(res);
+    if (r < 0 && PQtransactionStatus(pg) == PQTRANS_INERROR)
+        run(pg, "rollback", "ROLLBACK", 0, NULL, NULL);
     return r;
 }
 
@@ -448,9 +477,9 @@ static void claim_release(pg_store *s, const char *id, bool done)
 }
 
 /* After an UPDATE matching id and this node's token changed nothing:
- * -ENOENT, -ESTALE (lost is set: another node claimed it again after
- * this node's lease expired) or -EBUSY (not running). */
-static int why_not(PGconn *pg, const char *id, int64_t token, bool lost_is_stale,
+ * -ENOENT, -ESTALE (with stale set, when another node claimed it again
+ * after this node's lease expired) or -EBUSY (not running). */
+static int why_not(PGconn *pg, const char *id, int64_t token, bool stale,
                    geo_err *err)
 {
     const char *v[] = {id};
@@ -465,9 +494,10 @@ static int why_not(PGconn *pg, const char *id, int64_t token, bool lost_is_stale
     else {
         job_state st = (job_state)col_i64(res, 0, 0);
         int64_t now_token = col_i64(res, 0, 1);
-        bool lost = st == JOB_QUEUED || (st == JOB_RUNNING && now_token != token);
+        bool lost = st == JOB_QUEUED ||
+                    (st == JOB_RUNNING && now_token != token);
         if (lost && token)
-            r = geo_err_set(err, lost_is_stale ? -ESTALE : -EBUSY,
+            r = geo_err_set(err, stale ? -ESTALE : -EBUSY,
                             "job %s: this node's lease on it expired; %s", id,
                             st == JOB_QUEUED ? "it was queued again"
                                              : "another node runs it now");
@@ -481,6 +511,29 @@ static int why_not(PGconn *pg, const char *id, int64_t token, bool lost_is_stale
 
 /* ---- the operations ------------------------------------------------ */
 
+/* Reads the job an idempotency key names: -EEXIST with *ret_existing,
+ * -ENOENT, or the error. */
+static int find_key(PGconn *pg, const char *key, job_rec *ret_existing,
+                    geo_err *err)
+{
+    const char *v[] = {key};
+    int r;
+    PGresult *res = exec(pg, "find key", "SELECT " COLS " FROM facetd_jobs "
+                         "WHERE idem_key=$1", 1, v, NULL, NULL, 0, &r, err);
+    if (!res)
+        return r;
+    job_rec old;
+    r = one_row(res, &old, err);
+    PQclear(res);
+    if (r < 0)
+        return r;
+    if (ret_existing)
+        *ret_existing = old;
+    else
+        job_rec_clear(&old);
+    return -EEXIST;
+}
+
 static int pg_put(store *s, const store_new_job *j, unsigned max_queued,
                   job_rec *ret_existing, geo_err *err)
 {
@@ -488,84 +541,45 @@ static int pg_put(store *s, const store_new_job *j, unsigned max_queued,
     int r = begin_durable(pg, err);
     if (r < 0)
         return r;
-    PGresult *res;
-    if (j->idem_key) {
-        const char *v[] = {j->idem_key};
-        res = exec(pg, "find key", "SELECT " COLS " FROM facetd_jobs WHERE "
-                   "idem_key=$1", 1, v, NULL, NULL, 0, &r, err);
-        if (!res)
-            goto out;
-        job_rec old;
-        r = one_row(res, &old, err);
-        PQclear(res);
-        if (r == 0) {
-            if (ret_existing)
-                *ret_existing = old;
-            else
-                job_rec_clear(&old);
-            r = -EEXIST;
-            goto out;
-        }
-        if (r != -ENOENT)
-            goto out;
-        r = 0;
-    }
-    res = exec(pg, "count queued", "SELECT count(*) FROM facetd_jobs WHERE "
-               "state=0", 0, NULL, NULL, NULL, 0, &r, err);
-    if (!res)
-        goto out;
-    int64_t queued = col_i64(res, 0, 0);
-    PQclear(res);
-    if ((uint64_t)queued >= max_queued) {
-        r = geo_err_set(err, -EAGAIN, "the queue is full (%lld jobs)",
-                        (long long)queued);
-        goto out;
-    }
-    char prio[8], hash[24], created[24], bytes[24];
+    char prio[8], hash[24], created[24], bytes[24], max[16];
     snprintf(prio, sizeof prio, "%d", (int)j->priority);
     snprintf(hash, sizeof hash, "%lld", (long long)(int64_t)j->idem_hash);
     snprintf(created, sizeof created, "%lld", (long long)j->created_ms);
     snprintf(bytes, sizeof bytes, "%zu", j->input_len);
+    snprintf(max, sizeof max, "%u", max_queued);
     const char *v[] = {j->id, prio, j->source, j->label ? j->label : "",
-                       j->pipeline, j->idem_key, hash, created, bytes};
-    /* a key another node inserted meanwhile: ON CONFLICT waits for its
-     * commit and inserts nothing */
-    res = exec(pg, "insert job", "INSERT INTO facetd_jobs(id,state,priority,"
-               "source,label,pipeline,idem_key,idem_hash,created_ms,"
-               "input_bytes) VALUES($1,0,$2,$3,$4,$5,$6,$7,$8,$9) "
-               "ON CONFLICT (idem_key) DO NOTHING RETURNING seq", 9, v, NULL,
-               NULL, 0, &r, err);
+                       j->pipeline, j->idem_key, hash, created, bytes, max,
+                       j->input ? (const char *)j->input : ""};
+    int len[11] = {[10] = (int)j->input_len};
+    int fmt[11] = {[10] = 1};
+    /* one round trip: the job and its input, unless the queue is full or
+     * the key was used (ON CONFLICT also waits for another node's insert
+     * of the same key to commit, then inserts nothing) */
+    PGresult *res = exec(
+        pg, "insert job",
+        "WITH q AS (SELECT count(*) AS n FROM facetd_jobs WHERE state=0), "
+        "j AS (INSERT INTO facetd_jobs(id,state,priority,source,label,"
+        "pipeline,idem_key,idem_hash,created_ms,input_bytes) "
+        "SELECT $1,0,$2,$3,$4,$5,$6,$7,$8,$9 FROM q WHERE q.n<$10::bigint "
+        "ON CONFLICT (idem_key) DO NOTHING RETURNING seq), "
+        "b AS (INSERT INTO facetd_blobs SELECT seq,0,$11::bytea FROM j "
+        "RETURNING job_seq) "
+        "SELECT (SELECT n FROM q), (SELECT job_seq FROM b)",
+        11, v, len, fmt, 0, &r, err);
     if (!res)
         goto out;
-    if (PQntuples(res) < 1) {
-        PQclear(res);
-        const char *k[] = {j->idem_key};
-        res = exec(pg, "find key", "SELECT " COLS " FROM facetd_jobs WHERE "
-                   "idem_key=$1", 1, k, NULL, NULL, 0, &r, err);
-        if (!res)
-            goto out;
-        job_rec old;
-        r = one_row(res, &old, err);
-        PQclear(res);
-        if (r == 0) {
-            if (ret_existing)
-                *ret_existing = old;
-            else
-                job_rec_clear(&old);
-            r = -EEXIST;
-        } else if (r == -ENOENT) {
-            r = geo_err_set(err, -EIO, "store: idempotency key vanished");
-        }
-        goto out;
-    }
-    char seq[24];
-    snprintf(seq, sizeof seq, "%s", PQgetvalue(res, 0, 0));
+    int64_t queued = col_i64(res, 0, 0);
+    bool inserted = !PQgetisnull(res, 0, 1);
     PQclear(res);
-    const char *bv[] = {seq, j->input ? (const char *)j->input : ""};
-    int blen[] = {0, (int)j->input_len};
-    int bfmt[] = {0, 1};
-    PQclear(exec(pg, "insert input", "INSERT INTO facetd_blobs VALUES($1,0,$2)",
-                 2, bv, blen, bfmt, 0, &r, err));
+    if (inserted)
+        goto out;
+    /* a used key answers with its job even when the queue is full */
+    r = j->idem_key ? find_key(pg, j->idem_key, ret_existing, err) : -ENOENT;
+    if (r == -ENOENT)
+        r = (uint64_t)queued >= max_queued
+                ? geo_err_set(err, -EAGAIN, "the queue is full (%lld jobs)",
+                              (long long)queued)
+                : geo_err_set(err, -EIO, "store: the job was not inserted");
 out:
     return end_tx(pg, r, err);
 }
@@ -644,11 +658,6 @@ static int pg_finish(store *s, const char *id, job_state state,
 {
     CONN_OR_FAIL(s, pg, err);
     int64_t token = claim_token(P(s), id);
-    int r = run(pg, "begin", "BEGIN", 0, NULL, err);
-    if (r < 0) {
-        claim_release(P(s), id, false);
-        return r;
-    }
     /* as store_sqlite.c: a result that is the input is named by its id */
     uint64_t hash = model ? job_digest64(model, model_len)
                     : state == JOB_SUCCEEDED ? job_digest64(id, strlen(id))
@@ -660,40 +669,32 @@ static int pg_finish(store *s, const char *id, job_state state,
              (model ? model_len : 0) + (stats ? stats_len : 0));
     snprintf(h, sizeof h, "%lld", (long long)(int64_t)hash);
     snprintf(tok, sizeof tok, "%lld", (long long)token);
-    const char *v[] = {id, st, now, error, summary, bytes, h, tok};
+    const char *v[] = {id, st, now, error, summary, bytes, h, tok, model,
+                       stats};
+    int len[10] = {[8] = (int)model_len, [9] = (int)stats_len};
+    int fmt[10] = {[8] = 1, [9] = 1};
+    int r;
+    /* one statement, so one transaction: the state and the blobs, or
+     * nothing when the token is not the job's any more */
     PGresult *res = exec(
         pg, "finish",
-        "UPDATE facetd_jobs SET state=$2, finished_ms=$3, error=$4, "
-        "summary=$5, result_bytes=$6, result_hash=$7, version=version+1, "
+        "WITH u AS (UPDATE facetd_jobs SET state=$2, finished_ms=$3, "
+        "error=$4, summary=$5, result_bytes=$6, result_hash=$7, "
+        "version=version+1, "
         "progress=CASE WHEN $2::smallint=2 THEN 1.0 ELSE progress END, "
         "lease_until=NULL WHERE id=$1 AND state=1 AND claim_token=$8 "
-        "RETURNING seq",
-        8, v, NULL, NULL, 0, &r, err);
-    if (!res)
-        goto out;
-    char seq[24] = "";
-    if (PQntuples(res))
-        snprintf(seq, sizeof seq, "%s", PQgetvalue(res, 0, 0));
-    PQclear(res);
-    if (!seq[0]) {
-        r = why_not(pg, id, token, false, err);
-        goto out;
+        "RETURNING seq), "
+        "m AS (INSERT INTO facetd_blobs SELECT seq,1,$9::bytea FROM u "
+        "WHERE $9::bytea IS NOT NULL), "
+        "t AS (INSERT INTO facetd_blobs SELECT seq,2,$10::bytea FROM u "
+        "WHERE $10::bytea IS NOT NULL) "
+        "SELECT seq FROM u",
+        10, v, len, fmt, 0, &r, err);
+    if (res) {
+        if (PQntuples(res) < 1)
+            r = why_not(pg, id, token, false, err);
+        PQclear(res);
     }
-    const void *blob[2] = {model, stats};
-    size_t blen[2] = {model_len, stats_len};
-    const char *kinds[2] = {"1", "2"};
-    for (int k = 0; k < 2 && r == 0; k++) {
-        if (!blob[k])
-            continue;
-        const char *bv[] = {seq, kinds[k], blob[k]};
-        int lens[] = {0, 0, (int)blen[k]};
-        int fmts[] = {0, 0, 1};
-        PQclear(exec(pg, "insert result", "INSERT INTO facetd_blobs "
-                     "VALUES($1,$2,$3) ON CONFLICT (job_seq, kind) DO UPDATE "
-                     "SET data=excluded.data", 3, bv, lens, fmts, 0, &r, err));
-    }
-out:
-    r = end_tx(pg, r, err);
     /* refused for good (-EBUSY, -ENOENT) or written: forget the claim;
      * a failed write keeps the token until the lease would lapse */
     claim_release(P(s), id, r == 0 || r == -EBUSY || r == -ENOENT);
@@ -1151,6 +1152,7 @@ static void *events_main(void *arg)
                 poll(&w, 1, RETRY_CONNECT_MS);
                 continue;
             }
+            atomic_store(&s->down_until, 0);
             if (down) {
                 log_msg(LOG_NOTICE, NULL, "the database is reachable again");
                 emit(s, STORE_EV_RESYNC, NULL, NULL);

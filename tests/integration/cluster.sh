@@ -178,6 +178,17 @@ post_json /v1/jobs "$g" -H 'Idempotency-Key: cluster-7'
 expect_eq "an idempotent retry on another node returns the same job" \
     "202 $first true" "$CODE $(jstr id) $(header Idempotent-Replayed)"
 
+wait_job "$first" 30
+curl -s -o "$T/a.obj" "${NURL[1]}/v1/jobs/$first/model?format=obj"
+curl -s -o "$T/b.obj" "${NURL[2]}/v1/jobs/$first/model?format=obj"
+check "every node serves a job's model in another format" \
+    bash -c "[ -s '$T/a.obj' ] && cmp -s '$T/a.obj' '$T/b.obj' && grep -q '^f ' '$T/a.obj'"
+req DELETE "/v1/jobs/$first"
+del=$CODE
+URL=${NURL[1]}
+req GET "/v1/jobs/$first"
+expect_eq "a job deleted on one node is gone on the other" "204 404" "$del $CODE"
+
 # a waiter on node 2 hears a job node 1 queued and node 1 ran
 URL=${NURL[1]}
 submit l-prism.json
@@ -211,9 +222,32 @@ for _ in $(seq 1 100); do
     sleep 0.1
 done
 expect_eq "both nodes are ready again once the database is back" 1 "$ready"
-submit brilliant.scan-k100.json '"auto"'
+# a client honours Retry-After: a node may still be reconnecting
+for _ in 1 2 3 4 5; do
+    submit brilliant.scan-k100.json '"auto"'
+    [ "$CODE" = 503 ] || break
+    sleep "$(header Retry-After)"
+done
+code=$CODE
 wait_job "$ID" 30
-expect_eq "a job submitted after the outage succeeds" succeeded "$STATE_OF"
+expect_eq "a job submitted after the outage succeeds" "202 succeeded" "$code $STATE_OF"
+# the queue bound is the cluster's queue; a used key still answers
+printf '[Jobs]\nPaused=yes\nQueueSize=1\n' >"$T/node1.conf"
+kill -HUP "${NPID[1]}"
+setpaused 2 yes
+sleep 0.5
+URL=${NURL[1]}
+post_json /v1/jobs "$g" -H 'Idempotency-Key: cluster-full'
+kept=$(jstr id)
+post_json /v1/jobs "$g"
+full=$CODE
+post_json /v1/jobs "$g" -H 'Idempotency-Key: cluster-full'
+expect_eq "a full shared queue is 503; a retry of a queued key still returns its job" \
+    "503 202 $kept" "$full $CODE $(jstr id)"
+setpaused 1 no
+setpaused 2 no
+wait_job "$kept" 30
+expect_eq "the job kept in the full queue runs once unpaused" succeeded "$STATE_OF"
 # KEEP=1 keeps the database directory with the nodes' logs in it
 [ -n "${KEEP:-}" ] && cp "${NLOG[@]}" "$PGD/"
 finish

@@ -14,9 +14,10 @@ as_pg() {
     if [ "$(id -u)" = 0 ]; then runuser -u postgres -- "$@"; else "$@"; fi
 }
 
+# below the kernel's ephemeral range, where clients' own ports are taken
 pg_free_port() {
     local p
-    for p in $(shuf -i 20000-60000 -n 50); do
+    for p in $(shuf -i 20000-32000 -n 50); do
         (exec 3<>"/dev/tcp/127.0.0.1/$p") 2>/dev/null || { echo "$p"; return; }
     done
 }
@@ -35,15 +36,36 @@ pg_init() {
         -A scram-sha-256 -E UTF8 --no-instructions >"$PGD/initdb.log" 2>&1 ||
         return 1
     PG_PASSFILE=$1/pgpass
+    pg_port "$PGPORT"
+}
+
+# pg_port PORT: the port the database listens on, in the URL and the
+# password file.
+pg_port() {
+    PGPORT=$1
     printf '127.0.0.1:%s:*:facetd:secret-pw\n' "$PGPORT" >"$PG_PASSFILE"
     chmod 600 "$PG_PASSFILE"
     PG_URL="postgresql://facetd@127.0.0.1:$PGPORT/postgres"
 }
 
+# pg_start: starts it on PGPORT; the first start moves to another port
+# if that one was taken meanwhile (tests run side by side). Later starts
+# keep the port: the nodes know it.
 pg_start() {
-    as_pg "$PGBIN/pg_ctl" -D "$PGD/data" -l "$PGD/log" -w -t 30 -o \
-        "-c listen_addresses=127.0.0.1 -c port=$PGPORT -c unix_socket_directories=$PGD -c fsync=$PG_FSYNC -c max_connections=200" \
-        start >/dev/null
+    local try
+    for try in 1 2 3 4 5; do
+        [ -f "$PGD/log" ] && : >"$PGD/log" # keeps its owner
+        if as_pg "$PGBIN/pg_ctl" -D "$PGD/data" -l "$PGD/log" -w -t 30 -o \
+            "-c listen_addresses=127.0.0.1 -c port=$PGPORT -c unix_socket_directories=$PGD -c fsync=$PG_FSYNC -c max_connections=200" \
+            start >/dev/null 2>&1; then
+            PG_STARTED=1
+            return 0
+        fi
+        grep -q 'Address already in use' "$PGD/log" || return 1
+        [ -z "${PG_STARTED:-}" ] && pg_port "$(pg_free_port)"
+        sleep 0.5
+    done
+    return 1
 }
 
 pg_stop() {
