@@ -5,6 +5,7 @@
 #include "runner.h"
 
 #include <errno.h>
+#include <assert.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
@@ -548,6 +549,9 @@ static int run_pipeline(const proto_pipeline *p, const geo_frep *frep,
         }
         json_t *report = NULL;
         double t0 = mono_seconds();
+        /* every op the parser knows has its kernel in the table */
+        assert((unsigned)op->kind < PROTO_OP_COUNT &&
+               (ops[op->kind].run || ops[op->kind].run_frep));
         r = ops[op->kind].run_frep
                 ? ops[op->kind].run_frep(op, frep, model, &sub, &report,
                                          summary, err)

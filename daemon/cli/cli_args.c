@@ -1,6 +1,7 @@
 /* cli_args.c — the option parser of every command (cli_args.h). */
 #include "cli_args.h"
 
+#include <assert.h>
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
@@ -14,6 +15,8 @@ void cli_args_init(cli_args *a, const char *cmd, int argc, char **argv,
 {
     *a = (cli_args){.cmd = cmd, .argc = argc, .i = 1, .argv = argv,
                     .opts = opts};
+    for (const cli_opt *o = opts; o->name; o++)
+        assert(o->key >= 0 && o->name[0] == '-');
 }
 
 int cli_args_next(cli_args *a, const char **val)

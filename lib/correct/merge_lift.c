@@ -43,6 +43,7 @@
  * planes meet at small angles. */
 #include "merge_impl.h"
 
+#include <assert.h>
 #include <errno.h>
 #include <math.h>
 #include <string.h>
@@ -280,6 +281,7 @@ static int apply_side(geo_edit *e, uint32_t f, const lift_plan *lp,
         left ? ins_after : ins_before;
     int (*back)(geo_edit *, uint32_t, uint32_t, uint32_t) =
         left ? ins_before : ins_after;
+    assert(A != N && fN1 != fO1 && fN1 != f && fO1 != f);
     bool hiA = geo_edit_vn(e, A) > 3, hiN = geo_edit_vn(e, N) > 3;
     const side_plan *s = &lp->s;
     int r = 0;
