@@ -220,8 +220,7 @@ static uint32_t spread10(uint32_t x)
 }
 
 typedef struct morton_builder {
-    geo_bvh *h;
-    const geo_bbox *in;   /* input boxes by item index */
+    geo_bvh *h;           /* boxes in leaf order */
     const uint32_t *code; /* Morton code by item index */
 } morton_builder;
 
@@ -233,7 +232,7 @@ static void build_morton_node(const morton_builder *b, uint32_t node,
     geo_bbox_empty(&n->box);
     if (hi - lo <= GEO_BVH_LEAF) {
         for (uint32_t i = lo; i < hi; i++)
-            geo_bbox_union(&n->box, &b->in[h->items[i]]);
+            geo_bbox_union(&n->box, &h->boxes[i]);
         n->child = lo;
         n->count = hi - lo;
         return;
@@ -265,26 +264,45 @@ static void build_morton_node(const morton_builder *b, uint32_t node,
     geo_bbox_union(&n->box, &h->nodes[child + 1].box);
 }
 
-geo_bvh *geo_bvh_build_morton(const geo_bbox *boxes, uint32_t n, geo_err *err)
+/* Where a Morton build takes its items' boxes from: an array by item
+ * index, or the facets of a polyhedron (computed where needed, from the
+ * vertices, rather than kept in a second array of boxes: they are the
+ * tree's largest part). */
+typedef struct box_source {
+    const geo_bbox *boxes;
+    const geo_poly *p;
+} box_source;
+
+static inline void source_box(const box_source *src, uint32_t i,
+                              geo_bbox *ret)
 {
-    geo_bvh *h = calloc(1, sizeof *h);
-    uint32_t *code = NULL, *tmp = NULL;
-    if (!h)
-        goto oom;
-    h->nitems = n;
-    h->nodes = malloc((2 * (size_t)n + 1) * sizeof *h->nodes);
-    h->items = malloc(((size_t)n + 1) * sizeof *h->items);
-    h->boxes = malloc(((size_t)n + 1) * sizeof *h->boxes);
-    code = malloc(((size_t)n + 1) * sizeof *code);
-    tmp = malloc(((size_t)n + 1) * sizeof *tmp);
-    if (!h->nodes || !h->items || !h->boxes || !code || !tmp)
-        goto oom;
-    geo_bbox cb;
+    if (src->boxes)
+        *ret = src->boxes[i];
+    else
+        geo_poly_facet_bbox(src->p, i, ret);
+}
+
+/* The Morton build of h (h->nitems items, arrays allocated) over the
+ * boxes of src: codes from the box centres, a radix sort of the items,
+ * the boxes written in leaf order (a gather: independent reads, unlike
+ * a permutation in place), then the nodes. -ENOMEM. */
+static int morton_core(geo_bvh *h, const box_source *src)
+{
+    uint32_t n = h->nitems;
+    uint32_t *code = malloc(((size_t)n + 1) * sizeof *code);
+    uint32_t *tmp = malloc(((size_t)n + 1) * sizeof *tmp);
+    if (!code || !tmp) {
+        free(code);
+        free(tmp);
+        return -ENOMEM;
+    }
+    geo_bbox cb, b;
     geo_bbox_empty(&cb);
     for (uint32_t i = 0; i < n; i++) {
         double c[3];
+        source_box(src, i, &b);
         for (int k = 0; k < 3; k++)
-            c[k] = 0.5 * (boxes[i].lo[k] + boxes[i].hi[k]);
+            c[k] = 0.5 * (b.lo[k] + b.hi[k]);
         geo_bbox_add(&cb, c);
     }
     double scale[3];
@@ -292,9 +310,9 @@ geo_bvh *geo_bvh_build_morton(const geo_bbox *boxes, uint32_t n, geo_err *err)
         scale[k] = cb.hi[k] > cb.lo[k] ? 1024.0 / (cb.hi[k] - cb.lo[k]) : 0;
     for (uint32_t i = 0; i < n; i++) {
         uint32_t q[3];
+        source_box(src, i, &b);
         for (int k = 0; k < 3; k++) {
-            double x = (0.5 * (boxes[i].lo[k] + boxes[i].hi[k]) - cb.lo[k]) *
-                       scale[k];
+            double x = (0.5 * (b.lo[k] + b.hi[k]) - cb.lo[k]) * scale[k];
             q[k] = x >= 0 ? (x < 1023 ? (uint32_t)x : 1023) : 0;
         }
         code[i] = spread10(q[0]) << 2 | spread10(q[1]) << 1 | spread10(q[2]);
@@ -313,26 +331,53 @@ geo_bvh *geo_bvh_build_morton(const geo_bbox *boxes, uint32_t n, geo_err *err)
         }
         memcpy(h->items, tmp, (size_t)n * sizeof *tmp);
     }
+    free(tmp);
+    for (uint32_t k = 0; k < n; k++)
+        source_box(src, h->items[k], &h->boxes[k]);
     if (n > 0) {
-        morton_builder b = {h, boxes, code};
+        morton_builder mb = {h, code};
         h->nnodes = 1;
-        build_morton_node(&b, 0, 0, n);
+        build_morton_node(&mb, 0, 0, n);
     }
-    for (uint32_t i = 0; i < n; i++)
-        h->boxes[i] = boxes[h->items[i]];
     free(code);
-    free(tmp);
+    return 0;
+}
+
+/* A tree with room for n items and its nodes, or NULL. */
+static geo_bvh *bvh_alloc(uint32_t n)
+{
+    geo_bvh *h = calloc(1, sizeof *h);
+    if (!h)
+        return NULL;
+    h->nitems = n;
+    h->nodes = malloc((2 * (size_t)n + 1) * sizeof *h->nodes);
+    h->items = malloc(((size_t)n + 1) * sizeof *h->items);
+    h->boxes = malloc(((size_t)n + 1) * sizeof *h->boxes);
+    if (!h->nodes || !h->items || !h->boxes)
+        return geo_bvh_free(h);
     return h;
-oom:
-    free(code);
-    free(tmp);
-    geo_err_set(err, -ENOMEM, "out of memory building the BVH");
-    return geo_bvh_free(h);
+}
+
+geo_bvh *geo_bvh_build_morton(const geo_bbox *boxes, uint32_t n, geo_err *err)
+{
+    box_source src = {boxes, NULL};
+    geo_bvh *h = bvh_alloc(n);
+    if (!h || morton_core(h, &src) < 0) {
+        geo_err_set(err, -ENOMEM, "out of memory building the BVH");
+        return geo_bvh_free(h);
+    }
+    return h;
 }
 
 geo_bvh *geo_bvh_build_facets_morton(const geo_poly *p, geo_err *err)
 {
-    return build_over_facets(p, err, geo_bvh_build_morton);
+    box_source src = {NULL, p};
+    geo_bvh *h = bvh_alloc(p->nfacets);
+    if (!h || morton_core(h, &src) < 0) {
+        geo_err_set(err, -ENOMEM, "out of memory building the BVH");
+        return geo_bvh_free(h);
+    }
+    return h;
 }
 
 /* An explicit stack: depth is bounded by the tree height (median splits:

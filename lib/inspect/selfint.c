@@ -1100,7 +1100,8 @@ typedef struct search {
     const geo_ctx *ctx;
     const geo_facet_shape *shapes;
     const uint64_t *masks; /* vertex_mask of each facet */
-    const uint64_t *const *sorted; /* per facet: sorted keys or NULL */
+    const uint64_t *const *sorted; /* per facet: sorted keys or NULL;
+                                      NULL when no facet has them */
     atomic_uchar *flags;
     uint32_t keep;
     uint32_t maxn;        /* largest facet size */
@@ -1230,9 +1231,9 @@ static bool visit_pair(void *user, uint32_t a, uint32_t b)
                              geo_poly_facet(s->p, b)))
         return true;
     facet_ref F = {a, geo_poly_facet_size(s->p, a), geo_poly_facet(s->p, a),
-                   sa, s->masks[a], s->sorted[a]};
+                   sa, s->masks[a], s->sorted ? s->sorted[a] : NULL};
     facet_ref G = {b, geo_poly_facet_size(s->p, b), geo_poly_facet(s->p, b),
-                   sb, s->masks[b], s->sorted[b]};
+                   sb, s->masks[b], s->sorted ? s->sorted[b] : NULL};
     if (!pair_test(s->p, &F, &G, &vs->sc))
         return true;
     vs->out->count++;
@@ -1256,8 +1257,10 @@ static int cmp_u64(const void *x, const void *y)
 enum { SORTED_MIN = 32 };
 
 /* The sorted keys of every facet above SORTED_MIN vertices, in one
- * buffer (*keys); sorted[f] points into it or is NULL. -ENOMEM. */
-static int sort_large_facets(const geo_poly *p, const uint64_t **sorted,
+ * buffer (*keys); (*sorted)[f] points into it or is NULL. Both stay NULL
+ * when no facet is that large (a triangle mesh: no per-facet array of
+ * NULLs to fill). -ENOMEM. */
+static int sort_large_facets(const geo_poly *p, const uint64_t ***sorted,
                              uint64_t **keys)
 {
     size_t total = 0;
@@ -1266,13 +1269,18 @@ static int sort_large_facets(const geo_poly *p, const uint64_t **sorted,
         if (n > SORTED_MIN)
             total += n;
     }
+    *sorted = NULL;
+    *keys = NULL;
+    if (total == 0)
+        return 0;
+    *sorted = malloc(((size_t)p->nfacets + 1) * sizeof **sorted);
     *keys = malloc((total + 1) * sizeof **keys);
-    if (!*keys)
+    if (!*sorted || !*keys)
         return -ENOMEM;
     size_t at = 0;
     for (uint32_t f = 0; f < p->nfacets; f++) {
         uint32_t n = geo_poly_facet_size(p, f);
-        sorted[f] = NULL;
+        (*sorted)[f] = NULL;
         if (n <= SORTED_MIN)
             continue;
         const uint32_t *fv = geo_poly_facet(p, f);
@@ -1280,7 +1288,7 @@ static int sort_large_facets(const geo_poly *p, const uint64_t **sorted,
         for (uint32_t i = 0; i < n; i++)
             k[i] = (uint64_t)fv[i] << 32 | i;
         qsort(k, n, sizeof *k, cmp_u64);
-        sorted[f] = k;
+        (*sorted)[f] = k;
         at += n;
     }
     return 0;
@@ -1366,7 +1374,7 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     geo_bvh *own = NULL;
     geo_facet_shape *shapes = malloc(((size_t)nf + 1) * sizeof *shapes);
     uint64_t *masks = malloc(((size_t)nf + 1) * sizeof *masks);
-    const uint64_t **sorted = malloc(((size_t)nf + 1) * sizeof *sorted);
+    const uint64_t **sorted = NULL;
     uint64_t *keys = NULL;
     atomic_uchar *flags = malloc(((size_t)nf + 1) * sizeof *flags);
     uint8_t *plain = malloc((size_t)nf + 1);
@@ -1375,8 +1383,8 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     task_out *out = NULL;
     uint32_t ntasks = 0;
     pair_list all = {0};
-    if (!shapes || !masks || !flags || !plain || !ta || !tb || !sorted ||
-        sort_large_facets(p, sorted, &keys) < 0)
+    if (!shapes || !masks || !flags || !plain || !ta || !tb ||
+        sort_large_facets(p, &sorted, &keys) < 0)
         goto oom;
     uint32_t maxn = 3;
     for (uint32_t f = 0; f < nf; f++)

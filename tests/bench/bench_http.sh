@@ -56,7 +56,7 @@ echo "inspect_k400_facetd_cpu_per_job: $per_job ms"
 if [ -x "$B/bench/bench_inspect" ]; then
     inproc=$("$B/bench/bench_inspect" --parse-inspect-cpu)
     echo "inspect_k400_facetd_cpu_vs_in_process: $(awk -v a="$per_job" -v b="$inproc" \
-        'BEGIN {printf "%.2f", b > 0 ? a / b : 0}') (facetd $per_job ms, in-process parse+inspect $inproc ms CPU)"
+        'BEGIN {printf "%.2f", (b > 0 ? a / b : 0)}') (facetd $per_job ms, in-process parse+inspect $inproc ms CPU)"
 fi
 
 id=$(curl -s "$URL/v1/jobs?limit=1" | grep -o '"id":"[0-9A-Z]*"' | head -n 1 | cut -d'"' -f4)

@@ -6,9 +6,9 @@
 # seeds 1-3), the 1,002,252-triangle cube-sphere and the K=400 gem scan.
 # facet reads the facet-model/1 file (the scanned meshes without planes),
 # CGAL the OBJ of the same vertices and triangles (the gem's polygons
-# triangulated by CGAL's reader). Best of RUNS (default 3) wall times,
-# the two programs interleaved; CPU times of the same runs beside them,
-# since a shared machine moves wall times. Also facet's peak RSS on the
+# triangulated for CGAL). Best of RUNS (default 3) wall times, the two
+# programs interleaved, and beside them the best CPU times of the same
+# runs, since a shared machine moves wall times. Also facet's peak RSS on the
 # sphere against its vertex and index arrays. Prints "name: value"
 # lines; skipped (exit 0) where cgal_selfint was not built.
 # Usage: inspect_vs_cgal.sh BUILD_DIR
@@ -45,12 +45,15 @@ cgal_run() {
 }
 
 compare() { # name json obj target
-    local fw=1e9 fc=0 cw=1e9 cc=0 r w c
+    local fw=1e9 fc=1e9 cw=1e9 cc=1e9 r w c
+    lt() { awk -v a="$1" -v b="$2" 'BEGIN {exit !(a < b)}'; }
     for r in $(seq "$RUNS"); do
         read -r w c < <(facet_run "$2")
-        if awk -v a="$w" -v b="$fw" 'BEGIN {exit !(a < b)}'; then fw=$w fc=$c; fi
+        lt "$w" "$fw" && fw=$w
+        lt "$c" "$fc" && fc=$c
         read -r w c < <(cgal_run "$3")
-        if awk -v a="$w" -v b="$cw" 'BEGIN {exit !(a < b)}'; then cw=$w cc=$c; fi
+        lt "$w" "$cw" && cw=$w
+        lt "$c" "$cc" && cc=$c
     done
     awk -v n="$1" -v fw="$fw" -v fc="$fc" -v cw="$cw" -v cc="$cc" -v t="$4" '
         BEGIN {
