@@ -1067,7 +1067,8 @@ static int renew(pg_store *s, PGconn *pg, geo_err *err)
 {
     int64_t now = job_mono_ms();
     pthread_mutex_lock(&s->claims_lock);
-    size_t cap = 2 + s->nclaims * 21;
+    /* "{", each token (at most 20 digits and sign) with its comma, "}", NUL */
+    size_t cap = 3 + s->nclaims * 22;
     char *arr = malloc(cap);
     size_t len = 0, n = 0;
     if (arr) {
