@@ -75,6 +75,9 @@ expect_eq "no request got a 500 (or any 5xx but 503, 505)" 0 "$n5"
 expect_eq "every request was answered (status 000 is no answer)" 0 "$n0"
 check "every /livez probe was 200 within 1 s ($probes probes, slowest ${worst} s)" \
     awk -v b="$bad" -v w="$worst" -v s="$SLOW" 'BEGIN {exit !(b == 0 && w < s)}'
-check "the RSS grew by under 64 MB (${rss0} -> ${rss1} kB)" test $((rss1 - rss0)) -lt 65536
+case "$BUILD" in
+*asan*) skip "RSS under AddressSanitizer (its quarantine keeps freed memory: ${rss0} -> ${rss1} kB)" ;;
+*) check "the RSS grew by under 64 MB (${rss0} -> ${rss1} kB)" test $((rss1 - rss0)) -lt 65536 ;;
+esac
 check "facetd still serves" test "$(curl -s -m 5 -o /dev/null -w '%{http_code}' "$URL/livez")" = 200
 finish

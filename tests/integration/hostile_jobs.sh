@@ -132,6 +132,9 @@ wait_job "$(jstr id)" 60
 sleep 0.5
 rss1=$(rss_kb)
 echo "# RSS before ${rss0} kB, after a 120,000-facet job ${rss1} kB"
-check "the RSS comes back within 64 MB of where it was (${rss0} -> ${rss1} kB)" \
-    test $((rss1 - rss0)) -lt 65536
+case "$BUILD" in
+*asan*) skip "RSS under AddressSanitizer (its allocator keeps freed memory: ${rss0} -> ${rss1} kB)" ;;
+*) check "the RSS comes back within 64 MB of where it was (${rss0} -> ${rss1} kB)" \
+    test $((rss1 - rss0)) -lt 65536 ;;
+esac
 finish
