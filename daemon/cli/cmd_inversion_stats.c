@@ -92,20 +92,10 @@ int cmd_inversion_stats(int argc, char **argv)
     const char *optarg, *path = NULL;
     cli_args a;
     cli_args_init(&a, CMD, argc, argv, opts);
-    for (int c; (c = cli_args_next(&a, &optarg)) != CLI_ARGS_END;) {
+    for (int c; (c = cli_replanar_next(&a, &rp, &path, &optarg)) !=
+                CLI_ARGS_END;) {
         if (c == CLI_ARGS_ERROR)
             return CLI_USAGE;
-        if (c == CLI_ARGS_POSITIONAL) {
-            if (path)
-                return cli_usage_error(CMD, "expected one MODEL");
-            path = optarg;
-            continue;
-        }
-        int taken = cli_replanar_option(CMD, c, optarg, &rp);
-        if (taken == 1)
-            continue;
-        if (taken)
-            return taken;
         switch (c) {
         case 'n':
             if (!parse_u64(optarg, &samples) || samples == 0 ||

@@ -120,20 +120,10 @@ int cmd_move(int argc, char **argv)
     const char *optarg, *model = NULL;
     cli_args a;
     cli_args_init(&a, CMD, argc, argv, opts);
-    for (int c; (c = cli_args_next(&a, &optarg)) != CLI_ARGS_END;) {
+    for (int c; (c = cli_replanar_next(&a, &rp, &model, &optarg)) !=
+                CLI_ARGS_END;) {
         if (c == CLI_ARGS_ERROR)
             return CLI_USAGE;
-        if (c == CLI_ARGS_POSITIONAL) {
-            if (model)
-                return cli_usage_error(CMD, "expected one MODEL");
-            model = optarg;
-            continue;
-        }
-        int taken = cli_replanar_option(CMD, c, optarg, &rp);
-        if (taken == 1)
-            continue;
-        if (taken)
-            return taken;
         switch (c) {
         case 'v':
             if (!parse_u32(optarg, &vertex))

@@ -61,3 +61,26 @@ void cli_replanar_opts(const cli_replanar_args *a, geo_replanar_opts *o)
     o->fit = a->fit;
     o->scaled_k = a->scaled_k;
 }
+
+int cli_replanar_next(cli_args *a, cli_replanar_args *rp, const char **model,
+                      const char **val)
+{
+    for (;;) {
+        int c = cli_args_next(a, val);
+        if (c == CLI_ARGS_END || c == CLI_ARGS_ERROR)
+            return c;
+        if (c == CLI_ARGS_POSITIONAL) {
+            if (*model) {
+                cli_usage_error(a->cmd, "expected one MODEL");
+                return CLI_ARGS_ERROR;
+            }
+            *model = *val;
+            continue;
+        }
+        int taken = cli_replanar_option(a->cmd, c, *val, rp);
+        if (taken == 0)
+            return c;
+        if (taken != 1)
+            return CLI_ARGS_ERROR;
+    }
+}

@@ -7,6 +7,7 @@
 
 #include <stdint.h>
 
+#include "cli_args.h"
 #include "replanar.h"
 
 /* cli_args keys of the shared options, above every command's own. */
@@ -41,6 +42,13 @@ void cli_replanar_args_init(cli_replanar_args *a,
  * CLI_USAGE (after printing "facet CMD: --option: ...") on a bad value. */
 int cli_replanar_option(const char *cmd, int c, const char *arg,
                         cli_replanar_args *a);
+
+/* The next option of a command that takes the shared options and one
+ * MODEL: the shared ones are taken into rp, the MODEL into *model (a
+ * second one is a usage error); returns the command's own key (*val its
+ * value), CLI_ARGS_END, or CLI_ARGS_ERROR (printed). */
+int cli_replanar_next(cli_args *a, cli_replanar_args *rp, const char **model,
+                      const char **val);
 
 /* Replanarisation options for a: the schedule's defaults with the
  * arguments given applied. */
