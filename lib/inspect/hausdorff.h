@@ -5,12 +5,9 @@
  * The directed distance from A to B is the largest distance from a
  * sample point of A's surface to B's surface; samples are the vertices of
  * A's facets, the midpoints of their edges and their vertex centroids.
- * The distance of a point to B is exact up to rounding (nearest point on
- * each candidate facet: inside the polygon, on an edge, or at a vertex),
- * candidates coming from a BVH over B's facets searched nearest box
- * first, so the cost is O((V + E + F) log F) (convex facets above 32
- * vertices are searched as their fans of triangles: same distance, no
- * O(n) walk of a large facet per sample). The symmetric estimate is
+ * The distance of a point to B is exact up to rounding (surface.h: a BVH
+ * over B's facets searched nearest box first), so the cost is
+ * O((V + E + F) log F). The symmetric estimate is
  * the larger of the two directions; it can only underestimate the true
  * Hausdorff distance (the maximum may fall between samples), by at most
  * the sampled surface's largest facet diameter in the worst case and far

@@ -44,16 +44,11 @@ static void reassemble_again(proto_hid_reasm *r2, const uint8_t *frame,
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    static proto_hid_reasm *r, *r2;
-    static proto_fsp_decoder *d;
-    if (!r) {
-        r = proto_hid_reasm_new(LIMIT);
-        r2 = proto_hid_reasm_new(LIMIT);
-        d = proto_fsp_decoder_new(0);
-    }
-    proto_hid_reasm_reset(r);
-    proto_hid_reasm_reset(r2);
-    proto_fsp_decoder_reset(d);
+    /* fresh state per input, so a crash replays from its input alone */
+    proto_hid_reasm *r = proto_hid_reasm_new(LIMIT);
+    proto_hid_reasm *r2 = proto_hid_reasm_new(LIMIT);
+    proto_fsp_decoder *d = proto_fsp_decoder_new(0);
+    check(r && r2 && d);
     while (size > 0) {
         size_t n = size < PROTO_HID_REPORT_SIZE ? size : PROTO_HID_REPORT_SIZE;
         const uint8_t *frame = NULL;
@@ -76,5 +71,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         data += n;
         size -= n;
     }
+    proto_hid_reasm_free(r);
+    proto_hid_reasm_free(r2);
+    proto_fsp_decoder_free(d);
     return 0;
 }
