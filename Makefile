@@ -206,8 +206,12 @@ all-tests: $(FSP_MOCK)
 bench: $(FSP_MOCK)
 
 # libFuzzer targets (tests/fuzz/fuzz_*.c), built with clang apart from the
-# unit tests: make fuzz [FUZZ_SECONDS=60] runs each for FUZZ_SECONDS.
+# unit tests: make fuzz [FUZZ_SECONDS=60] runs each for FUZZ_SECONDS;
+# FUZZ_RUNS=N runs each for N executions instead (FUZZ_SECONDS then bounds
+# it), FUZZ_TARGETS="fuzz_a fuzz_b" picks some.
 FUZZ_SECONDS ?= 60
+FUZZ_RUNS    ?=
+FUZZ_TARGETS ?=
 FUZZ_CC      ?= clang
 FUZZ_DIR     := build/fuzz
 FUZZ_CFLAGS   = -std=c11 -D_GNU_SOURCE -g -O1 -fno-omit-frame-pointer \
@@ -223,9 +227,26 @@ $(FUZZ_DIR)/obj/%.o: %.c
 $(FUZZ_DIR)/fuzz_%: tests/fuzz/fuzz_%.c $(FUZZ_OBJS)
 	$(FUZZ_CC) $(FUZZ_CFLAGS) -fsanitize=fuzzer -o $@ $^ \
 	    $(call pkg_libs,$(PKG_PROTO)) -lm -lpthread
+# The HTTP server target runs the whole daemon library in the fuzzer.
+FUZZ_DAEMON_OBJS := $(patsubst %.c,$(FUZZ_DIR)/obj/%.o,$(SCANNER_SRCS) $(DAEMON_SRCS))
+FUZZ_DAEMON_PKGS := $(PKG_PROTO) $(PKG_SCANNER) $(PKG_DAEMON)
+$(FUZZ_DIR)/obj/scanner/%.o $(FUZZ_DIR)/obj/daemon/%.o: FUZZ_CFLAGS += \
+    $(INC_DAEMON) $(call pkg_cflags,$(FUZZ_DAEMON_PKGS))
+$(FUZZ_DIR)/fuzz_http_request: tests/fuzz/fuzz_http_request.c $(FUZZ_OBJS) \
+    $(FUZZ_DAEMON_OBJS)
+	$(FUZZ_CC) $(FUZZ_CFLAGS) $(INC_DAEMON) -fsanitize=fuzzer -o $@ $^ \
+	    $(call pkg_libs,$(FUZZ_DAEMON_PKGS)) -lm -lpthread
+# The same targets built with the ordinary compiler and a plain driver
+# (tests/fuzz/replay.c): make test replays their seeds.
+FUZZ_REPLAY_BINS := $(patsubst tests/fuzz/%.c,$(B)/fuzz-replay/%,$(FUZZ_SRCS))
+$(B)/fuzz-replay/fuzz_%: $(B)/obj/tests/fuzz/fuzz_%.o \
+    $(B)/obj/tests/fuzz/replay.o $(ALL_LIBS)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) -o $@ $^ $(ALL_LDLIBS)
+all-tests: $(FUZZ_REPLAY_BINS)
 fuzz: deps
 	@$(MAKE) --no-print-directory $(FUZZ_BINS)
-	@sh tests/fuzz/run.sh $(FUZZ_DIR) $(FUZZ_SECONDS)
+	@sh tests/fuzz/run.sh $(FUZZ_DIR) $(FUZZ_SECONDS) "$(FUZZ_RUNS)" $(FUZZ_TARGETS)
 
 run: deps
 	@$(MAKE) --no-print-directory all
