@@ -5,7 +5,10 @@
 // one call: the surface in its colour, then colour layers (a subset of
 // triangles in one colour: a merged group, a tier, the self-intersecting
 // facets), then lines (facet edges, free edges). Frames are drawn on
-// demand, not in a loop.
+// demand, not in a loop. While the camera moves, a mesh of more than
+// LOD_MIN triangles is drawn as a coarse copy (vertex clustering) at a
+// lower resolution, and in full again once it stops: what keeps 10^6
+// triangles interactive on a software renderer.
 
 const VS = `#version 300 es
 in vec3 a_pos;
@@ -29,6 +32,54 @@ void main() {
   float l = 0.32 + 0.68 * abs(dot(n, normalize(vec3(0.25, 0.45, 1.0))));
   o = vec4(c.rgb * l, c.a);
 }`;
+
+const LOD_MIN = 150000;     // triangles above which motion draws a coarse copy
+const LOD_TRIS = 25000;     // about what the coarse copy keeps
+const LOD_SCALE = 0.5;      // resolution while moving, for such meshes
+const SETTLE_MS = 150;      // no input this long: the camera has stopped
+
+// A coarse copy of a mesh: every vertex moved to the first vertex of its
+// cell in a G³ grid over the mesh's box, the triangles that collapse
+// dropped (vertex clustering, Rossignac & Borrel 1993), O(n). It has its
+// own compact vertex array: a software renderer transforms every vertex
+// of the range an indexed draw spans. G shrinks until about `want`
+// triangles remain. Returns {pos: Float32Array, tris: Uint32Array}.
+export function coarseMesh(pos, tris, want = LOD_TRIS) {
+  const nv = pos.length / 3;
+  const lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
+  for (let i = 0; i < nv; i++)
+    for (let k = 0; k < 3; k++) {
+      const x = pos[3 * i + k];
+      if (x < lo[k]) lo[k] = x;
+      if (x > hi[k]) hi[k] = x;
+    }
+  const ext = Math.max(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) || 1;
+  // a closed surface over a G³ grid keeps about 4·G² triangles
+  let g = Math.max(8, Math.min(1024, Math.round(Math.sqrt(want / 4))));
+  for (;;) {
+    const rep = new Int32Array(nv), cells = new Map(), keep = [];
+    for (let i = 0; i < nv; i++) {
+      const c = [0, 1, 2].map(k => Math.min(g - 1, Math.floor((pos[3 * i + k] - lo[k]) / ext * g)));
+      const key = (c[0] * g + c[1]) * g + c[2];
+      let r = cells.get(key);
+      if (r === undefined) { r = keep.length; keep.push(i); cells.set(key, r); }
+      rep[i] = r;
+    }
+    const out = new Uint32Array(tris.length);
+    let n = 0;
+    for (let t = 0; t < tris.length; t += 3) {
+      const a = rep[tris[t]], b = rep[tris[t + 1]], c = rep[tris[t + 2]];
+      if (a === b || b === c || a === c) continue;
+      out[n++] = a; out[n++] = b; out[n++] = c;
+    }
+    if (n / 3 <= 1.5 * want || g <= 8) {
+      const cp = new Float32Array(3 * keep.length);
+      keep.forEach((v, i) => { cp[3 * i] = pos[3 * v]; cp[3 * i + 1] = pos[3 * v + 1]; cp[3 * i + 2] = pos[3 * v + 2]; });
+      return { pos: cp, tris: out.slice(0, n) };
+    }
+    g = Math.max(8, Math.floor(g / Math.sqrt(n / 3 / want)));
+  }
+}
 
 // column-major 4×4 matrices
 function mul(a, b) {
@@ -88,6 +139,8 @@ export class View {
     this.onFrame = null;
     this.onPick = onPick;
     this.pending = false;
+    this.moving = false;  // the camera is moving: coarse copies, lower resolution
+    this.settle = 0;
     this.input(canvas);
     new ResizeObserver(() => this.redraw()).observe(canvas);
   }
@@ -115,32 +168,45 @@ export class View {
   // (a < 1: translucent, drawn without depth writes); returns handles
   // for setLayers.
   setMeshes(list) {
-    const gl = this.gl;
     for (const h of this.meshes) this.release(h);
     this.meshes = list.map(e => {
-      const vao = gl.createVertexArray();
-      gl.bindVertexArray(vao);
-      const pb = gl.createBuffer();
-      gl.bindBuffer(gl.ARRAY_BUFFER, pb);
-      gl.bufferData(gl.ARRAY_BUFFER, e.mesh.pos, gl.STATIC_DRAW);
-      gl.enableVertexAttribArray(this.loc.pos);
-      gl.vertexAttribPointer(this.loc.pos, 3, gl.FLOAT, false, 0, 0);
-      const tb = gl.createBuffer();
-      gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, tb);
-      gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, e.mesh.tris, gl.STATIC_DRAW);
-      gl.bindVertexArray(null);
-      return { mesh: e.mesh, vao, pb, tb, ntri: e.mesh.tris.length,
+      const { vao, pb, tb } = this.buffers(e.mesh);
+      let coarse = null;
+      if (e.mesh.tris.length / 3 > LOD_MIN) {
+        const cm = e.mesh.coarse || (e.mesh.coarse = coarseMesh(e.mesh.pos, e.mesh.tris));
+        coarse = this.buffers(cm);
+      }
+      return { mesh: e.mesh, vao, pb, tb, ntri: e.mesh.tris.length, coarse,
                color: e.color, layers: [] };
     });
     this.redraw();
     return this.meshes;
   }
 
+  // A VAO with its own vertex and index buffers: {vao, pb, tb, ntri}.
+  buffers(m) {
+    const gl = this.gl;
+    const vao = gl.createVertexArray();
+    gl.bindVertexArray(vao);
+    const pb = gl.createBuffer();
+    gl.bindBuffer(gl.ARRAY_BUFFER, pb);
+    gl.bufferData(gl.ARRAY_BUFFER, m.pos, gl.STATIC_DRAW);
+    gl.enableVertexAttribArray(this.loc.pos);
+    gl.vertexAttribPointer(this.loc.pos, 3, gl.FLOAT, false, 0, 0);
+    const tb = gl.createBuffer();
+    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, tb);
+    gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, m.tris, gl.STATIC_DRAW);
+    gl.bindVertexArray(null);
+    return { vao, pb, tb, ntri: m.tris.length };
+  }
+
   release(h) {
     const gl = this.gl;
     for (const l of h.layers) gl.deleteBuffer(l.buf);
-    gl.deleteBuffer(h.pb); gl.deleteBuffer(h.tb);
-    gl.deleteVertexArray(h.vao);
+    for (const b of h.coarse ? [h, h.coarse] : [h]) {
+      gl.deleteBuffer(b.pb); gl.deleteBuffer(b.tb);
+      gl.deleteVertexArray(b.vao);
+    }
   }
 
   // Layers of h: [{kind: 'tris'|'lines', index: Uint32Array, color: [r,g,b,a]}]
@@ -193,6 +259,19 @@ export class View {
     return { view, proj, mvp: mul(proj, view), s, u };
   }
 
+  // The camera moved: coarse frames until SETTLE_MS pass without input,
+  // then one full frame.
+  moved() {
+    this.moving = true;
+    clearTimeout(this.settle);
+    this.settle = setTimeout(() => { this.moving = false; this.redraw(); }, SETTLE_MS);
+    this.redraw();
+  }
+
+  // Whether this frame is drawn coarse: moving, with a mesh that has a
+  // coarse copy.
+  coarse() { return this.moving && this.meshes.some(h => h.coarse); }
+
   redraw() {
     if (this.pending) return;
     this.pending = true;
@@ -201,7 +280,8 @@ export class View {
 
   draw() {
     const gl = this.gl, c = this.canvas;
-    const dpr = window.devicePixelRatio || 1;
+    const coarse = this.coarse();
+    const dpr = (window.devicePixelRatio || 1) * (coarse ? LOD_SCALE : 1);
     const w = Math.max(1, Math.round(c.clientWidth * dpr)), h = Math.max(1, Math.round(c.clientHeight * dpr));
     if (c.width !== w || c.height !== h) { c.width = w; c.height = h; }
     gl.viewport(0, 0, w, h);
@@ -225,6 +305,14 @@ export class View {
       gl.polygonOffset(1, 1);
       gl.uniform1i(this.loc.mode, 1);
       gl.uniform4fv(this.loc.ucol, h.color);
+      if (coarse && h.coarse) {
+        // the shape only: layers and lines come back when it stops
+        gl.bindVertexArray(h.coarse.vao);
+        gl.drawElements(gl.TRIANGLES, h.coarse.ntri, gl.UNSIGNED_INT, 0);
+        gl.disable(gl.POLYGON_OFFSET_FILL);
+        if (translucent) { gl.disable(gl.BLEND); gl.depthMask(true); }
+        continue;
+      }
       gl.drawElements(gl.TRIANGLES, h.ntri, gl.UNSIGNED_INT, 0);
       gl.polygonOffset(0.5, 0.5);
       for (const l of h.layers) {
@@ -250,15 +338,22 @@ export class View {
     if (this.onFrame) this.onFrame(this.frames);
   }
 
-  // Spins the camera for ms and resolves with frames per second: every
-  // frame drawn in full, as in an interactive orbit.
-  spin(ms) {
+  // Spins the camera for ms and resolves with frames per second: as in
+  // an orbit with the mouse (coarse frames for a large mesh), or with
+  // full = true every frame drawn in full.
+  spin(ms, full = false) {
     return new Promise(resolve => {
       const t0 = performance.now();
       let n = 0;
+      this.moving = !full;
       const step = () => {
         const t = performance.now();
-        if (t - t0 >= ms) { resolve(n * 1000 / (t - t0)); return; }
+        if (t - t0 >= ms) {
+          this.moving = false;
+          this.redraw();
+          resolve(n * 1000 / (t - t0));
+          return;
+        }
         this.yaw += 0.02;
         this.draw();
         n++;
@@ -289,7 +384,7 @@ export class View {
         this.yaw -= dx * 0.01;
         this.pitch = Math.max(-1.55, Math.min(1.55, this.pitch + dy * 0.01));
       }
-      this.redraw();
+      this.moved();
     });
     c.addEventListener('pointerup', e => {
       if (drag && !drag.moved && e.button === 0 && this.onPick) {
@@ -301,7 +396,7 @@ export class View {
     c.addEventListener('wheel', e => {
       e.preventDefault();
       this.dist *= Math.exp(e.deltaY * 0.001);
-      this.redraw();
+      this.moved();
     }, { passive: false });
   }
 

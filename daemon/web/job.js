@@ -14,7 +14,9 @@
 // Hash arguments: ?model=result|input|overlay and ?colour=plain|groups|
 // tiers choose the first view (a link can show a job as it should be
 // seen); ?bench=MS spins the camera for MS ms after the first frame and
-// writes the frame rate into body[data-fps].
+// writes the frame rate into body[data-fps] (as while orbiting: a large
+// mesh drawn coarse), then MS more ms into body[data-fps-full] (every
+// frame in full).
 import { api, getJson, events, download, el, fmt } from './api.js';
 import { parseFmb1, buildMesh, facetTris, keyedTris, facetAngles } from './model.js';
 import { View } from './gl.js';
@@ -86,6 +88,14 @@ function hue(i) {
   const h = (i * 0.618033988749895) % 1, s = 0.55, l = 0.58;
   const f = n => { const k = (n + h * 12) % 12; return l - s * Math.min(l, 1 - l) * Math.max(-1, Math.min(k - 3, 9 - k, 1)); };
   return [f(0), f(8), f(4), 1];
+}
+
+// "table 1, crown 32, …": the facets of each tier of the report op, the
+// tiers legend (and what a test reads); "" without a report.
+function tierCounts(report) {
+  if (!report || !report.facets) return '';
+  const n = TIERS.map(t => report.facets.filter(f => f.tier === t).length);
+  return TIERS.map((t, i) => `${t} ${n[i]}`).join(', ');
 }
 
 export async function jobView(app, id, args) {
@@ -282,7 +292,9 @@ async function showResult(c) {
        radio('model', 'input', 'input'), radio('model', 'overlay', 'before/after')),
     el('fieldset', {}, el('legend', {}, 'Colour'), radio('colour', 'plain', 'plain'),
        radio('colour', 'groups', `merged groups${a.groups ? ` (${a.groups.group_list.filter(g => g.merged).length})` : ''}`, !a.groups),
-       radio('colour', 'tiers', 'report tiers', !(a.report && a.report.facets))),
+       el('span', { 'data-tiers': tierCounts(a.report) },
+          radio('colour', 'tiers', `report tiers${tierCounts(a.report) ? ` (${tierCounts(a.report)})` : ''}`,
+                !(a.report && a.report.facets)))),
     el('fieldset', {}, el('legend', {}, 'Layers'), check('edges', 'facet edges'),
        check('selfint', 'self-intersecting'), check('inverted', 'inverted'), check('free', 'holes / free edges')),
     el('button', { type: 'button', id: 'fit', onclick: () => view.fit() }, 'Fit'),
@@ -318,6 +330,9 @@ async function showResult(c) {
     body.firstFrameMs = String(Math.round(performance.now()));
     body.loadMs = String(Math.round(tParse - t0));
     body.triangles = String(result.ntris);
+    // what an orbit draws instead of a large mesh (gl.js coarseMesh)
+    const co = view.meshes[0] && view.meshes[0].coarse;
+    body.coarseTriangles = String(co ? co.ntri / 3 : result.ntris);
     // where the canvas is, for a test that looks at a screenshot of it
     const r = canvas.getBoundingClientRect();
     body.canvas = [r.left, r.top, r.right, r.bottom].map(Math.round).join(' ');
@@ -325,7 +340,11 @@ async function showResult(c) {
     const bench = Number(args.get('bench') || 0);
     if (bench > 0) {
       body.state = 'bench';
-      view.spin(bench).then(fps => { body.fps = fps.toFixed(1); body.state = 'ready'; });
+      // as the mouse orbits it (coarse while moving), then every frame in full
+      view.spin(bench).then(fps => {
+        body.fps = fps.toFixed(1);
+        return view.spin(bench, true);
+      }).then(fps => { body.fpsFull = fps.toFixed(1); body.state = 'ready'; });
     }
   };
   await apply();

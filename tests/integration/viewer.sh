@@ -54,13 +54,18 @@ req GET /ui/app.js -X POST
 expect_eq "the files are read-only" 405 "$CODE"
 
 # the corrected sample scan, submitted as a file
-req POST '/v1/jobs?format=json&pipeline=correct&label=k400' -H 'Content-Type: application/json' \
+req POST '/v1/jobs?format=json&pipeline=correct,report&label=k400' -H 'Content-Type: application/json' \
     --data-binary "@$MODELS/brilliant.scan-k400.json"
 expect_eq "a ?format= POST becomes a job" 202 "$CODE"
 ID=$(jstr id)
 wait_job "$ID" 60
 expect_eq "the correction succeeds" succeeded "$STATE_OF"
 fb=$(jnum facets_before); fa=$(jnum facets_after); va=$(jnum vertices_after)
+# the report op's tiers as the legend must count them
+req GET "/v1/jobs/$ID/stats"
+tiers=$(jq -r '[.ops[] | select(.op == "report") | .report.facets[].tier] as $t
+    | ["table","crown","girdle","pavilion","culet"]
+    | map(. as $n | "\($n) \([$t[] | select(. == $n)] | length)") | join(", ")' "$BODY" 2>/dev/null)
 
 if [ -z "$CHROME" ]; then
     skip "the browser checks: chromium is not installed (make deps installs it)"
@@ -85,6 +90,12 @@ rect=$(sed -n 's/.*data-canvas="\([0-9 ]*\)".*/\1/p' "$T/job.html")
 first=$(sed -n 's/.*data-first-frame-ms="\([0-9]*\)".*/\1/p' "$T/job.html")
 echo "# first frame ${first:-?} ms after navigation (virtual time)"
 
+browse "$T/tiers.html" --dump-dom "$URL/#/jobs/$ID?colour=tiers"
+check "the report's tiers are a colour layer ($tiers)" \
+    grep -q "data-tiers=\"$tiers\"" "$T/tiers.html"
+check "chosen by the link" grep -q 'value="tiers" checked' "$T/tiers.html"
+check "the tiers view has no JavaScript error" grep -q 'data-errors="0"' "$T/tiers.html"
+
 browse "$T/shot.out" --screenshot="$T/shot.png" "$URL/#/jobs/$ID"
 set -- $rect
 if [ $# -eq 4 ] && probe=$("$BUILD/tools/png_probe" "$T/shot.png" $(($1 + 2)) $(($2 + 2)) $(($3 - 2)) $(($4 - 2))); then
@@ -94,6 +105,29 @@ if [ $# -eq 4 ] && probe=$("$BUILD/tools/png_probe" "$T/shot.png" $(($1 + 2)) $(
     check "shaded, with drawn edges ($4 shades)" test "$4" -ge 8
 else
     not_ok "the screenshot can be read" "canvas rect '$rect'"
+fi
+
+# a large mesh orbits as a coarse copy: 10^5+ triangles, drawn while the
+# camera spins (virtual time: the frame rate itself is tests/bench's)
+"$BUILD/tools/gen_scanmesh" --triangles 200000 --sphere --radius 3 "$T/big.obj" >/dev/null
+req POST '/v1/jobs?format=obj&pipeline=inspect&label=big' -H 'Content-Type: application/octet-stream' \
+    --data-binary "@$T/big.obj"
+BIG=$(jstr id)
+wait_job "$BIG" 60
+# in real time (tests/bench/viewer_fps.py drives the browser over the
+# DevTools pipe): the spin draws coarse frames, then full ones
+if command -v python3 >/dev/null; then
+    python3 tests/bench/viewer_fps.py "$CHROME" "$URL/#/jobs/$BIG?bench=1000" $((60 * SLOW)) \
+        >"$T/big.txt" 2>&1
+    fig() { sed -n "s/^$1: //p" "$T/big.txt"; }
+    big_t=$(fig triangles); big_c=$(fig coarseTriangles)
+    check "a $big_t-triangle mesh orbits as a coarse copy of $big_c triangles" \
+        test -n "$big_c" -a "${big_c:-0}" -gt 1000 -a "${big_c:-0}" -lt $((${big_t:-0} / 4))
+    check "it draws frames coarse ($(fig fps) fps) and in full ($(fig fpsFull) fps)" \
+        awk -v a="$(fig fps)" -v b="$(fig fpsFull)" 'BEGIN { exit !(a > 0 && b > 0) }'
+    expect_eq "the large mesh has no JavaScript error" 0 "$(fig errors)"
+else
+    skip "the real-time spin of a large mesh: python3 is not installed"
 fi
 
 browse "$T/list.html" --dump-dom "$URL/#/jobs"
