@@ -1161,9 +1161,10 @@ int geo_compare(const geo_poly *a, const geo_poly *b,
     mat_identity(R);
     ret->aligned = best.found && best.score >= 0.5;
     if (ret->aligned) {
-        static const double fine[] = {1 * DEG, 0.5 * DEG, 0.25 * DEG};
+        static const double fine[] = {1 * DEG, 0.5 * DEG, 0.25 * DEG,
+                                      0.1 * DEG};
         memcpy(R, best.R, sizeof R);
-        refine(&A, &B, true, fine, 3, 6, R);
+        refine(&A, &B, true, fine, 4, 7, R);
         /* from the centroids, then the planes, matched again each time */
         double c[3];
         mat_vec(R, B.centroid, c);

@@ -12,8 +12,9 @@
  * axis itself is used. The rotation takes B's axis onto A's, then turns
  * B about A's axis by the best correlation of the area-weighted
  * (inclination, azimuth) histograms of the facet normals (0.5° steps),
- * then is refined by least squares (Horn's quaternion) on B's normals
- * matched to their nearest A normals (2° down to 0.25°), axis included.
+ * then is refined by least squares (Horn's quaternion) on each model's
+ * normals * matched to the other's nearest (both ways, weighted by the smaller
+ * area; 2° down to 0.1°), axis included.
  * Every promising turn is refined; the one whose normals cover the most
  * of both surfaces wins, and among equally good ones (a symmetric stone)
  * the smallest rotation. The translation solves, by least squares over
