@@ -13,8 +13,8 @@
  * B about A's axis by the best correlation of the area-weighted
  * (inclination, azimuth) histograms of the facet normals (0.5° steps),
  * then is refined by least squares (Horn's quaternion) on each model's
- * normals * matched to the other's nearest (both ways, weighted by the smaller
- * area; 2° down to 0.1°), axis included.
+ * normals matched to the other's nearest (both ways, weighted by the
+ * smaller area; 2° down to 0.1°), axis included.
  * Every promising turn is refined; the one whose normals cover the most
  * of both surfaces wins, and among equally good ones (a symmetric stone)
  * the smallest rotation. The translation solves, by least squares over
