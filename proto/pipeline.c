@@ -5,7 +5,9 @@
  * default. */
 #include "pipeline.h"
 
+#include "compare.h"
 #include "frep_grid.h"
+#include "model_io.h"
 
 #include <errno.h>
 #include <float.h>
@@ -27,6 +29,7 @@ static const char *const op_names[PROTO_OP_COUNT] = {
     [PROTO_OP_STITCH] = "stitch",
     [PROTO_OP_CORRECT] = "correct",
     [PROTO_OP_REPORT] = "report",
+    [PROTO_OP_COMPARE] = "compare",
 };
 
 /* Names of earlier releases, still accepted for one release so that saved
@@ -60,6 +63,7 @@ static const char *const op_keys[PROTO_OP_COUNT][8] = {
     [PROTO_OP_FILL] = {"op", "weight", "refine", "fair"},
     [PROTO_OP_STITCH] = {"op"},
     [PROTO_OP_REPORT] = {"op", "gear", "axis"},
+    [PROTO_OP_COMPARE] = {"op", "reference", "axis"},
     [PROTO_OP_CORRECT] = {"op", "radius", "max_angle_deg", "max_deviation",
                        "views"},
 };
@@ -354,6 +358,40 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
         }
         return r;
     }
+    case PROTO_OP_COMPARE: {
+        const json_t *a = json_object_get(o, "axis");
+        if (a) {
+            double *v = op->u.compare.axis;
+            if ((r = get_vec(a, "axis", pl, 3, v, err)) < 0)
+                return r;
+            if (!(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] > 0))
+                return FAIL(pl, "axis", "must be a non-zero vector");
+            op->u.compare.have_axis = true;
+        }
+        const json_t *ref = json_object_get(o, "reference");
+        if (!ref)
+            return FAIL(pl, "reference", "required (the facet-model/1 to "
+                        "compare the job's model with)");
+        char where[160];
+        snprintf(where, sizeof where, "%s[%zu].reference",
+                 pl->where ? pl->where : "", pl->index);
+        geo_poly *m = proto_model_from_json(ref, NULL, where, err);
+        if (!m)
+            return -EINVAL;
+        /* the reference is the frame: without a table or an axis there
+         * is nothing to align on, which the client should hear now */
+        double axis[3];
+        uint32_t table;
+        r = geo_compare_axis(m, op->u.compare.have_axis ? op->u.compare.axis
+                                                        : NULL,
+                             where, axis, &table, err);
+        if (r < 0) {
+            geo_poly_free(m);
+            return r;
+        }
+        op->u.compare.reference = m;
+        return 0;
+    }
     case PROTO_OP_CORRECT:
         r = get_number(o, "radius", pl, 0, 1e9, false,
                        &op->u.correct.radius, err);
@@ -489,6 +527,10 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
 
 static void op_free(proto_op *op)
 {
+    if (op->kind == PROTO_OP_COMPARE) {
+        geo_poly_free(op->u.compare.reference);
+        op->u.compare.reference = NULL;
+    }
     if (op->kind == PROTO_OP_MERGE) {
         free(op->u.merge.gstart);
         free(op->u.merge.gfacets);
@@ -729,6 +771,12 @@ static json_t *op_to_json(const proto_op *op)
                                  json_integer(op->u.report.gear));
         if (op->u.report.have_axis)
             e |= json_object_set_new(o, "axis", vec(op->u.report.axis, 3));
+        break;
+    case PROTO_OP_COMPARE:
+        e |= json_object_set_new(o, "reference",
+                                 proto_model_to_json(op->u.compare.reference));
+        if (op->u.compare.have_axis)
+            e |= json_object_set_new(o, "axis", vec(op->u.compare.axis, 3));
         break;
     case PROTO_OP_FILL:
         e |= json_object_set_new(

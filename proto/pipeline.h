@@ -40,6 +40,11 @@
  *   report {gear 1..100000 [96], axis?: [x, y, z]} — the stone's tiers,
  *                 proportions and facet table (lib/gem/report.h); reads
  *                 the model, changes nothing
+ *   compare {reference: facet-model/1, axis?: [x, y, z]} — lays the job's
+ *                 model onto the reference (its design, an earlier scan)
+ *                 and measures them (lib/gem/compare.h); the reference is
+ *                 read with the limits of a job's model and must have a
+ *                 table unless an axis is given; changes nothing
  * The pipeline "correct" is the post-scan correction: inspect → correct →
  * inspect, with the defaults above; the correct op merges (automatic
  * groups) and collapses clusters, repeating both until nothing changes (in
@@ -61,6 +66,7 @@
 #include <jansson.h>
 
 #include "ctx.h"
+#include "poly.h"
 
 typedef enum proto_op_kind {
     PROTO_OP_INSPECT = 0,
@@ -74,6 +80,7 @@ typedef enum proto_op_kind {
     PROTO_OP_STITCH,
     PROTO_OP_CORRECT,
     PROTO_OP_REPORT,
+    PROTO_OP_COMPARE,
     PROTO_OP_COUNT
 } proto_op_kind;
 
@@ -143,6 +150,11 @@ typedef struct proto_op {
             bool have_axis;
             double axis[3];      /* the main axis, when given */
         } report;
+        struct {
+            geo_poly *reference; /* A, owned; the job's model is B */
+            bool have_axis;
+            double axis[3];      /* the main axis, when given */
+        } compare;
         struct {
             bool weight_length;  /* weight by edge length (else area) */
             bool refine, fair;

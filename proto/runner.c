@@ -11,6 +11,8 @@
 #include <time.h>
 
 #include "clusters.h"
+#include "compare.h"
+#include "compare_json.h"
 #include "correct.h"
 #include "correct_json.h"
 #include "cut.h"
@@ -145,6 +147,40 @@ static int run_report(const proto_op *op, geo_poly **model,
         geo_report_free(&rep);
     }
     if (e || !j) {
+        json_decref(j);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    *ret_report = j;
+    return 0;
+}
+
+/* compare (lib/gem/compare.h): the job's model (B) laid onto the
+ * op's reference (A) and measured; the model is not changed. The summary
+ * gets compare_aligned, compare_rotation_deg, compare_hausdorff_mm and
+ * compare_mean_distance_mm (apart from correct's hausdorff). */
+static int run_compare(const proto_op *op, geo_poly **model,
+                       const geo_ctx *ctx, json_t **ret_report,
+                       json_t *summary, geo_err *err)
+{
+    geo_compare_opts o = {
+        .axis = op->u.compare.have_axis ? op->u.compare.axis : NULL,
+        .name_a = "reference", .name_b = "model"};
+    geo_compare_result res;
+    int r = geo_compare(op->u.compare.reference, *model, &o, ctx, &res, err);
+    if (r < 0)
+        return r;
+    json_t *j = proto_compare_to_json(&res);
+    int e = !j;
+    e |= json_object_set_new(summary, "compare_aligned",
+                             json_boolean(res.aligned));
+    e |= json_object_set_new(summary, "compare_rotation_deg",
+                             json_real(res.rotation_deg));
+    e |= json_object_set_new(summary, "compare_hausdorff_mm",
+                             json_real(res.hausdorff_mm));
+    e |= json_object_set_new(summary, "compare_mean_distance_mm",
+                             json_real(res.mean_distance_mm));
+    geo_compare_free(&res);
+    if (e) {
         json_decref(j);
         return geo_err_set(err, -ENOMEM, "out of memory");
     }
@@ -544,6 +580,7 @@ static const op_entry ops[PROTO_OP_COUNT] = {
     [PROTO_OP_MOVE] = {run_move, true},
     [PROTO_OP_INVERSION_STATS] = {run_inversion_stats, false},
     [PROTO_OP_REPORT] = {run_report, false},
+    [PROTO_OP_COMPARE] = {run_compare, false},
 };
 
 int runner_check_input(const proto_pipeline *p, bool frep, geo_err *err)

@@ -20,7 +20,9 @@
  * "vertices_after", "facets_after", "ms"} plus what the operations add
  * (inspect adds "valid", "closed", "orientation", "self_intersections"
  * of the model it saw; a later inspect overwrites an earlier one's;
- * triangulate adds "closed" and "self_intersections" of its mesh).
+ * triangulate adds "closed" and "self_intersections" of its mesh;
+ * compare adds "compare_aligned", "compare_rotation_deg",
+ * "compare_hausdorff_mm" and "compare_mean_distance_mm").
  *
  * Inputs: a polyhedron (runner_run) or a frep-object/1 (runner_run_frep),
  * which only triangulate takes, as the first operation; its report is the

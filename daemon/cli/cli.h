@@ -47,5 +47,6 @@ int cmd_correct(int argc, char **argv);
 int cmd_fill(int argc, char **argv);
 int cmd_stitch(int argc, char **argv);
 int cmd_report(int argc, char **argv);
+int cmd_compare(int argc, char **argv);
 
 #endif

@@ -101,6 +101,29 @@ int cli_args_format(cli_args *a, const char *s, proto_format *ret)
     return 0;
 }
 
+int cli_args_direction(cli_args *a, const char *s, double ret[3])
+{
+    const char *p = s;
+    char *end;
+    double v[3];
+    for (int k = 0; k < 3; k++) {
+        errno = 0;
+        v[k] = strtod(p, &end);
+        if (errno || end == p || !isfinite(v[k]) ||
+            *end != (k < 2 ? ',' : '\0'))
+            goto bad;
+        p = end + 1;
+    }
+    if (v[0] == 0 && v[1] == 0 && v[2] == 0)
+        goto bad;
+    ret[0] = v[0], ret[1] = v[1], ret[2] = v[2];
+    return 0;
+bad:
+    cli_usage_error(a->cmd, "%s: expected a direction X,Y,Z (not all zero), "
+                    "got '%s'", a->opt, s);
+    return CLI_ARGS_ERROR;
+}
+
 int cli_args_unexpected(cli_args *a, const char *arg)
 {
     cli_usage_error(a->cmd, "unexpected argument '%s'", arg);

@@ -44,6 +44,8 @@ int cli_args_long(cli_args *a, const char *s, long lo, long hi, long *ret);
 int cli_args_double(cli_args *a, const char *s, double lo, double hi,
                     bool lo_open, double *ret);
 int cli_args_format(cli_args *a, const char *s, proto_format *ret);
+/* "X,Y,Z": three finite numbers, not all zero (a direction). */
+int cli_args_direction(cli_args *a, const char *s, double ret[3]);
 
 /* Prints "facet CMD: unexpected argument 'X'" and returns CLI_ARGS_ERROR. */
 int cli_args_unexpected(cli_args *a, const char *arg);

@@ -23,6 +23,8 @@ static const cli_command commands[] = {
     {"inspect", "print a model's statistics and defects as JSON", cmd_inspect},
     {"report", "print a stone's proportions and facet table as JSON",
      cmd_report},
+    {"compare", "align two models of a stone and measure their "
+     "differences", cmd_compare},
     {"orient", "make a model's facets consistent and outward", cmd_orient},
     {"triangulate", "triangulate a functionally defined object",
      cmd_triangulate},

@@ -225,6 +225,57 @@ static void test_canonical_json_round_trips(void **state)
     proto_pipeline_free(&b);
 }
 
+/* compare carries its reference model: read with its place in errors,
+ * refused without a table unless an axis is given, and written back in
+ * the canonical JSON so that the stored pipeline runs the same. */
+static void test_compare_carries_its_reference(void **state)
+{
+    (void)state;
+    static const char tetra[] =
+        "{\"format\":\"facet-model/1\",\"vertices\":[[1,0,0],"
+        "[-0.5,0.8660254037844386,0],[-0.5,-0.8660254037844386,0],"
+        "[0,0,1.4142135623730951]],\"facets\":[{\"vertices\":[0,2,1]},"
+        "{\"vertices\":[0,1,3]},{\"vertices\":[1,2,3]},"
+        "{\"vertices\":[2,0,3]}]}";
+    char text[1024];
+    snprintf(text, sizeof text, "[{\"op\":\"compare\",\"axis\":[0,0,-1],"
+             "\"reference\":%s}]", tetra);
+    proto_pipeline a, b;
+    geo_err err = {{0}};
+    assert_int_equal(parse(text, &a, &err), 0);
+    assert_int_equal(a.ops[0].kind, PROTO_OP_COMPARE);
+    assert_int_equal(a.ops[0].u.compare.reference->nfacets, 4);
+    json_t *j = proto_pipeline_to_json(&a);
+    char *canon = json_dumps(j, JSON_COMPACT);
+    assert_int_equal(proto_pipeline_from_json(j, "pipeline", &b, &err), 0);
+    json_t *j2 = proto_pipeline_to_json(&b);
+    char *canon2 = json_dumps(j2, JSON_COMPACT);
+    assert_string_equal(canon, canon2);
+    assert_memory_equal(b.ops[0].u.compare.reference->verts,
+                        a.ops[0].u.compare.reference->verts,
+                        4 * sizeof(double[3]));
+    free(canon);
+    free(canon2);
+    json_decref(j);
+    json_decref(j2);
+    proto_pipeline_free(&a);
+    proto_pipeline_free(&b);
+
+    snprintf(text, sizeof text, "[\"inspect\", {\"op\":\"compare\","
+             "\"reference\":%s}]", tetra);
+    assert_int_equal(parse(text, &a, &err), -EINVAL);
+    if (strncmp(err.msg, "pipeline[1].reference: no table", 31) != 0)
+        fail_msg("got '%s'", err.msg);
+    expect_error("[{\"op\":\"compare\"}]",
+                 "pipeline[0].reference: required (the facet-model/1 to "
+                 "compare the job's model with)");
+    expect_error("[{\"op\":\"compare\",\"reference\":{\"format\":"
+                 "\"facet-model/1\",\"vertices\":[[0,0,0],[1,0,0],[0,1,0]],"
+                 "\"facets\":[{\"vertices\":[0,1,5]}]}}]",
+                 "pipeline[0].reference.facets[0].vertices[2]: index 5 out "
+                 "of range (3 vertices)");
+}
+
 /* A scanner job's pipeline carries the scan's contour count to every op
  * that would otherwise read the view step off the model; an explicit
  * "views" stays as given, and the copy leaves the original untouched. */
@@ -260,6 +311,7 @@ int main(void)
         cmocka_unit_test(test_cut_plane_is_normalised),
         cmocka_unit_test(test_cut_plane_survives_the_round_trip),
         cmocka_unit_test(test_canonical_json_round_trips),
+        cmocka_unit_test(test_compare_carries_its_reference),
         cmocka_unit_test(test_views_are_set_on_a_copy_for_scanner_jobs),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
