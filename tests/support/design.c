@@ -128,7 +128,7 @@ char *design_brilliant_asc(const design_brilliant *b)
      * point of the girdle line (as on a well cut stone). */
     const double dh = 3.75;
     text t = {0};
-    put(&t, "GemCad 5.0\ng 96 0.0\ny 8 y\nI 2.42\n");
+    put(&t, "GemCad 5.0\ng -96 48\ny 8 y\nI 2.42\n");
     put(&t, "H Round brilliant: crown %.6g, pavilion %.6g, table %.6g%%, "
             "girdle %.6g%%, culet %.6g%%, %u girdle facets\n",
         b->crown_deg, b->pavilion_deg, b->table_percent, b->girdle_percent,
