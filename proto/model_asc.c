@@ -360,6 +360,17 @@ geo_poly *proto_asc_read(const void *data, size_t len,
         enum geo_halfspace_status st = GEO_HALFSPACE_OK;
         geo_err herr = {{0}};
         e = geo_halfspace_intersect(&r.pl[0][0], r.n, -1, &p, &src, &st, &herr);
+        if (e == 0) {
+            /* again contracting only edges below half the planarity
+             * tolerance of the stone: merged vertices then lie on their
+             * planes as every reader of the model checks */
+            double tol = 0.5 * geo_poly_eps(p);
+            p = geo_poly_free(p);
+            free(src);
+            src = NULL;
+            e = geo_halfspace_intersect(&r.pl[0][0], r.n, tol, &p, &src, &st,
+                                        &herr);
+        }
         if (e == -EINVAL && st == GEO_HALFSPACE_EMPTY) {
             /* the kernel names the plane that emptied the region */
             unsigned idx = 0;
@@ -410,12 +421,6 @@ geo_poly *proto_asc_read(const void *data, size_t len,
         return geo_poly_free(p);
     }
     free(given);
-    /* A vertex where an edge shorter than the intersection's contraction
-     * length was contracted lies off its planes by up to that length: the
-     * construction's own rounding, not a disagreement in the file. */
-    if (rep->plane_mismatches &&
-        rep->worst_deviation <= GEO_HALFSPACE_MERGE * (1.0 + geo_poly_size(p)))
-        rep->plane_mismatches = 0, rep->first[0] = '\0';
     return p;
 }
 
