@@ -13,6 +13,7 @@
 
 #include <math.h>
 #include <stdarg.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -43,6 +44,63 @@ geo_poly *design_load(const char *path, double width_mm, geo_err *err)
     if (p && width_mm > 0 && proto_model_scale_to_width(p, width_mm, err) < 0)
         p = geo_poly_free(p);
     return p;
+}
+
+uint32_t design_file_planes(const char *path, double *planes, double *angle,
+                            uint32_t max)
+{
+    FILE *f = fopen(path, "r");
+    if (!f)
+        return 0;
+    char line[8192];
+    const char *sep = " \t\r\n";
+    double gear = 96, off = 0, a_deg = 0, dist = 0;
+    uint32_t n = 0;
+    bool open = false;
+    while (fgets(line, sizeof line, f)) {
+        bool cont = line[0] == ' ' || line[0] == '\t';
+        char *save = NULL, *t = strtok_r(line, sep, &save);
+        if (!t)
+            continue;
+        if (!cont && strcmp(t, "g") == 0) {
+            char *g = strtok_r(NULL, sep, &save), *o = strtok_r(NULL, sep, &save);
+            gear = g ? atof(g) : 96, off = o ? atof(o) : 0;
+            open = false;
+            continue;
+        }
+        if (!cont && strcmp(t, "a") == 0) {
+            char *x = strtok_r(NULL, sep, &save), *y = strtok_r(NULL, sep, &save);
+            a_deg = x ? atof(x) : 0, dist = y ? atof(y) : 0;
+            if (x && x[0] == '-' && a_deg == 0)
+                a_deg = -0.0;
+            open = true;
+            t = strtok_r(NULL, sep, &save);
+        } else if (!cont || !open) {
+            open = open && cont; /* another record ends the tier */
+            continue;
+        }
+        bool culet = a_deg == 0 && dist < 0;
+        bool pav = signbit(a_deg) || culet;
+        for (; t && strcmp(t, "G") != 0; t = strtok_r(NULL, sep, &save)) {
+            if (strcmp(t, "n") == 0) {
+                strtok_r(NULL, sep, &save);
+                continue;
+            }
+            if (n == max)
+                break;
+            /* θ counter-clockwise from −y in the top view; the gear's sign
+             * turns the counting clockwise */
+            double th = (atof(t) - off) * 2 * M_PI / gear;
+            double a = fabs(a_deg) * DEG;
+            planes[4 * n] = sin(a) * sin(th);
+            planes[4 * n + 1] = -sin(a) * cos(th);
+            planes[4 * n + 2] = pav ? -cos(a) : cos(a);
+            planes[4 * n + 3] = -fabs(dist);
+            angle[n++] = culet ? -0.0 : a_deg;
+        }
+    }
+    fclose(f);
+    return n;
 }
 
 void design_brilliant_random(uint64_t seed, design_brilliant *ret)

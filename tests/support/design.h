@@ -27,6 +27,15 @@ const char *design_path(const char *name);
  * with err set on any error. The caller frees the model. */
 geo_poly *design_load(const char *path, double width_mm, geo_err *err);
 
+/* The facet planes of the GemCad file at path, computed from the
+ * definitions of docs/formats-asc.md alone (its own parse and standard
+ * sin/cos, sharing no code with the reader), for checking the reader:
+ * planes[4i..4i+3] (unit normal, plane(x) ≤ 0 inside) and angle[i] (the
+ * tier's signed angle; −0 for a culet) of every listed index, at most
+ * max. Returns the count; the caller's test fails on an unreadable file. */
+uint32_t design_file_planes(const char *path, double *planes, double *angle,
+                            uint32_t max);
+
 /* A round brilliant by its proportions; angles in degrees, percentages of
  * the mean diameter (outline perimeter / π) unless said otherwise. */
 typedef struct design_brilliant {

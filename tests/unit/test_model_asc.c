@@ -171,58 +171,6 @@ static void test_gear_direction_and_offset(void **state)
                  "line 1: gear offset 97: must be an index within -96..96");
 }
 
-/* The planes of a GemCad file computed here from the manual's
- * definitions (docs/formats-asc.md), independently of the reader's code:
- * the normal's horizontal part points to the index on the top view's
- * circle, θ = ±360°·(IDX − OFFSET)/|N| counter-clockwise from −y. */
-static uint32_t planes_of_file(const char *path, double *pl, uint32_t max)
-{
-    FILE *f = fopen(path, "r");
-    assert_non_null(f);
-    char line[8192];
-    double gear = 96, off = 0, angle = 0, dist = 0;
-    uint32_t n = 0;
-    bool open = false;
-    while (fgets(line, sizeof line, f)) {
-        bool cont = line[0] == ' ' || line[0] == '\t';
-        char *save = NULL, *t = strtok_r(line, " \t\r\n", &save);
-        if (!t)
-            continue;
-        if (!cont && strcmp(t, "g") == 0) {
-            gear = atof(strtok_r(NULL, " \t\r\n", &save));
-            char *o = strtok_r(NULL, " \t\r\n", &save);
-            off = o ? atof(o) : 0;
-            continue;
-        }
-        if (!cont && strcmp(t, "a") == 0) {
-            angle = atof(strtok_r(NULL, " \t\r\n", &save));
-            dist = atof(strtok_r(NULL, " \t\r\n", &save));
-            open = true;
-            t = strtok_r(NULL, " \t\r\n", &save);
-        } else if (!cont || !open) {
-            open = open && cont; /* another record ends the tier */
-            continue;
-        }
-        bool pav = angle < 0 || (angle == 0 && dist < 0);
-        for (; t && strcmp(t, "G") != 0; t = strtok_r(NULL, " \t\r\n", &save)) {
-            if (strcmp(t, "n") == 0) {
-                strtok_r(NULL, " \t\r\n", &save);
-                continue;
-            }
-            double th = (atof(t) - off) * 2 * M_PI / gear; /* sign: gear's */
-            double a = fabs(angle) * M_PI / 180;
-            assert_true(n < max);
-            pl[4 * n] = sin(a) * sin(th);
-            pl[4 * n + 1] = -sin(a) * cos(th);
-            pl[4 * n + 2] = pav ? -cos(a) : cos(a);
-            pl[4 * n + 3] = -fabs(dist);
-            n++;
-        }
-    }
-    fclose(f);
-    return n;
-}
-
 static void assert_convex(const geo_poly *p)
 {
     double eps = geo_poly_eps(p);
@@ -255,8 +203,8 @@ static void test_public_designs(void **state)
         assert_closed(p);
         assert_convex(p);
         assert_int_equal(rep.plane_mismatches, 0);
-        double pl[4 * 256];
-        uint32_t n = planes_of_file(path, pl, 256);
+        double pl[4 * 256], angle[256];
+        uint32_t n = design_file_planes(path, pl, angle, 256);
         assert_int_equal(n, files[i].listed);
         assert_int_equal(p->nfacets, files[i].facets);
         geo_poly *q = sim_halfspace_intersection(pl, n, 10.0);
