@@ -350,7 +350,7 @@ void design_fancy_random(enum design_shape s, uint64_t seed,
         r->girdle_facets = 64 + 8 * (uint32_t)(geo_rand_next(&st) % 8);
 }
 
-void design_free(design *d)
+void design_free(design_cut *d)
 {
     if (d) {
         free(d->f);
@@ -365,7 +365,7 @@ static double norm_az(double az)
     return az < 0 ? az + 360.0 : az;
 }
 
-static int add_facet(design *d, uint32_t *cap, double angle, double dist,
+static int add_facet(design_cut *d, uint32_t *cap, double angle, double dist,
                      double az, int tier)
 {
     if (d->n == *cap) {
@@ -379,7 +379,7 @@ static int add_facet(design *d, uint32_t *cap, double angle, double dist,
     return 0;
 }
 
-double *design_planes(const design *d)
+double *design_planes(const design_cut *d)
 {
     double *pl = malloc(4 * (size_t)(d->n ? d->n : 1) * sizeof *pl);
     if (!pl)
@@ -398,7 +398,7 @@ double *design_planes(const design *d)
 
 /* A facet of inclination A (degrees; negative: pavilion) whose horizontal
  * normal points to azimuth az, through the point (x, y, z). */
-static int add_through(design *d, uint32_t *cap, double A, double az,
+static int add_through(design_cut *d, uint32_t *cap, double A, double az,
                        const double x[2], double z, int tier)
 {
     double a = fabs(A) * DEG, ph = az * DEG;
@@ -427,7 +427,7 @@ static uint32_t polygon_sides(const design_fancy *d, double *az, double *h)
     return n;
 }
 
-static int build_planes(const design_fancy *d, design *ds)
+static int build_planes(const design_fancy *d, design_cut *ds)
 {
     uint32_t cap = 0;
     int e = 0;
@@ -574,7 +574,7 @@ static int build_planes(const design_fancy *d, design *ds)
     return e;
 }
 
-int design_fancy_build(const design_fancy *d, design *ret)
+int design_fancy_build(const design_fancy *d, design_cut *ret)
 {
     static const uint32_t fold[DESIGN_NSHAPES] = {2, 1, 2, 1, 3, 4, 4, 2, 2,
                                                   1};
@@ -675,7 +675,7 @@ fail:
     return -1;
 }
 
-char *design_asc(const design *d)
+char *design_asc(const design_cut *d)
 {
     text t = {0};
     put(&t, "GemCad 5.0\ng -96 48\ny %u %s\nI 1.76\nH %s\n", d->fold,

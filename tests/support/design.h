@@ -97,14 +97,14 @@ typedef struct design_facet {
     bool main;
 } design_facet;
 
-typedef struct design {
+typedef struct design_cut {
     char title[200];
     uint32_t fold;
     bool mirror;
     uint32_t n;
     design_facet *f;
     uint32_t dropped; /* facets that did not appear and were left out */
-} design;
+} design_cut;
 
 /* The proportions of a fancy design. The outline of a faceted girdle is
  * the curve of support function h(ψ) = 1 + Σ a[k] cos kψ + b[k] sin kψ
@@ -137,17 +137,17 @@ void design_fancy_random(enum design_shape s, uint64_t seed,
 
 /* Builds the design (see above): 0, or -1 on out-of-memory or when the
  * planes bound no stone. The caller frees it with design_free. */
-int design_fancy_build(const design_fancy *d, design *ret);
+int design_fancy_build(const design_fancy *d, design_cut *ret);
 
-void design_free(design *d);
+void design_free(design_cut *d);
 
 /* The planes of d (4 doubles each, plane(x) ≤ 0 inside) from its facets'
  * angles, distances and azimuths; malloc'd, NULL on out-of-memory. */
-double *design_planes(const design *d);
+double *design_planes(const design_cut *d);
 
 /* d as GemCad .asc text (malloc'd; NULL on out-of-memory): consecutive
  * facets of equal angle and distance share a tier line, in d's order, so
  * the stone read back has d's facets in d's order. */
-char *design_asc(const design *d);
+char *design_asc(const design_cut *d);
 
 #endif

@@ -33,7 +33,7 @@ static char *fancy_text(enum design_shape s, uint64_t seed)
         design_fancy_random(s, seed, &fd);
     else
         design_fancy_default(s, &fd);
-    design d;
+    design_cut d;
     if (design_fancy_build(&fd, &d) < 0)
         return NULL;
     if (d.dropped)

@@ -22,7 +22,7 @@ typedef struct mains {
     double min, max, mean;
 } mains;
 
-static mains design_mains(const design *d, int tier)
+static mains design_mains(const design_cut *d, int tier)
 {
     mains m = {0, INFINITY, -INFINITY, 0};
     for (uint32_t i = 0; i < d->n; i++)
@@ -57,7 +57,7 @@ static void check_mains(const char *what, const mains *want, uint32_t n,
 /* One design end to end; returns its facet count. */
 static uint32_t check_design(const design_fancy *fd, const char *name)
 {
-    design d;
+    design_cut d;
     if (design_fancy_build(fd, &d) < 0)
         fail_msg("%s: does not build", name);
     char *text = design_asc(&d);
@@ -150,7 +150,7 @@ static void test_collection_files(void **state)
         if (!p)
             fail_msg("%s", err.msg);
         design_fancy fd;
-        design d;
+        design_cut d;
         design_fancy_default((enum design_shape)s, &fd);
         assert_int_equal(design_fancy_build(&fd, &d), 0);
         assert_int_equal(p->nfacets, d.n);
