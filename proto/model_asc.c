@@ -2,10 +2,14 @@
  *
  * A design is a list of tiers; each tier is one angle and one distance
  * and the gear indices of its facets. Facet plane: unit normal
- * (sin|A|·sin φ, sin|A|·cos φ, ±cos A) — φ = 360°·IDX/N + OFFSET, the
- * azimuth measured from +y towards +x (clockwise seen from above),
- * + for a crown facet (A > 0 or +0), − for a pavilion facet (A < 0 or
- * −0) — at distance DIST from the origin along it. A zero angle with a
+ * (sin|A|·sin φ, sin|A|·cos φ, ±cos A) — φ the azimuth measured from +y
+ * towards +x (clockwise seen from above), + for a crown facet (A > 0 or
+ * +0), − for a pavilion facet (A < 0 or −0) — at distance DIST from the
+ * origin along it. The gear "g N OFFSET" places the indices as GemCad
+ * draws them in its top view: index OFFSET at the bottom (−y), indices
+ * increasing counter-clockwise for N > 0, clockwise for N < 0; so
+ * φ = 180° − 360°·(IDX − OFFSET)/N, and "g -96 48" puts 96 at the top
+ * counting clockwise (φ = 3.75°·IDX). A zero angle with a
  * negative distance is GemCad's way of writing a culet. The stone is the
  * exact intersection of those half-spaces (lib/core/halfspace.h), so
  * vertices where many facets meet are single vertices.
@@ -15,8 +19,8 @@
  * design: the origin moves to the vertex centroid (so every distance is
  * positive, as GemCad expects) and an "H origin X Y Z" header records the
  * shift, which this reader undoes; facets of equal inclination and
- * distance share a tier; an azimuth off the 96-tooth gear is written as a
- * fractional index. Numbers are written as the shortest decimals that
+ * distance share a tier; the gear is "g -96 48" (96 at the top, counting
+ * clockwise) and an azimuth off its teeth is a fractional index. Numbers are written as the shortest decimals that
  * read back exactly, so a convex model round-trips to within rounding. */
 #include <errno.h>
 #include <math.h>
@@ -39,8 +43,8 @@ typedef struct asc_tok {
 typedef struct asc_reader {
     geo_err *err;
     uint32_t line;
-    int32_t gear;   /* teeth; negative: indices counted the other way */
-    double offset;  /* degrees added to every azimuth */
+    int32_t gear;   /* teeth; negative: indices counted clockwise */
+    double offset;  /* the index at the bottom of the top view */
     bool have_origin;
     double origin[3];
     bool tier_open; /* an "a" record may continue on the next lines */
@@ -148,7 +152,7 @@ static int add_plane(asc_reader *r, double idx)
         r->cap = cap;
     }
     double sp, cp, sa, ca;
-    sincos_deg(360.0 * idx / r->gear + r->offset, &sp, &cp);
+    sincos_deg(180.0 - 360.0 * (idx - r->offset) / r->gear, &sp, &cp);
     sincos_deg(fabs(r->angle), &sa, &ca);
     double *q = r->pl[r->n];
     q[0] = sa * sp;
@@ -225,9 +229,9 @@ static int record_gear(asc_reader *r, const asc_tok *t, uint32_t nt)
     r->offset = 0.0;
     if (off.s && (e = number(r, off, "gear offset", &r->offset)) < 0)
         return e;
-    if (fabs(r->offset) > 360.0)
-        return fail(r, "gear offset %g: must lie within -360..360 degrees",
-                    r->offset);
+    if (!(fabs(r->offset) <= abs(r->gear)))
+        return fail(r, "gear offset %g: must be an index within -%d..%d",
+                    r->offset, abs(r->gear), abs(r->gear));
     return 0;
 }
 
@@ -356,6 +360,17 @@ geo_poly *proto_asc_read(const void *data, size_t len,
         enum geo_halfspace_status st = GEO_HALFSPACE_OK;
         geo_err herr = {{0}};
         e = geo_halfspace_intersect(&r.pl[0][0], r.n, -1, &p, &src, &st, &herr);
+        if (e == 0) {
+            /* again contracting only edges below half the planarity
+             * tolerance of the stone: merged vertices then lie on their
+             * planes as every reader of the model checks */
+            double tol = 0.5 * geo_poly_eps(p);
+            p = geo_poly_free(p);
+            free(src);
+            src = NULL;
+            e = geo_halfspace_intersect(&r.pl[0][0], r.n, tol, &p, &src, &st,
+                                        &herr);
+        }
         if (e == -EINVAL && st == GEO_HALFSPACE_EMPTY) {
             /* the kernel names the plane that emptied the region */
             unsigned idx = 0;
@@ -364,8 +379,16 @@ geo_poly *proto_asc_read(const void *data, size_t len,
             fail(&r, "the facets bound nothing: this facet leaves no "
                      "interior of those before it");
         } else if (e == -EINVAL) {
+            uint32_t up = 0, down = 0;
+            for (uint32_t i = 0; i < r.n; i++)
+                up += r.pl[i][2] > 0, down += r.pl[i][2] < 0;
             r.line = last;
-            fail(&r, "the facets do not bound a stone (%s)", herr.msg);
+            fail(&r, "the facets do not bound a stone%s (%s)",
+                 !up && !down ? ": no crown or pavilion facets"
+                 : !up        ? ": no crown facets (a design in progress?)"
+                 : !down      ? ": no pavilion facets (a design in progress?)"
+                              : "",
+                 herr.msg);
         } else if (e < 0) {
             geo_err_set(err, e, "%s", herr.msg);
         }
@@ -480,9 +503,12 @@ int proto_asc_write(const geo_poly *p, proto_buf *b, geo_err *err)
             first[ntier++] = i;
         f[i].tier = t;
     }
-    proto_buf_puts(b, "GemCad 5.0\r\ng ");
+    /* 96 at the top counting clockwise: the index is φ · 96 / 360 */
+    proto_buf_puts(b, "GemCad 5.0\r\ng -");
     proto_buf_u32(b, gear);
-    proto_buf_puts(b, " 0\r\ny 1 n\r\nI 1.54\r\nH facet convert: ");
+    proto_buf_puts(b, " ");
+    proto_buf_u32(b, gear / 2);
+    proto_buf_puts(b, "\r\ny 1 n\r\nI 1.54\r\nH facet convert: ");
     proto_buf_u32(b, p->nfacets);
     proto_buf_puts(b, " facets in ");
     proto_buf_u32(b, ntier);

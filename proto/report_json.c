@@ -17,13 +17,20 @@ json_t *proto_report_to_json(const geo_report *r)
     json_t *facets = json_array();
     for (uint32_t f = 0; f < r->nfacets; f++) {
         const geo_report_facet *F = &r->facets[f];
-        json_array_append_new(
-            facets, json_pack("{s:s, s:f, s:f, s:f, s:f, s:f}", "tier",
+        json_t *e = json_pack("{s:s, s:f, s:f, s:f, s:f, s:f}", "tier",
                               geo_tier_name(F->tier), "inclination_deg",
                               F->inclination_deg, "azimuth_deg",
                               F->azimuth_deg, "index", F->index,
                               "distance_mm", F->distance_mm, "area_mm2",
-                              F->area_mm2));
+                              F->area_mm2);
+        if (r->scan) /* null: no sample of the scan is nearest to it */
+            json_object_set_new(
+                e, "scan_deviation_um",
+                r->scan[f].samples
+                    ? json_pack("{s:f, s:f}", "max", r->scan[f].max_um,
+                                "rms", r->scan[f].rms_um)
+                    : json_null());
+        json_array_append_new(facets, e);
     }
     json_t *tiers = json_object();
     for (int t = 0; t < 5; t++)

@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "predicates.h"
+#include "surface.h"
 
 #define DEG (M_PI / 180.0)
 
@@ -28,7 +29,9 @@ void geo_report_free(geo_report *r)
 {
     if (r) {
         free(r->facets);
+        free(r->scan);
         r->facets = NULL;
+        r->scan = NULL;
     }
 }
 
@@ -139,6 +142,20 @@ static int measure_outline(const geo_poly *p, const double ex[3],
     return 0;
 }
 
+/* The extent of facet f along the axis a. */
+static void facet_heights(const geo_poly *p, uint32_t f, const double a[3],
+                          double *ret_lo, double *ret_hi)
+{
+    uint32_t n = geo_poly_facet_size(p, f);
+    const uint32_t *ix = geo_poly_facet(p, f);
+    double lo = INFINITY, hi = -INFINITY;
+    for (uint32_t k = 0; k < n; k++) {
+        double h = dot(p->verts[ix[k]], a);
+        lo = fmin(lo, h), hi = fmax(hi, h);
+    }
+    *ret_lo = lo, *ret_hi = hi;
+}
+
 static void range_add(geo_range *r, double v, uint32_t *count)
 {
     if (*count == 0)
@@ -236,13 +253,8 @@ int geo_report_compute(const geo_poly *p, const double *axis, uint32_t gear,
             culet_area = F->area_mm2, culet = f;
         if (F->tier != GEO_TIER_GIRDLE)
             continue;
-        uint32_t n = geo_poly_facet_size(p, f);
-        const uint32_t *ix = geo_poly_facet(p, f);
-        double lo = INFINITY, hi = -INFINITY;
-        for (uint32_t k = 0; k < n; k++) {
-            double h = dot(p->verts[ix[k]], a);
-            lo = fmin(lo, h), hi = fmax(hi, h);
-        }
+        double lo, hi;
+        facet_heights(p, f, a, &lo, &hi);
         g_hi = fmax(g_hi, hi), g_lo = fmin(g_lo, lo);
         range_add(&r.girdle_thickness_percent, hi - lo, &ngirdle);
     }
@@ -295,22 +307,128 @@ int geo_report_compute(const geo_poly *p, const double *axis, uint32_t gear,
         F->distance_mm = fabs(dot(q, r.center) + q[3]);
         if (F->tier != GEO_TIER_CROWN && F->tier != GEO_TIER_PAVILION)
             continue;
-        uint32_t n = geo_poly_facet_size(p, f);
-        const uint32_t *ix = geo_poly_facet(p, f);
-        double lo = INFINITY, hi = -INFINITY;
-        for (uint32_t k = 0; k < n; k++) {
-            double h = dot(p->verts[ix[k]], a);
-            lo = fmin(lo, h), hi = fmax(hi, h);
-        }
+        double lo, hi;
+        facet_heights(p, f, a, &lo, &hi);
+        /* a main spans its part of the stone: from the table (culet) to
+         * the girdle, so a sliver at either end is not one */
         if (F->tier == GEO_TIER_CROWN && hi >= top - 0.02 * ch &&
             lo <= g_hi + 0.10 * ch)
             range_add(&r.crown_angle_deg, F->inclination_deg, &ncm);
-        if (F->tier == GEO_TIER_PAVILION && lo <= culet_h + 0.02 * pd)
+        if (F->tier == GEO_TIER_PAVILION && lo <= culet_h + 0.02 * pd &&
+            hi >= g_lo - 0.10 * pd)
             range_add(&r.pavilion_angle_deg, F->inclination_deg, &npm);
     }
     range_end(&r.crown_angle_deg, ncm);
     range_end(&r.pavilion_angle_deg, npm);
     r.crown_mains = ncm, r.pavilion_mains = npm;
     *ret = r;
+    return 0;
+}
+
+/* (b − o) × (d − o) */
+static void cross_at(const double o[3], const double b[3], const double d[3],
+                     double t[3])
+{
+    double u[3] = {b[0] - o[0], b[1] - o[1], b[2] - o[2]};
+    double v[3] = {d[0] - o[0], d[1] - o[1], d[2] - o[2]};
+    t[0] = u[1] * v[2] - u[2] * v[1];
+    t[1] = u[2] * v[0] - u[0] * v[2];
+    t[2] = u[0] * v[1] - u[1] * v[0];
+}
+
+/* Accumulates one sample of the scan at x standing for area w. */
+typedef struct dev_acc {
+    double sum_w, sum_wd2, sum_d2;
+} dev_acc;
+
+static void dev_sample(const geo_surface *s, const double x[3], double w,
+                       uint32_t *hint, geo_scan_deviation *dev, dev_acc *acc)
+{
+    uint32_t f = UINT32_MAX;
+    double d2 = geo_surface_dist2(s, x, hint, &f);
+    if (f == UINT32_MAX || !isfinite(d2))
+        return;
+    double d = sqrt(d2) * 1000.0;
+    dev[f].samples++;
+    dev[f].max_um = fmax(dev[f].max_um, d);
+    acc[f].sum_w += w;
+    acc[f].sum_wd2 += w * d * d;
+    acc[f].sum_d2 += d * d;
+}
+
+int geo_report_scan_deviation(geo_report *r, const geo_poly *model,
+                              const geo_poly *scan, geo_err *err)
+{
+    free(r->scan);
+    r->scan = NULL;
+    if (scan->nfacets == 0)
+        return geo_err_set(err, -EINVAL, "the scan has no facets");
+    geo_surface *s = NULL;
+    int e = geo_surface_new(model, &s, err);
+    if (e < 0)
+        return e;
+    geo_scan_deviation *dev = calloc(model->nfacets, sizeof *dev);
+    dev_acc *acc = calloc(model->nfacets, sizeof *acc);
+    if (!dev || !acc) {
+        free(dev), free(acc);
+        geo_surface_free(s);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    uint32_t hint = UINT32_MAX;
+    for (uint32_t f = 0; f < scan->nfacets; f++) {
+        uint32_t n = geo_poly_facet_size(scan, f);
+        const uint32_t *ix = geo_poly_facet(scan, f);
+        if (n == 0)
+            continue;
+        /* the area centroid from the fan of the first corner: each
+         * triangle weighted by its area along the facet's area vector */
+        const double *o = scan->verts[ix[0]];
+        double av[3] = {0, 0, 0}, c[3] = {0, 0, 0};
+        for (uint32_t k = 1; k + 1 < n; k++) {
+            double t[3];
+            cross_at(o, scan->verts[ix[k]], scan->verts[ix[k + 1]], t);
+            for (int j = 0; j < 3; j++)
+                av[j] += t[j];
+        }
+        double al = sqrt(dot(av, av)), wsum = 0;
+        for (uint32_t k = 1; k + 1 < n && al > 0; k++) {
+            const double *b = scan->verts[ix[k]], *d = scan->verts[ix[k + 1]];
+            double t[3];
+            cross_at(o, b, d, t);
+            double w = dot(t, av) / al;
+            for (int j = 0; j < 3; j++)
+                c[j] += w * (o[j] + b[j] + d[j]) / 3;
+            wsum += w;
+        }
+        double area = al / 2;
+        if (wsum != 0) {
+            for (int j = 0; j < 3; j++)
+                c[j] /= wsum;
+        } else { /* a degenerate facet: its corners' mean */
+            for (uint32_t k = 0; k < n; k++)
+                for (int j = 0; j < 3; j++)
+                    c[j] += scan->verts[ix[k]][j] / n;
+        }
+        dev_sample(s, c, area / 2, &hint, dev, acc);
+        for (uint32_t k = 0; k < n; k++) {
+            const double *a = scan->verts[ix[k]];
+            const double *b = scan->verts[ix[(k + 1) % n]];
+            double m[3] = {(a[0] + b[0]) / 2, (a[1] + b[1]) / 2,
+                           (a[2] + b[2]) / 2};
+            dev_sample(s, a, area / (4.0 * n), &hint, dev, acc);
+            dev_sample(s, m, area / (4.0 * n), &hint, dev, acc);
+        }
+    }
+    for (uint32_t f = 0; f < model->nfacets; f++) {
+        if (!dev[f].samples)
+            continue;
+        /* samples of zero area only (degenerate scan facets): unweighted */
+        dev[f].rms_um = acc[f].sum_w > 0
+                            ? sqrt(acc[f].sum_wd2 / acc[f].sum_w)
+                            : sqrt(acc[f].sum_d2 / dev[f].samples);
+    }
+    free(acc);
+    geo_surface_free(s);
+    r->scan = dev;
     return 0;
 }

@@ -61,7 +61,21 @@ typedef struct geo_report {
     uint32_t tier_count[5];
     uint32_t nfacets;
     geo_report_facet *facets; /* nfacets, in the model's facet order */
+    struct geo_scan_deviation *scan; /* nfacets, or NULL: see below */
 } geo_report;
+
+/* How far a raw scan's surface lies from each facet of the model, µm:
+ * the scan's surface is sampled at every facet's vertices, edge midpoints
+ * and area centroid (the centroid standing for half of the facet's area,
+ * the corners and midpoints for a quarter, shared equally), each sample is
+ * assigned to the model facet nearest to it (lib/inspect/surface.h), and
+ * each model facet gets the largest distance of its samples and their
+ * area-weighted root mean square. A facet no sample is nearest to has
+ * samples 0 (and max, rms 0). */
+typedef struct geo_scan_deviation {
+    uint32_t samples;
+    double max_um, rms_um;
+} geo_scan_deviation;
 
 /* Fills *ret for model p. axis: the main axis (NULL: +z); when given, a
  * model without a table is still reported (has_table false, table and
@@ -71,6 +85,14 @@ typedef struct geo_report {
  * releases ret with geo_report_free. */
 int geo_report_compute(const geo_poly *p, const double *axis, uint32_t gear,
                        geo_report *ret, geo_err *err);
+
+/* Fills r->scan (r computed for model; its previous deviations freed)
+ * with the deviation of scan from model's facets (above). scan: any
+ * polyhedron with valid indices (open, non-convex, many facets: a raw
+ * scan), in the model's frame and units (mm). 0, or -EINVAL (an empty
+ * model or scan) / -ENOMEM with err set and r->scan NULL. */
+int geo_report_scan_deviation(geo_report *r, const geo_poly *model,
+                              const geo_poly *scan, geo_err *err);
 
 void geo_report_free(geo_report *r);
 

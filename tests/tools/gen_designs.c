@@ -2,6 +2,10 @@
  *
  *   gen_designs --brilliant SEED        a round brilliant with random
  *                                       proportions, to stdout
+ *   gen_designs --shape NAME [SEED]     a design of that shape (oval, pear,
+ *                                       ...; design.h), its reference
+ *                                       proportions or those of SEED, to
+ *                                       stdout
  *   gen_designs --collection DIR        the collection of
  *                                       tests/data/designs/ into DIR
  *
@@ -16,8 +20,29 @@
 static int usage(const char *msg)
 {
     fprintf(stderr, "gen_designs: %s\nusage: gen_designs --brilliant SEED | "
-            "--collection DIR\n", msg);
+            "--shape NAME [SEED] | --collection DIR\n", msg);
     return 2;
+}
+
+/* The design of shape s (seed 0: its reference proportions) as .asc
+ * text, NULL when it does not build. */
+static char *fancy_text(enum design_shape s, uint64_t seed)
+{
+    design_fancy fd;
+    if (seed)
+        design_fancy_random(s, seed, &fd);
+    else
+        design_fancy_default(s, &fd);
+    design_cut d;
+    if (design_fancy_build(&fd, &d) < 0)
+        return NULL;
+    if (d.dropped)
+        fprintf(stderr, "gen_designs: %s seed %llu: %u listed facets did "
+                "not appear and were left out\n", design_shape_name(s),
+                (unsigned long long)seed, d.dropped);
+    char *text = design_asc(&d);
+    design_free(&d);
+    return text;
 }
 
 static int write_text(const char *dir, const char *name, char *text)
@@ -62,11 +87,46 @@ static int collection(const char *dir)
                  (unsigned long long)seed);
         rc |= write_text(dir, name, design_brilliant_asc(&b));
     }
+    for (int sh = 0; sh < DESIGN_NSHAPES; sh++) {
+        char name[64];
+        snprintf(name, sizeof name, "%s.asc", design_shape_name(sh));
+        rc |= write_text(dir, name, fancy_text((enum design_shape)sh, 0));
+        snprintf(name, sizeof name, "%s-random-1.asc", design_shape_name(sh));
+        rc |= write_text(dir, name, fancy_text((enum design_shape)sh, 1));
+    }
     return rc;
+}
+
+static int shape(int argc, char **argv)
+{
+    int sh = 0;
+    while (sh < DESIGN_NSHAPES && strcmp(design_shape_name(sh), argv[2]))
+        sh++;
+    if (sh == DESIGN_NSHAPES)
+        return usage("--shape: unknown shape");
+    unsigned long long seed = 0;
+    if (argc == 4) {
+        char *end;
+        errno = 0;
+        seed = strtoull(argv[3], &end, 10);
+        if (errno || end == argv[3] || *end)
+            return usage("--shape: expected a seed after the name");
+    }
+    char *text = fancy_text((enum design_shape)sh, seed);
+    if (!text) {
+        fprintf(stderr, "gen_designs: %s: the design does not build\n",
+                argv[2]);
+        return 1;
+    }
+    fputs(text, stdout);
+    free(text);
+    return 0;
 }
 
 int main(int argc, char **argv)
 {
+    if (argc >= 3 && argc <= 4 && strcmp(argv[1], "--shape") == 0)
+        return shape(argc, argv);
     if (argc != 3)
         return usage("expected one option and its value");
     if (strcmp(argv[1], "--collection") == 0)

@@ -6,6 +6,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -109,14 +110,129 @@ static void test_errors_name_line_and_reason(void **state)
                  "line 2: tier: expected an index, \"n NAME\" or \"G "
                  "text\", found \"x\"");
     expect_error("g 96 0\na 41 1 96 24 48 72\n",
-                 "line 2: the facets do not bound a stone (the planes do not "
-                 "bound the region: it is unbounded towards +x)");
+                 "line 2: the facets do not bound a stone: no pavilion facets "
+                 "(a design in progress?) (the planes do not bound the "
+                 "region: it is unbounded towards +x)");
+    /* a pavilion cut, the crown not yet (as files in progress are) */
+    expect_error("g 96 0\na -90 1 3 27 51 75\n n G\na -45 0.8 3 27 51 75\n",
+                 "line 4: the facets do not bound a stone: no crown facets "
+                 "(a design in progress?) (the planes do not bound the "
+                 "region: it is unbounded towards +z)");
+    expect_error("g 96 0\na 90 1 3 27 51 75\n",
+                 "line 2: the facets do not bound a stone: no crown or "
+                 "pavilion facets (the planes do not bound the region: it "
+                 "is unbounded towards +z)");
     expect_error("g 96 0\na 45 -1 96 24 48 72\na -45 -1 96 24 48 72\n",
                  "line 3: the facets bound nothing: this facet leaves no "
                  "interior of those before it");
     expect_error("g 96 0\nz 1\n", "line 2: unknown record \"z\"");
     expect_error("GemCad 5.0\n", "line 1: no facets: a design needs \"a "
                                  "ANGLE DIST INDEX...\" tiers");
+}
+
+/* The gear as GemCad's manual has it: index OFFSET at the bottom of the
+ * top view (−y), counting counter-clockwise for N > 0 and clockwise for
+ * N < 0. A one-facet probe: a pyramid whose only tilted crown facet is
+ * at the index asked; its normal's azimuth tells where the index lies. */
+static void expect_index_direction(const char *gear, const char *idx,
+                                   double want_x, double want_y)
+{
+    char text[256];
+    snprintf(text, sizeof text, "%s\na 45 0.5 %s\na -90 1 0 24 48 72\n"
+             "a 0 1 96\na -0 1 96\n", gear, idx);
+    geo_err err = {{0}};
+    geo_poly *p = read_asc(text, &err);
+    if (!p)
+        fail_msg("%s: %s", gear, err.msg);
+    const double *q = p->planes[0];
+    double h = hypot(q[0], q[1]);
+    if (fabs(q[0] / h - want_x) > 1e-12 || fabs(q[1] / h - want_y) > 1e-12)
+        fail_msg("%s index %s: azimuth (%g, %g), want (%g, %g)", gear, idx,
+                 q[0] / h, q[1] / h, want_x, want_y);
+    geo_poly_free(p);
+}
+
+static void test_gear_direction_and_offset(void **state)
+{
+    (void)state;
+    expect_index_direction("g 96 0", "96", 0, -1);  /* at the bottom */
+    expect_index_direction("g 96 0", "24", 1, 0);   /* counter-clockwise */
+    expect_index_direction("g 96 0", "48", 0, 1);
+    expect_index_direction("g -96 48.0", "96", 0, 1); /* 96 at the top */
+    expect_index_direction("g -96 48.0", "-96", 0, 1);
+    expect_index_direction("g -96 48.0", "24", 1, 0); /* clockwise */
+    expect_index_direction("g -96 48.0", "72", -1, 0);
+    expect_index_direction("g 64 0", "16", 1, 0);
+    expect_index_direction("g 64 32", "0", 0, 1);
+    expect_index_direction("g 96 12", "12", 0, -1);
+    expect_index_direction("g -96 48", "1.5", sin(5.625 * M_PI / 180),
+                           cos(5.625 * M_PI / 180));
+    expect_error("g 96 97\na 41 1 96\n",
+                 "line 1: gear offset 97: must be an index within -96..96");
+}
+
+static void assert_convex(const geo_poly *p)
+{
+    double eps = geo_poly_eps(p);
+    for (uint32_t f = 0; f < p->nfacets; f++)
+        for (uint32_t v = 0; v < p->nverts; v++)
+            assert_true(geo_plane_eval(p->planes[f], p->verts[v]) <= eps);
+}
+
+/* Published designs (tests/data/designs/public): closed outward convex
+ * stones of the expected facets, the volume of an independent half-space
+ * clipper to 1e-9, and convert → .asc → convert within 1 µm. */
+static void test_public_designs(void **state)
+{
+    (void)state;
+    static const struct {
+        const char *name;
+        uint32_t listed, facets;
+    } files[] = {{"public/SRB.asc", 73, 73},
+                 {"public/Compear125.asc", 67, 67},
+                 {"public/CubeIllusionTri.asc", 51, 51},
+                 {"public/Turkey.asc", 74, 74}};
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+        const char *path = design_path(files[i].name);
+        geo_err err = {{0}};
+        proto_read_report rep;
+        geo_poly *p = proto_model_read_file_ex(path, PROTO_FMT_ASC, NULL,
+                                               &rep, &err);
+        if (!p)
+            fail_msg("%s", err.msg);
+        assert_closed(p);
+        assert_convex(p);
+        assert_int_equal(rep.plane_mismatches, 0);
+        double pl[4 * 256], angle[256];
+        uint32_t n = design_file_planes(path, pl, angle, 256);
+        assert_int_equal(n, files[i].listed);
+        assert_int_equal(p->nfacets, files[i].facets);
+        geo_poly *q = sim_halfspace_intersection(pl, n, 10.0);
+        assert_non_null(q);
+        double va = geo_poly_volume(p), vb = geo_poly_volume(q);
+        char *buf = NULL;
+        size_t len = 0;
+        assert_int_equal(proto_model_write_mem(p, PROTO_FMT_ASC, &buf, &len,
+                                               &err), 0);
+        geo_poly *b = proto_model_read_mem(buf, len, PROTO_FMT_ASC, NULL,
+                                           &err);
+        if (!b)
+            fail_msg("%s: round trip: %s", files[i].name, err.msg);
+        assert_int_equal(b->nfacets, p->nfacets);
+        double hd = sim_hausdorff(p, b, 2000);
+        print_message("# %s: %u facets, volume %.12g mm3, independent "
+                      "%.3g relative, round trip Hausdorff %.3g mm\n",
+                      files[i].name, p->nfacets, va, fabs(va - vb) / vb, hd);
+        if (fabs(va - vb) > 1e-9 * vb)
+            fail_msg("%s: volume %.17g, independent %.17g", files[i].name,
+                     va, vb);
+        if (!(hd < 1e-3))
+            fail_msg("%s: round trip Hausdorff %g mm", files[i].name, hd);
+        free(buf);
+        geo_poly_free(b);
+        geo_poly_free(q);
+        geo_poly_free(p);
+    }
 }
 
 /* Any convex model → design → model: within rounding. */
@@ -243,6 +359,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_reads_an_octagonal_design),
         cmocka_unit_test(test_errors_name_line_and_reason),
+        cmocka_unit_test(test_gear_direction_and_offset),
+        cmocka_unit_test(test_public_designs),
         cmocka_unit_test(test_round_trip_of_convex_models),
         cmocka_unit_test(test_generated_brilliants),
         cmocka_unit_test(test_collection_designs_scan),
