@@ -9,6 +9,7 @@
 #define FACET_CLI_H
 
 #include <stdbool.h>
+#include <stddef.h>
 
 #include "version.h"
 
@@ -27,6 +28,13 @@ int cli_usage_error(const char *cmd, const char *fmt, ...)
 /* Prints "facet COMMAND: message" to stderr and returns CLI_INPUT. */
 int cli_input_error(const char *cmd, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
+
+/* Prints j (its reference taken; NULL: out of memory) to stdout with
+ * jansson's flags and a newline, in one write: jansson's dump to a FILE
+ * goes token by token, which costs a large report more than computing
+ * it. CLI_OK, or CLI_INPUT with the error said for cmd. */
+typedef struct json_t json_t;
+int cli_print_json(const char *cmd, json_t *j, size_t flags);
 
 /* True when argv holds -h or --help. */
 bool cli_wants_help(int argc, char **argv);

@@ -98,16 +98,5 @@ int cmd_compare(int argc, char **argv)
         return cli_input_error("compare", "%s", err.msg);
     json_t *j = proto_compare_to_json(&res);
     geo_compare_free(&res);
-    /* one write: jansson's dump to a FILE writes token by token */
-    char *text = j ? json_dumps(j, JSON_INDENT(2) | JSON_PRESERVE_ORDER)
-                   : NULL;
-    json_decref(j);
-    if (!text)
-        return cli_input_error("compare", "out of memory");
-    size_t len = strlen(text);
-    int wr = fwrite(text, 1, len, stdout) == len && fputc('\n', stdout) != EOF;
-    free(text);
-    if (!wr)
-        return cli_input_error("compare", "cannot write the output");
-    return CLI_OK;
+    return cli_print_json("compare", j, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
 }

@@ -97,11 +97,5 @@ int cmd_inspect(int argc, char **argv)
         return cli_input_error("inspect", "%s: %s", path, err.msg);
     json_t *j = proto_stats_to_json(&s);
     geo_stats_clear(&s);
-    if (!j)
-        return cli_input_error("inspect", "out of memory");
-    int wr = json_dumpf(j, stdout, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
-    json_decref(j);
-    if (wr < 0 || fputc('\n', stdout) == EOF || fflush(stdout) == EOF)
-        return cli_input_error("inspect", "cannot write the output");
-    return CLI_OK;
+    return cli_print_json("inspect", j, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
 }

@@ -114,9 +114,5 @@ int cmd_report(int argc, char **argv)
     geo_poly_free(scan);
     json_t *j = proto_report_to_json(&r);
     geo_report_free(&r);
-    int wr = json_dumpf(j, stdout, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
-    json_decref(j);
-    if (wr < 0 || fputc('\n', stdout) == EOF)
-        return cli_input_error("report", "cannot write the output");
-    return CLI_OK;
+    return cli_print_json("report", j, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
 }

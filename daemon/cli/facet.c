@@ -3,7 +3,10 @@
 #include <malloc.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+
+#include <jansson.h>
 
 #include "cli.h"
 
@@ -76,6 +79,19 @@ int cli_input_error(const char *cmd, const char *fmt, ...)
     vreport(cmd, fmt, ap);
     va_end(ap);
     return CLI_INPUT;
+}
+
+int cli_print_json(const char *cmd, json_t *j, size_t flags)
+{
+    char *text = j ? json_dumps(j, flags) : NULL;
+    json_decref(j);
+    if (!text)
+        return cli_input_error(cmd, "out of memory");
+    size_t len = strlen(text);
+    bool ok = fwrite(text, 1, len, stdout) == len && fputc('\n', stdout) != EOF &&
+              fflush(stdout) != EOF;
+    free(text);
+    return ok ? CLI_OK : cli_input_error(cmd, "cannot write the output");
 }
 
 bool cli_wants_help(int argc, char **argv)
