@@ -9,6 +9,8 @@ Usage: viewer_fps.py CHROMIUM URL [TIMEOUT_S]
 """
 import json
 import os
+import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -32,7 +34,7 @@ def main():
          "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
          "--window-size=1200,800", "--remote-debugging-pipe", "about:blank"],
         preexec_fn=fds, pass_fds=(3, 4), stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL)
+        stderr=subprocess.DEVNULL, start_new_session=True)
     os.close(to_r)
     os.close(from_w)
     out, inp = os.fdopen(to_w, "wb"), os.fdopen(from_r, "rb")
@@ -79,9 +81,13 @@ def main():
         if not data.get("fpsFull"):
             raise SystemExit("viewer_fps: no figures within %g s" % timeout)
     finally:
-        proc.kill()
+        # the browser and its renderer and GPU processes
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
         proc.wait()
-        subprocess.run(["rm", "-rf", profile])
+        shutil.rmtree(profile, ignore_errors=True)
 
 
 if __name__ == "__main__":
