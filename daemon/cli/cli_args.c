@@ -90,6 +90,24 @@ int cli_args_double(cli_args *a, const char *s, double lo, double hi,
     return 0;
 }
 
+int cli_args_invalid(cli_args *a, const char *s, const char *expected)
+{
+    cli_usage_error(a->cmd, "%s: expected %s, got '%s'", a->opt, expected, s);
+    return CLI_ARGS_ERROR;
+}
+
+int cli_args_positive(cli_args *a, const char *s, double hi,
+                      const char *expected, double *ret)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (end == s || *end || errno || !isfinite(v) || v <= 0 || v > hi)
+        return cli_args_invalid(a, s, expected);
+    *ret = v;
+    return 0;
+}
+
 int cli_args_format(cli_args *a, const char *s, proto_format *ret)
 {
     proto_format f = proto_format_from_name(s);

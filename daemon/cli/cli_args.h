@@ -44,6 +44,15 @@ int cli_args_long(cli_args *a, const char *s, long lo, long hi, long *ret);
 int cli_args_double(cli_args *a, const char *s, double lo, double hi,
                     bool lo_open, double *ret);
 int cli_args_format(cli_args *a, const char *s, proto_format *ret);
+/* A finite number in (0, hi]; the message says what was expected:
+ * "OPT: expected EXPECTED, got 'S'". */
+int cli_args_positive(cli_args *a, const char *s, double hi,
+                      const char *expected, double *ret);
+
+/* Prints "facet CMD: OPT: expected EXPECTED, got 'S'" for the option just
+ * returned and returns CLI_ARGS_ERROR: for a value a command checks
+ * itself (a keyword, a list). */
+int cli_args_invalid(cli_args *a, const char *s, const char *expected);
 
 /* Prints "facet CMD: unexpected argument 'X'" and returns CLI_ARGS_ERROR. */
 int cli_args_unexpected(cli_args *a, const char *arg);
