@@ -13,6 +13,7 @@
 #include <time.h>
 
 #include "cli.h"
+#include "cli_args.h"
 #include "fill_json.h"
 #include "model_io.h"
 #include "stats.h"
@@ -56,25 +57,31 @@ int cmd_stitch(int argc, char **argv)
     const char *in[2] = {NULL, NULL}, *outpath = NULL, *report = NULL;
     int nin = 0;
     bool keep_invalid = false;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0 ||
-            strcmp(a, "--report") == 0) {
-            if (i + 1 == argc)
-                return cli_usage_error("stitch", "%s needs a value", a);
-            if (strcmp(a, "--report") == 0)
-                report = argv[++i];
+    enum { O_OUT, O_REPORT, O_KEEP_INVALID };
+    static const cli_opt opts[] = {
+        {"-o", O_OUT, true},           {"--output", O_OUT, true},
+        {"--report", O_REPORT, true},  {"--keep-invalid", O_KEEP_INVALID, false},
+        {NULL, 0, false},
+    };
+    cli_args a;
+    const char *v;
+    cli_args_init(&a, "stitch", argc, argv, opts);
+    for (int k; (k = cli_args_next(&a, &v)) != CLI_ARGS_END;) {
+        int r = 0;
+        switch (k) {
+        case O_OUT: outpath = v; break;
+        case O_REPORT: report = v; break;
+        case O_KEEP_INVALID: keep_invalid = true; break;
+        case CLI_ARGS_POSITIONAL:
+            if (nin < 2)
+                in[nin++] = v;
             else
-                outpath = argv[++i];
-        } else if (strcmp(a, "--keep-invalid") == 0) {
-            keep_invalid = true;
-        } else if (a[0] == '-' && a[1] != '\0') {
-            return cli_usage_error("stitch", "unknown option '%s'", a);
-        } else if (nin < 2) {
-            in[nin++] = a;
-        } else {
-            return cli_usage_error("stitch", "unexpected argument '%s'", a);
+                r = cli_args_unexpected(&a, v);
+            break;
+        default: r = CLI_ARGS_ERROR;
         }
+        if (r)
+            return CLI_USAGE;
     }
     if (nin < 2)
         return cli_usage_error("stitch", "needs two model files");
