@@ -19,6 +19,14 @@ void cli_args_init(cli_args *a, const char *cmd, int argc, char **argv,
         assert(o->key >= 0 && o->name[0] == '-');
 }
 
+void cli_args_positionals(cli_args *a, const char **slots, int n)
+{
+    a->slots = slots;
+    a->nslots = n;
+    for (int k = 0; k < n; k++)
+        slots[k] = NULL;
+}
+
 int cli_args_next(cli_args *a, const char **val)
 {
     *val = NULL;
@@ -30,8 +38,16 @@ int cli_args_next(cli_args *a, const char **val)
         return cli_args_next(a, val);
     }
     if (a->only_positional || s[0] != '-' || s[1] == '\0') {
-        *val = s;
-        return CLI_ARGS_POSITIONAL;
+        if (!a->slots) {
+            *val = s;
+            return CLI_ARGS_POSITIONAL;
+        }
+        for (int k = 0; k < a->nslots; k++)
+            if (!a->slots[k]) {
+                a->slots[k] = s;
+                return cli_args_next(a, val);
+            }
+        return cli_args_unexpected(a, s);
     }
     const char *eq = strncmp(s, "--", 2) == 0 ? strchr(s, '=') : NULL;
     size_t len = eq ? (size_t)(eq - s) : strlen(s);
@@ -117,6 +133,16 @@ int cli_args_format(cli_args *a, const char *s, proto_format *ret)
     }
     *ret = f;
     return 0;
+}
+
+int cli_args_output(cli_args *a, const char *out)
+{
+    if (!out)
+        return cli_usage_error(a->cmd, "needs -o OUT");
+    if (proto_format_from_path(out) == PROTO_FMT_UNKNOWN)
+        return cli_usage_error(a->cmd, "%s: cannot tell the format from the "
+                               "name", out);
+    return CLI_OK;
 }
 
 int cli_args_unexpected(cli_args *a, const char *arg)

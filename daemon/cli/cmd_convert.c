@@ -49,7 +49,6 @@ int cmd_convert(int argc, char **argv)
         return CLI_OK;
     }
     const char *files[2] = {NULL, NULL};
-    int nfiles = 0;
     proto_format from = PROTO_FMT_UNKNOWN, to = PROTO_FMT_UNKNOWN;
     double width = 0.0;
     enum { O_FROM, O_TO, O_WIDTH };
@@ -60,6 +59,7 @@ int cmd_convert(int argc, char **argv)
     cli_args a;
     const char *v;
     cli_args_init(&a, "convert", argc, argv, opts);
+    cli_args_positionals(&a, files, 2);
     for (int k; (k = cli_args_next(&a, &v)) != CLI_ARGS_END;) {
         int r = 0;
         switch (k) {
@@ -69,18 +69,12 @@ int cmd_convert(int argc, char **argv)
             r = cli_args_positive(&a, v, DBL_MAX, "a positive number of mm",
                                   &width);
             break;
-        case CLI_ARGS_POSITIONAL:
-            if (nfiles < 2)
-                files[nfiles++] = v;
-            else
-                r = cli_args_unexpected(&a, v);
-            break;
         default: r = CLI_ARGS_ERROR;
         }
         if (r)
             return CLI_USAGE;
     }
-    if (nfiles < 2)
+    if (!files[1])
         return cli_usage_error("convert", "needs an input and an output file");
     if (from == PROTO_FMT_UNKNOWN)
         from = proto_format_from_path(files[0]);

@@ -68,6 +68,7 @@ int cmd_correct(int argc, char **argv)
     cli_args a;
     const char *v;
     cli_args_init(&a, "correct", argc, argv, opts);
+    cli_args_positionals(&a, &in, 1);
     for (int k; (k = cli_args_next(&a, &v)) != CLI_ARGS_END;) {
         int r = 0;
         double views;
@@ -96,11 +97,6 @@ int cmd_correct(int argc, char **argv)
             break;
         case O_NO_COLLAPSE: o.collapse_clusters = false; break;
         case O_CONVEX: o.convex = true; break;
-        case CLI_ARGS_POSITIONAL:
-            if (in)
-                r = cli_args_unexpected(&a, v);
-            in = v;
-            break;
         default: r = CLI_ARGS_ERROR;
         }
         if (r)
@@ -108,11 +104,8 @@ int cmd_correct(int argc, char **argv)
     }
     if (!in)
         return cli_usage_error("correct", "needs a model file");
-    if (!outpath)
-        return cli_usage_error("correct", "needs -o OUT");
-    if (proto_format_from_path(outpath) == PROTO_FMT_UNKNOWN)
-        return cli_usage_error("correct", "%s: cannot tell the format from "
-                               "the name", outpath);
+    if (cli_args_output(&a, outpath) != CLI_OK)
+        return CLI_USAGE;
 
     geo_err err = {{0}};
     geo_poly *p = proto_model_read_file(in, PROTO_FMT_UNKNOWN, NULL, &err);

@@ -79,6 +79,7 @@ int cmd_fill(int argc, char **argv)
     cli_args a;
     const char *v;
     cli_args_init(&a, "fill", argc, argv, opts);
+    cli_args_positionals(&a, &in, 1);
     for (int k; (k = cli_args_next(&a, &v)) != CLI_ARGS_END;) {
         int r = 0;
         switch (k) {
@@ -97,11 +98,6 @@ int cmd_fill(int argc, char **argv)
         case O_NO_REFINE: o.fill.refine = false; break;
         case O_NO_FAIR: o.fill.fair = GEO_FAIR_NONE; break;
         case O_KEEP_INVALID: keep_invalid = true; break;
-        case CLI_ARGS_POSITIONAL:
-            if (in)
-                r = cli_args_unexpected(&a, v);
-            in = v;
-            break;
         default: r = CLI_ARGS_ERROR;
         }
         if (r)
@@ -109,11 +105,8 @@ int cmd_fill(int argc, char **argv)
     }
     if (!in)
         return cli_usage_error("fill", "needs a model file");
-    if (!outpath)
-        return cli_usage_error("fill", "needs -o OUT");
-    if (proto_format_from_path(outpath) == PROTO_FMT_UNKNOWN)
-        return cli_usage_error("fill", "%s: cannot tell the format from the "
-                               "name", outpath);
+    if (cli_args_output(&a, outpath) != CLI_OK)
+        return CLI_USAGE;
 
     geo_err err = {{0}};
     geo_poly *p = proto_model_read_file(in, PROTO_FMT_UNKNOWN, NULL, &err);

@@ -111,6 +111,7 @@ int cmd_merge(int argc, char **argv)
     cli_args args;
     const char *v;
     cli_args_init(&args, "merge", argc, argv, opts);
+    cli_args_positionals(&args, &in, 1);
     for (int k; (k = cli_args_next(&args, &v)) != CLI_ARGS_END;) {
         switch (k) {
         case O_AUTO: automatic = true; break;
@@ -139,11 +140,6 @@ int cmd_merge(int argc, char **argv)
                 return CLI_USAGE;
             }
             break;
-        case CLI_ARGS_POSITIONAL:
-            if (in)
-                return cli_usage_error("merge", "unexpected argument '%s'", v);
-            in = v;
-            break;
         default: return CLI_USAGE;
         }
     }
@@ -151,11 +147,8 @@ int cmd_merge(int argc, char **argv)
         return cli_usage_error("merge", "needs a model file");
     if (!!groups == automatic)
         return cli_usage_error("merge", "needs exactly one of --groups and --auto");
-    if (!outpath)
-        return cli_usage_error("merge", "needs -o OUT");
-    if (proto_format_from_path(outpath) == PROTO_FMT_UNKNOWN)
-        return cli_usage_error("merge", "%s: cannot tell the format from the "
-                               "name", outpath);
+    if (cli_args_output(&args, outpath) != CLI_OK)
+        return CLI_USAGE;
     uint32_t ng = 0, *gstart = NULL, *gfacets = NULL;
     if (groups && parse_groups(groups, &ng, &gstart, &gfacets) < 0)
         return cli_usage_error("merge", "--groups: expected facet indices "

@@ -55,7 +55,6 @@ int cmd_stitch(int argc, char **argv)
         return CLI_OK;
     }
     const char *in[2] = {NULL, NULL}, *outpath = NULL, *report = NULL;
-    int nin = 0;
     bool keep_invalid = false;
     enum { O_OUT, O_REPORT, O_KEEP_INVALID };
     static const cli_opt opts[] = {
@@ -66,30 +65,22 @@ int cmd_stitch(int argc, char **argv)
     cli_args a;
     const char *v;
     cli_args_init(&a, "stitch", argc, argv, opts);
+    cli_args_positionals(&a, in, 2);
     for (int k; (k = cli_args_next(&a, &v)) != CLI_ARGS_END;) {
         int r = 0;
         switch (k) {
         case O_OUT: outpath = v; break;
         case O_REPORT: report = v; break;
         case O_KEEP_INVALID: keep_invalid = true; break;
-        case CLI_ARGS_POSITIONAL:
-            if (nin < 2)
-                in[nin++] = v;
-            else
-                r = cli_args_unexpected(&a, v);
-            break;
         default: r = CLI_ARGS_ERROR;
         }
         if (r)
             return CLI_USAGE;
     }
-    if (nin < 2)
+    if (!in[1])
         return cli_usage_error("stitch", "needs two model files");
-    if (!outpath)
-        return cli_usage_error("stitch", "needs -o OUT");
-    if (proto_format_from_path(outpath) == PROTO_FMT_UNKNOWN)
-        return cli_usage_error("stitch", "%s: cannot tell the format from "
-                               "the name", outpath);
+    if (cli_args_output(&a, outpath) != CLI_OK)
+        return CLI_USAGE;
     geo_err err = {{0}};
     geo_poly *m[2] = {NULL, NULL}, *out = NULL;
     json_t *sj = NULL, *vj = NULL, *doc = NULL;
