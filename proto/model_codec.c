@@ -489,3 +489,26 @@ int proto_finish_planes(geo_poly *p, const bool *given,
     }
     return 0;
 }
+
+geo_poly *proto_poly_alloc(uint64_t nv, uint64_t nf, uint64_t nc,
+                           bool **ret_given, geo_err *err)
+{
+    geo_poly *p = geo_poly_new();
+    bool *given = ret_given ? calloc(nf ? nf : 1, sizeof *given) : NULL;
+    if (!p || (ret_given && !given) || geo_poly_reserve(p, nv, nf, nc) < 0) {
+        free(given);
+        geo_err_set(err, -ENOMEM, "out of memory");
+        return geo_poly_free(p);
+    }
+    if (ret_given)
+        *ret_given = given;
+    return p;
+}
+
+geo_poly *proto_read_done(geo_poly *p, bool *given, proto_read_report *rep,
+                          geo_err *err)
+{
+    int r = proto_finish_planes(p, given, rep, err);
+    free(given);
+    return r < 0 ? geo_poly_free(p) : p;
+}

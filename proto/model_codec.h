@@ -111,6 +111,19 @@ int proto_check_limits(const proto_limits *lim, uint64_t nverts,
 int proto_finish_planes(geo_poly *p, const bool *given,
                         proto_read_report *rep, geo_err *err);
 
+/* A new model with room for nv vertices, nf facets and nc corners, and,
+ * when ret_given is not NULL, *ret_given an array of nf flags (false) for
+ * the readers of formats that give planes. NULL with err set on
+ * out-of-memory, nothing left allocated. */
+geo_poly *proto_poly_alloc(uint64_t nv, uint64_t nf, uint64_t nc,
+                           bool **ret_given, geo_err *err);
+
+/* The end of every reader: p completed by proto_finish_planes and
+ * returned, or freed and NULL when that fails; given (may be NULL) is
+ * freed either way. */
+geo_poly *proto_read_done(geo_poly *p, bool *given, proto_read_report *rep,
+                          geo_err *err);
+
 /* The codecs. */
 geo_poly *proto_json_read(const void *data, size_t len,
                           const proto_limits *lim, proto_read_report *rep,

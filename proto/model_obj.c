@@ -131,11 +131,9 @@ geo_poly *proto_obj_read(const void *data, size_t len,
     }
     if (proto_check_limits(lim, nv, nf, 0, err) < 0)
         return NULL;
-    geo_poly *p = geo_poly_new();
-    if (!p || geo_poly_reserve(p, nv, nf, nf * 3) < 0) {
-        geo_err_set(err, -ENOMEM, "out of memory");
-        return geo_poly_free(p);
-    }
+    geo_poly *p = proto_poly_alloc(nv, nf, nf * 3, NULL, err);
+    if (!p)
+        return NULL;
     proto_scan_init(&s, data, len, false);
     while (proto_scan_line(&s, &line, &n)) {
         uint32_t ln = s.tok_line;
@@ -152,9 +150,7 @@ geo_poly *proto_obj_read(const void *data, size_t len,
         if (e < 0)
             return geo_poly_free(p);
     }
-    if (proto_finish_planes(p, NULL, rep, err) < 0)
-        return geo_poly_free(p);
-    return p;
+    return proto_read_done(p, NULL, rep, err);
 }
 
 int proto_obj_write(const geo_poly *p, proto_buf *b, geo_err *err)

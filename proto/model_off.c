@@ -314,11 +314,9 @@ geo_poly *proto_off_read(const void *data, size_t len,
                     "bytes left cannot hold them", s.tok_line, nv, nf, left);
         return NULL;
     }
-    geo_poly *p = geo_poly_new();
-    if (!p || geo_poly_reserve(p, nv, nf, (size_t)nf * 3) < 0) {
-        geo_err_set(err, -ENOMEM, "out of memory");
-        return geo_poly_free(p);
-    }
+    geo_poly *p = proto_poly_alloc(nv, nf, (uint64_t)nf * 3, NULL, err);
+    if (!p)
+        return NULL;
     const char *line;
     size_t n;
     uint32_t ln = s.tok_line;
@@ -348,9 +346,7 @@ geo_poly *proto_off_read(const void *data, size_t len,
                     "announced)", ln, proto_tok_show(line, n, shown), nf);
         return geo_poly_free(p);
     }
-    if (proto_finish_planes(p, NULL, rep, err) < 0)
-        return geo_poly_free(p);
-    return p;
+    return proto_read_done(p, NULL, rep, err);
 }
 
 int proto_off_write(const geo_poly *p, proto_buf *b, geo_err *err)
