@@ -512,3 +512,17 @@ geo_poly *proto_read_done(geo_poly *p, bool *given, proto_read_report *rep,
     free(given);
     return r < 0 ? geo_poly_free(p) : p;
 }
+
+void proto_buf_vertex_lines(proto_buf *b, const geo_poly *p,
+                            const char *prefix)
+{
+    for (uint32_t i = 0; i < p->nverts; i++) {
+        proto_buf_puts(b, prefix);
+        for (int k = 0; k < 3; k++) {
+            if (k)
+                proto_buf_puts(b, " ");
+            proto_buf_double(b, p->verts[i][k]);
+        }
+        proto_buf_puts(b, "\n");
+    }
+}

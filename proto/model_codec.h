@@ -124,6 +124,11 @@ geo_poly *proto_poly_alloc(uint64_t nv, uint64_t nf, uint64_t nc,
 geo_poly *proto_read_done(geo_poly *p, bool *given, proto_read_report *rep,
                           geo_err *err);
 
+/* Appends every vertex of p as a line "PREFIXx y z" (prefix "" or "v "),
+ * coordinates as by proto_buf_double. */
+void proto_buf_vertex_lines(proto_buf *b, const geo_poly *p,
+                            const char *prefix);
+
 /* The codecs. */
 geo_poly *proto_json_read(const void *data, size_t len,
                           const proto_limits *lim, proto_read_report *rep,

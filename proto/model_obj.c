@@ -159,14 +159,7 @@ int proto_obj_write(const geo_poly *p, proto_buf *b, geo_err *err)
     proto_buf_printf(b, "# %u vertices, %u facets (counter-clockwise seen "
                         "from outside), millimetres\n",
                      p->nverts, p->nfacets);
-    for (uint32_t i = 0; i < p->nverts; i++) {
-        proto_buf_puts(b, "v");
-        for (int k = 0; k < 3; k++) {
-            proto_buf_puts(b, " ");
-            proto_buf_double(b, p->verts[i][k]);
-        }
-        proto_buf_puts(b, "\n");
-    }
+    proto_buf_vertex_lines(b, p, "v ");
     for (uint32_t f = 0; f < p->nfacets; f++) {
         uint32_t n = geo_poly_facet_size(p, f);
         const uint32_t *v = geo_poly_facet(p, f);

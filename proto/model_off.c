@@ -355,14 +355,7 @@ int proto_off_write(const geo_poly *p, proto_buf *b, geo_err *err)
     proto_buf_printf(b, "OFF\n# %u vertices, %u facets (counter-clockwise "
                         "seen from outside), millimetres\n%u %u 0\n",
                      p->nverts, p->nfacets, p->nverts, p->nfacets);
-    for (uint32_t i = 0; i < p->nverts; i++) {
-        for (int k = 0; k < 3; k++) {
-            if (k)
-                proto_buf_puts(b, " ");
-            proto_buf_double(b, p->verts[i][k]);
-        }
-        proto_buf_puts(b, "\n");
-    }
+    proto_buf_vertex_lines(b, p, "");
     for (uint32_t f = 0; f < p->nfacets; f++) {
         uint32_t n = geo_poly_facet_size(p, f);
         const uint32_t *v = geo_poly_facet(p, f);

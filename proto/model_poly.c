@@ -188,14 +188,7 @@ int proto_polytxt_write(const geo_poly *p, proto_buf *b, geo_err *err)
                       "(outward), 0-based vertex indices counter-clockwise "
                       "from outside\n");
     proto_buf_printf(b, "%u %u\n", p->nverts, p->nfacets);
-    for (uint32_t i = 0; i < p->nverts; i++) {
-        for (int k = 0; k < 3; k++) {
-            if (k)
-                proto_buf_puts(b, " ");
-            proto_buf_double(b, p->verts[i][k]);
-        }
-        proto_buf_puts(b, "\n");
-    }
+    proto_buf_vertex_lines(b, p, "");
     for (uint32_t f = 0; f < p->nfacets; f++) {
         uint32_t n = geo_poly_facet_size(p, f);
         const uint32_t *v = geo_poly_facet(p, f);
