@@ -5,6 +5,7 @@
  * Invariant of proto_buf: data[0..len) is valid, len ≤ cap; once failed
  * is set the buffer never changes again. */
 #include "model_codec.h"
+#include "polygon_triangulate.h"
 
 #include <errno.h>
 #include <float.h>
@@ -525,4 +526,30 @@ void proto_buf_vertex_lines(proto_buf *b, const geo_poly *p,
         }
         proto_buf_puts(b, "\n");
     }
+}
+
+int proto_each_triangle(const geo_poly *p,
+                        void (*emit)(const geo_poly *p, uint32_t f,
+                                     const uint32_t *q, void *arg),
+                        void *arg, geo_err *err)
+{
+    uint32_t maxn = 3;
+    for (uint32_t f = 0; f < p->nfacets; f++)
+        if (geo_poly_facet_size(p, f) > maxn)
+            maxn = geo_poly_facet_size(p, f);
+    uint32_t (*tris)[3] = malloc((size_t)(maxn - 2) * sizeof *tris);
+    if (!tris)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        uint32_t n = geo_poly_facet_size(p, f);
+        if (geo_polygon_triangulate(&p->verts[0][0], geo_poly_facet(p, f), n,
+                                    tris) < 0) {
+            free(tris);
+            return geo_err_set(err, -ENOMEM, "out of memory");
+        }
+        for (uint32_t k = 0; k + 2 < n; k++)
+            emit(p, f, tris[k], arg);
+    }
+    free(tris);
+    return 0;
 }

@@ -129,6 +129,15 @@ geo_poly *proto_read_done(geo_poly *p, bool *given, proto_read_report *rep,
 void proto_buf_vertex_lines(proto_buf *b, const geo_poly *p,
                             const char *prefix);
 
+/* Calls emit(p, f, q, arg) for every triangle of every facet f of p
+ * (polygon_triangulate.h), q holding its corners as positions in the
+ * facet's vertex list, in the facet's turning direction. 0, or -ENOMEM
+ * with err set. */
+int proto_each_triangle(const geo_poly *p,
+                        void (*emit)(const geo_poly *p, uint32_t f,
+                                     const uint32_t *q, void *arg),
+                        void *arg, geo_err *err);
+
 /* The codecs. */
 geo_poly *proto_json_read(const void *data, size_t len,
                           const proto_limits *lim, proto_read_report *rep,
