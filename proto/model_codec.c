@@ -312,6 +312,29 @@ int proto_parse_i64(const char *tok, size_t len, int64_t *ret)
     return 0;
 }
 
+int proto_scan_coords(proto_scan *ls, uint32_t line, uint32_t i, int n,
+                      double *c, geo_err *err)
+{
+    for (int k = 0; k < n; k++) {
+        const char *t;
+        size_t len;
+        char shown[32];
+        if (!proto_scan_token(ls, &t, &len))
+            return geo_err_set(err, -EINVAL,
+                               "line %u: vertices[%u]: expected %d numbers",
+                               line, i, n);
+        int e = proto_parse_double(t, len, &c[k]);
+        if (e < 0)
+            return geo_err_set(err, -EINVAL,
+                               "line %u: vertices[%u][%d]: %s, found \"%s\"",
+                               line, i, k,
+                               e == -ERANGE ? "number out of range"
+                                            : "expected a number",
+                               proto_tok_show(t, len, shown));
+    }
+    return 0;
+}
+
 const char *proto_tok_show(const char *tok, size_t len, char *out)
 {
     size_t n = len > 24 ? 24 : len;

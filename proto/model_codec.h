@@ -86,6 +86,12 @@ int proto_parse_double(const char *tok, size_t len, double *ret);
 int proto_parse_u32(const char *tok, size_t len, uint32_t *ret);
 /* A signed decimal integer within ±2^62. 0, -EINVAL or -ERANGE. */
 int proto_parse_i64(const char *tok, size_t len, int64_t *ret);
+/* Reads the n coordinates (n <= 4) of vertex i, the rest of text line
+ * `line`, into c: 0, or -EINVAL with err "line L: vertices[I]: expected
+ * N numbers" or "line L: vertices[I][K]: expected a number, found \"X\""
+ * ("number out of range" for an overflow). */
+int proto_scan_coords(proto_scan *ls, uint32_t line, uint32_t i, int n,
+                      double *c, geo_err *err);
 /* Formats a token for an error message: at most 24 bytes, non-printable
  * bytes as '?', into out (32 bytes). */
 const char *proto_tok_show(const char *tok, size_t len, char *out);

@@ -36,24 +36,10 @@ static enum stmt statement(const char *line, size_t n)
 static int read_vertex(proto_scan *ls, geo_poly *p, uint32_t line,
                        geo_err *err)
 {
-    uint32_t i = p->nverts;
-    for (int k = 0; k < 3; k++) {
-        const char *t;
-        size_t n;
-        char shown[32];
-        if (!proto_scan_token(ls, &t, &n))
-            return geo_err_set(err, -EINVAL,
-                               "line %u: vertices[%u]: expected 3 numbers",
-                               line, i);
-        int e = proto_parse_double(t, n, &p->verts[i][k]);
-        if (e < 0)
-            return geo_err_set(err, -EINVAL,
-                               "line %u: vertices[%u][%d]: %s, found \"%s\"",
-                               line, i, k,
-                               e == -ERANGE ? "number out of range"
-                                            : "expected a number",
-                               proto_tok_show(t, n, shown));
-    }
+    int e = proto_scan_coords(ls, line, p->nverts, 3, p->verts[p->nverts],
+                              err);
+    if (e < 0)
+        return e;
     p->nverts++;
     return 0;
 }

@@ -115,23 +115,9 @@ static int read_vertex(proto_scan *ls, geo_poly *p, const off_header *h,
     uint32_t i = p->nverts;
     int ncoords = h->homogeneous ? 4 : 3;
     double c[4];
-    for (int k = 0; k < ncoords; k++) {
-        const char *t;
-        size_t n;
-        char shown[32];
-        if (!proto_scan_token(ls, &t, &n))
-            return geo_err_set(err, -EINVAL,
-                               "line %u: vertices[%u]: expected %d numbers",
-                               line, i, ncoords);
-        int e = proto_parse_double(t, n, &c[k]);
-        if (e < 0)
-            return geo_err_set(err, -EINVAL,
-                               "line %u: vertices[%u][%d]: %s, found \"%s\"",
-                               line, i, k,
-                               e == -ERANGE ? "number out of range"
-                                            : "expected a number",
-                               proto_tok_show(t, n, shown));
-    }
+    int e = proto_scan_coords(ls, line, i, ncoords, c, err);
+    if (e < 0)
+        return e;
     if (h->homogeneous) {
         if (!(c[3] != 0))
             return geo_err_set(err, -EINVAL,
