@@ -395,12 +395,10 @@ static int session_open(session *s, const geo_poly *p, const geo_merge_opts *o,
                         geo_merge_report *rep, geo_err *err)
 {
     memset(s, 0, sizeof *s);
-    int r = geo_poly_validate_indices(p, err);
-    if (r < 0)
-        return r;
-    geo_topo *t = geo_topo_build(p, err);
+    int r;
+    geo_topo *t = geo_topo_build_checked(p, &r, err);
     if (!t)
-        return -ENOMEM;
+        return r;
     bool ok = geo_topo_is_closed_manifold(t);
     geo_topo_free(t);
     if (!ok)
