@@ -28,6 +28,9 @@ int cli_usage_error(const char *cmd, const char *fmt, ...)
 int cli_input_error(const char *cmd, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
 
+/* A monotonic clock in milliseconds, for the "ms" a command reports. */
+double cli_mono_ms(void);
+
 /* True when argv holds -h or --help. */
 bool cli_wants_help(int argc, char **argv);
 

@@ -11,7 +11,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "cli.h"
 #include "cli_args.h"
@@ -48,13 +47,6 @@ static const char USAGE[] =
     "no self-intersection), 1 bad input or a result that is not valid (the\n"
     "reasons on stderr; OUT not written unless --keep-invalid), 2 usage\n"
     "error\n";
-
-static double mono_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
-}
 
 int cmd_fill(int argc, char **argv)
 {
@@ -113,9 +105,9 @@ int cmd_fill(int argc, char **argv)
     if (!p)
         return cli_input_error("fill", "%s", err.msg);
     geo_mesh_fill_report rep;
-    double t0 = mono_ms();
+    double t0 = cli_mono_ms();
     int r = geo_fill(p, &o, NULL, &rep, &err);
-    double ms = mono_ms() - t0;
+    double ms = cli_mono_ms() - t0;
     if (r < 0) {
         geo_poly_free(p);
         return cli_input_error("fill", "%s: %s", in, err.msg);

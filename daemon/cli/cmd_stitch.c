@@ -10,7 +10,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "cli.h"
 #include "cli_args.h"
@@ -40,13 +39,6 @@ static const char USAGE[] =
     "input (also meshes without free edges) or a result that is not a\n"
     "valid closed solid (the reasons on stderr; OUT not written unless\n"
     "--keep-invalid), 2 usage error\n";
-
-static double mono_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
-}
 
 int cmd_stitch(int argc, char **argv)
 {
@@ -96,9 +88,9 @@ int cmd_stitch(int argc, char **argv)
         goto out;
     }
     geo_stitch_report rep;
-    double t0 = mono_ms();
+    double t0 = cli_mono_ms();
     int r = geo_stitch(m[0], m[1], NULL, NULL, out, &rep, &err);
-    double ms = mono_ms() - t0;
+    double ms = cli_mono_ms() - t0;
     if (r < 0) {
         rc = cli_input_error("stitch", "%s, %s: %s", in[0], in[1], err.msg);
         goto out;
