@@ -862,27 +862,21 @@ int cfg_restart_only_changes(const cfg *a, const cfg *b, char *buf,
         const key *k = &keys[i];
         if (k->reloadable)
             continue;
+        bool same;
         if (k->type == K_LIST) {
-            bool same = a->nscanner == b->nscanner;
+            same = a->nscanner == b->nscanner;
             for (unsigned j = 0; same && j < a->nscanner; j++)
                 same = strcmp(a->scanner[j], b->scanner[j]) == 0;
-            if (!same) {
-                n++;
-                if (used < size) {
-                    int w = snprintf(buf + used, size - used, "%s%s.%s",
-                                     used ? ", " : "", k->section, k->name);
-                    if (w > 0)
-                        used += (size_t)w;
-                }
-            }
-            continue;
+        } else {
+            size_t len = k->type == K_STR ? strlen((const char *)a + k->off) + 1
+                         : k->type == K_UINT ? sizeof(unsigned)
+                         : k->type == K_BOOL ? sizeof(bool)
+                         : k->type == K_LEVEL ? sizeof(int)
+                                              : sizeof(uint64_t);
+            same = memcmp((const char *)a + k->off, (const char *)b + k->off,
+                          len) == 0;
         }
-        size_t len = k->type == K_STR ? strlen((const char *)a + k->off) + 1
-                     : k->type == K_UINT ? sizeof(unsigned)
-                     : k->type == K_BOOL ? sizeof(bool)
-                     : k->type == K_LEVEL ? sizeof(int)
-                                          : sizeof(uint64_t);
-        if (memcmp((const char *)a + k->off, (const char *)b + k->off, len) == 0)
+        if (same)
             continue;
         n++;
         if (used < size) {

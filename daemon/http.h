@@ -20,6 +20,7 @@
 
 #include "http_server.h"
 #include "job.h"
+#include "json_pull.h"
 
 /* ---- waiter hub (http_wait.c) ----
  * A waiter is a suspended connection waiting for a job to change, for a
@@ -161,6 +162,9 @@ enum MHD_Result http_problem(http_req *r, unsigned status, const char *slug,
                              const char *title, json_t *errors,
                              const char *const *headers, const char *fmt, ...)
     __attribute__((format(printf, 7, 8)));
+/* The answer to a body that is not JSON: 400 malformed-json naming line
+ * and column, or 500 when reading it ran out of memory. */
+enum MHD_Result http_malformed_json(http_req *r, const proto_jerror *je);
 /* Copies src into dst (size bytes, NUL-terminated), every byte that is
  * not part of well-formed UTF-8 written as the four characters \\xHH, so
  * the result always serialises as a JSON string. */

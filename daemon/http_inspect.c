@@ -255,20 +255,6 @@ static int scan_body(const char *text, size_t len, uint64_t cap, scan *s,
     return r;
 }
 
-static enum MHD_Result bad_json(http_req *r, const proto_jerror *je)
-{
-    if (je->code == -ENOMEM)
-        return http_problem(r, 500, "out-of-memory", "Internal Server Error",
-                            NULL, NULL, "out of memory reading the body");
-    json_t *errors = json_pack("[{s:s, s:s, s:i, s:i}]", "path", "",
-                               "message", je->text, "line",
-                               (json_int_t)je->line, "column",
-                               (json_int_t)je->column);
-    return http_problem(r, 400, "malformed-json", "Bad Request", errors, NULL,
-                        "line %d, column %d: %s", je->line, je->column,
-                        je->text);
-}
-
 /* Reads the model (the body, or its "model" member) in place. */
 static geo_poly *read_model(http_req *r, const scan *s, unsigned cap,
                             bool *syntax, proto_jerror *je, geo_err *err)
@@ -350,7 +336,7 @@ enum MHD_Result http_post_inspect(http_req *r)
     scan s;
     proto_jerror je;
     if (scan_body(r->body ? r->body : "", r->len, cap, &s, &je) < 0)
-        return bad_json(r, &je);
+        return http_malformed_json(r, &je);
     if (s.wrapped && s.unknown[0])
         return http_problem(r, 422, "invalid-model", "Unprocessable Content",
                             json_pack("[{s:s, s:s}]", "path", s.unknown,
@@ -366,7 +352,7 @@ enum MHD_Result http_post_inspect(http_req *r)
     geo_err err = {{0}};
     geo_poly *p = read_model(r, &s, cap, &syntax, &je, &err);
     if (!p && syntax)
-        return bad_json(r, &je);
+        return http_malformed_json(r, &je);
     if (!p)
         return http_problem(r, 422, "invalid-model", "Unprocessable Content",
                             json_pack("[o]", http_error_entry(err.msg)), NULL,

@@ -64,20 +64,6 @@ static enum MHD_Result reply_job(http_req *r, unsigned status, job_rec *j,
     return http_reply_json(r, status, o, headers);
 }
 
-static enum MHD_Result malformed(http_req *r, const proto_jerror *je)
-{
-    if (je->code == -ENOMEM)
-        return http_problem(r, 500, "out-of-memory", "Internal Server Error",
-                            NULL, NULL, "out of memory reading the body");
-    json_t *errors = json_pack("[{s:s, s:s, s:i, s:i}]", "path", "",
-                               "message", je->text, "line",
-                               (json_int_t)je->line, "column",
-                               (json_int_t)je->column);
-    return http_problem(r, 400, "malformed-json", "Bad Request", errors, NULL,
-                        "line %d, column %d: %s", je->line, je->column,
-                        je->text);
-}
-
 /* The body of POST /v1/jobs, read in one pass of the pull tokenizer: the
  * model goes straight into a geo_poly (no tree of its 10,000s of
  * numbers), every other member becomes a jansson value parsed from its
@@ -501,7 +487,7 @@ enum MHD_Result http_post_job(http_req *r)
     proto_jpull j;
     job_body jb;
     if (read_job_body(r, &j, &jb) < 0) {
-        enum MHD_Result res = malformed(r, &j.error);
+        enum MHD_Result res = http_malformed_json(r, &j.error);
         job_body_clear(&jb, &j);
         return res;
     }

@@ -6,6 +6,7 @@
 #include "http.h"
 
 #include <ctype.h>
+#include <errno.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -34,6 +35,22 @@ enum MHD_Result http_reply(http_req *r, unsigned status, const char *ctype,
     return ret;
 }
 
+/* Sends text (malloc'd, taken) with a trailing newline, which makes curl
+ * output and logs readable. */
+static enum MHD_Result reply_text_line(http_req *r, unsigned status,
+                                       const char *ctype, char *text,
+                                       const char *const *headers)
+{
+    size_t n = strlen(text);
+    char *nl = realloc(text, n + 2);
+    if (nl) {
+        text = nl;
+        text[n++] = '\n';
+        text[n] = '\0';
+    }
+    return http_reply(r, status, ctype, text, n, true, headers);
+}
+
 enum MHD_Result http_reply_json(http_req *r, unsigned status, json_t *body,
                                 const char *const *headers)
 {
@@ -42,15 +59,7 @@ enum MHD_Result http_reply_json(http_req *r, unsigned status, json_t *body,
     if (!text)
         return http_problem(r, 500, "out-of-memory", "Out of memory", NULL,
                             NULL, "the response could not be built");
-    size_t n = strlen(text);
-    /* A trailing newline makes curl output and logs readable. */
-    char *nl = realloc(text, n + 2);
-    if (nl) {
-        text = nl;
-        text[n++] = '\n';
-        text[n] = '\0';
-    }
-    return http_reply(r, status, "application/json", text, n, true, headers);
+    return reply_text_line(r, status, "application/json", text, headers);
 }
 
 /* Length of the well-formed UTF-8 sequence at s (RFC 3629: no overlong
@@ -137,15 +146,22 @@ enum MHD_Result http_problem(http_req *r, unsigned status, const char *slug,
         return http_reply(r, 500, "application/problem+json", (char *)oom,
                           sizeof oom - 1, false, NULL);
     }
-    size_t n = strlen(text);
-    char *nl = realloc(text, n + 2);
-    if (nl) {
-        text = nl;
-        text[n++] = '\n';
-        text[n] = '\0';
-    }
-    return http_reply(r, status, "application/problem+json", text, n, true,
-                      headers);
+    return reply_text_line(r, status, "application/problem+json", text,
+                           headers);
+}
+
+enum MHD_Result http_malformed_json(http_req *r, const proto_jerror *je)
+{
+    if (je->code == -ENOMEM)
+        return http_problem(r, 500, "out-of-memory", "Internal Server Error",
+                            NULL, NULL, "out of memory reading the body");
+    json_t *errors = json_pack("[{s:s, s:s, s:i, s:i}]", "path", "",
+                               "message", je->text, "line",
+                               (json_int_t)je->line, "column",
+                               (json_int_t)je->column);
+    return http_problem(r, 400, "malformed-json", "Bad Request", errors, NULL,
+                        "line %d, column %d: %s", je->line, je->column,
+                        je->text);
 }
 
 json_t *http_error_entry(const char *msg)

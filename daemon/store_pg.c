@@ -509,6 +509,23 @@ static int why_not(PGconn *pg, const char *id, int64_t token, bool stale,
     return r;
 }
 
+/* The end of a write under the claim token (finish, requeue): r, or why
+ * the row was not written (res NULL: exec failed, r and err say why).
+ * Refused for good (-EBUSY, -ENOENT) or written: the claim is forgotten;
+ * a failed write keeps the token until the lease would lapse. */
+static int claimed_write_end(pg_store *ps, PGconn *pg, PGresult *res,
+                             const char *id, int64_t token, int r,
+                             geo_err *err)
+{
+    if (res) {
+        if (PQntuples(res) < 1)
+            r = why_not(pg, id, token, false, err);
+        PQclear(res);
+    }
+    claim_release(ps, id, r == 0 || r == -EBUSY || r == -ENOENT);
+    return r;
+}
+
 /* ---- the operations ------------------------------------------------ */
 
 /* Reads the job an idempotency key names: -EEXIST with *ret_existing,
@@ -690,15 +707,7 @@ static int pg_finish(store *s, const char *id, job_state state,
         "WHERE $10::bytea IS NOT NULL) "
         "SELECT seq FROM u",
         10, v, len, fmt, 0, &r, err);
-    if (res) {
-        if (PQntuples(res) < 1)
-            r = why_not(pg, id, token, false, err);
-        PQclear(res);
-    }
-    /* refused for good (-EBUSY, -ENOENT) or written: forget the claim;
-     * a failed write keeps the token until the lease would lapse */
-    claim_release(P(s), id, r == 0 || r == -EBUSY || r == -ENOENT);
-    return r;
+    return claimed_write_end(P(s), pg, res, id, token, r, err);
 }
 
 static int pg_requeue(store *s, const char *id, geo_err *err)
@@ -714,13 +723,7 @@ static int pg_requeue(store *s, const char *id, geo_err *err)
                          "claim_token=0, lease_until=NULL WHERE id=$1 AND "
                          "state=1 AND claim_token=$2 RETURNING seq", 2, v,
                          NULL, NULL, 0, &r, err);
-    if (res) {
-        if (PQntuples(res) < 1)
-            r = why_not(pg, id, token, false, err);
-        PQclear(res);
-    }
-    claim_release(P(s), id, r == 0 || r == -EBUSY || r == -ENOENT);
-    return r;
+    return claimed_write_end(P(s), pg, res, id, token, r, err);
 }
 
 static int get_row(PGconn *pg, const char *id, job_rec *ret, geo_err *err)

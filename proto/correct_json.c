@@ -31,6 +31,29 @@ static json_t *finish(json_t *v, bool ok)
     return v;
 }
 
+/* The model's size before and after, in the order of every report. */
+static void put_sizes(json_t *o, uint32_t vertices_before,
+                      uint32_t facets_before, uint32_t vertices_after,
+                      uint32_t facets_after, bool *ok)
+{
+    put(o, "vertices_before", json_integer(vertices_before), ok);
+    put(o, "facets_before", json_integer(facets_before), ok);
+    put(o, "vertices_after", json_integer(vertices_after), ok);
+    put(o, "facets_after", json_integer(facets_after), ok);
+}
+
+/* A report object and the array of its list: both, or false and neither. */
+static bool report_with_list(json_t **ret_o, json_t **ret_list)
+{
+    *ret_o = json_object();
+    *ret_list = json_array();
+    if (*ret_o && *ret_list)
+        return true;
+    json_decref(*ret_o);
+    json_decref(*ret_list);
+    return false;
+}
+
 static json_t *u32_array(const uint32_t *a, uint32_t n)
 {
     json_t *arr = json_array();
@@ -92,13 +115,10 @@ static json_t *proto_merge_group_to_json(const geo_merge_report *r,
 
 json_t *proto_merge_report_to_json(const geo_merge_report *r)
 {
-    json_t *o = json_object(), *groups = json_array();
-    bool ok = o && groups;
-    if (!ok) {
-        json_decref(o);
-        json_decref(groups);
+    json_t *o, *groups;
+    if (!report_with_list(&o, &groups))
         return NULL;
-    }
+    bool ok = true;
     for (uint32_t g = 0; ok && g < r->ngroups; g++) {
         json_t *x = proto_merge_group_to_json(r, g);
         if (!x || json_array_append_new(groups, x) < 0)
@@ -113,10 +133,8 @@ json_t *proto_merge_report_to_json(const geo_merge_report *r)
     put(o, "noise", num(r->noise), &ok);
     put(o, "max_deviation", num(r->max_dev), &ok);
     put(o, "bevels", json_integer(r->bevels), &ok);
-    put(o, "vertices_before", json_integer(r->vertices_before), &ok);
-    put(o, "facets_before", json_integer(r->facets_before), &ok);
-    put(o, "vertices_after", json_integer(r->vertices_after), &ok);
-    put(o, "facets_after", json_integer(r->facets_after), &ok);
+    put_sizes(o, r->vertices_before, r->facets_before, r->vertices_after,
+              r->facets_after, &ok);
     put(o, "volume_before", num(r->volume_before), &ok);
     put(o, "volume_after", num(r->volume_after), &ok);
     put(o, "group_list", groups, &ok);
@@ -126,13 +144,10 @@ json_t *proto_merge_report_to_json(const geo_merge_report *r)
 
 json_t *proto_collapse_report_to_json(const geo_collapse_report *r)
 {
-    json_t *o = json_object(), *list = json_array();
-    bool ok = o && list;
-    if (!ok) {
-        json_decref(o);
-        json_decref(list);
+    json_t *o, *list;
+    if (!report_with_list(&o, &list))
         return NULL;
-    }
+    bool ok = true;
     for (uint32_t c = 0; ok && c < r->clusters; c++) {
         json_t *x = json_object();
         bool xok = x != NULL;
@@ -168,10 +183,8 @@ json_t *proto_correct_report_to_json(const geo_correct_report *r)
     bool ok = o != NULL;
     if (!ok)
         return NULL;
-    put(o, "vertices_before", json_integer(r->vertices_before), &ok);
-    put(o, "facets_before", json_integer(r->facets_before), &ok);
-    put(o, "vertices_after", json_integer(r->vertices_after), &ok);
-    put(o, "facets_after", json_integer(r->facets_after), &ok);
+    put_sizes(o, r->vertices_before, r->facets_before, r->vertices_after,
+              r->facets_after, &ok);
     put(o, "volume_before", num(r->volume_before), &ok);
     put(o, "volume_after", num(r->volume_after), &ok);
     put(o, "volume_change", num(r->volume_after - r->volume_before), &ok);

@@ -7,11 +7,7 @@
  * split (0), and *MESH_NORMALS with each triangle's facet normal (flat
  * shading: the vertex normals of a triangle are its facet's). Numbers are
  * the shortest decimals that read back exactly. */
-#include <errno.h>
-#include <stdlib.h>
-
 #include "model_codec.h"
-#include "polygon_triangulate.h"
 
 static int polygon_edge(uint32_t a, uint32_t b, uint32_t n)
 {
@@ -27,16 +23,44 @@ static void put_xyz(proto_buf *b, const double *v)
     proto_buf_puts(b, "\n");
 }
 
+/* One pass over the triangles: pass 0 the faces, pass 1 the normals;
+ * t numbers the triangles. */
+typedef struct ase_pass {
+    proto_buf *b;
+    int pass;
+    uint64_t t;
+} ase_pass;
+
+static void emit_triangle(const geo_poly *p, uint32_t f, const uint32_t *q,
+                          void *arg)
+{
+    ase_pass *a = arg;
+    proto_buf *b = a->b;
+    uint32_t n = geo_poly_facet_size(p, f);
+    const uint32_t *v = geo_poly_facet(p, f);
+    unsigned long long t = a->t++;
+    if (a->pass == 0) {
+        proto_buf_printf(b,
+                         "\t\t\t*MESH_FACE %llu:\tA: %u\tB: %u\tC: %u\t"
+                         "AB: %d\tBC: %d\tCA: %d\t*MESH_SMOOTHING 0\t"
+                         "*MESH_MTLID 0\n",
+                         t, v[q[0]], v[q[1]], v[q[2]],
+                         polygon_edge(q[0], q[1], n),
+                         polygon_edge(q[1], q[2], n),
+                         polygon_edge(q[2], q[0], n));
+        return;
+    }
+    proto_buf_printf(b, "\t\t\t*MESH_FACENORMAL %llu", t);
+    put_xyz(b, p->planes[f]);
+    for (int c = 0; c < 3; c++) {
+        proto_buf_printf(b, "\t\t\t\t*MESH_VERTEXNORMAL %u", v[q[c]]);
+        put_xyz(b, p->planes[f]);
+    }
+}
+
 int proto_ase_write(const geo_poly *p, proto_buf *b, geo_err *err)
 {
-    uint32_t maxn = 3;
-    for (uint32_t f = 0; f < p->nfacets; f++)
-        if (geo_poly_facet_size(p, f) > maxn)
-            maxn = geo_poly_facet_size(p, f);
     uint64_t nt = geo_poly_ncorners(p) - 2 * (uint64_t)p->nfacets;
-    uint32_t (*tris)[3] = malloc((size_t)(maxn - 2) * sizeof *tris);
-    if (!tris)
-        return geo_err_set(err, -ENOMEM, "out of memory");
     proto_buf_puts(b, "*3DSMAX_ASCIIEXPORT\t200\n"
                       "*COMMENT \"facetd: polyhedron in millimetres\"\n"
                       "*SCENE {\n"
@@ -67,42 +91,13 @@ int proto_ase_write(const geo_poly *p, proto_buf *b, geo_err *err)
     proto_buf_puts(b, "\t\t}\n\t\t*MESH_FACE_LIST {\n");
     /* the triangles twice: faces first, then normals, as ASE orders them */
     for (int pass = 0; pass < 2; pass++) {
-        uint64_t t = 0;
-        for (uint32_t f = 0; f < p->nfacets; f++) {
-            uint32_t n = geo_poly_facet_size(p, f);
-            const uint32_t *v = geo_poly_facet(p, f);
-            if (geo_polygon_triangulate(&p->verts[0][0], v, n, tris) < 0) {
-                free(tris);
-                return geo_err_set(err, -ENOMEM, "out of memory");
-            }
-            for (uint32_t k = 0; k + 2 < n; k++, t++) {
-                const uint32_t *q = tris[k];
-                if (pass == 0) {
-                    proto_buf_printf(
-                        b,
-                        "\t\t\t*MESH_FACE %llu:\tA: %u\tB: %u\tC: %u\t"
-                        "AB: %d\tBC: %d\tCA: %d\t*MESH_SMOOTHING 0\t"
-                        "*MESH_MTLID 0\n",
-                        (unsigned long long)t, v[q[0]], v[q[1]], v[q[2]],
-                        polygon_edge(q[0], q[1], n),
-                        polygon_edge(q[1], q[2], n),
-                        polygon_edge(q[2], q[0], n));
-                    continue;
-                }
-                proto_buf_printf(b, "\t\t\t*MESH_FACENORMAL %llu",
-                                 (unsigned long long)t);
-                put_xyz(b, p->planes[f]);
-                for (int c = 0; c < 3; c++) {
-                    proto_buf_printf(b, "\t\t\t\t*MESH_VERTEXNORMAL %u",
-                                     v[q[c]]);
-                    put_xyz(b, p->planes[f]);
-                }
-            }
-        }
+        ase_pass a = {b, pass, 0};
+        int e = proto_each_triangle(p, emit_triangle, &a, err);
+        if (e < 0)
+            return e;
         proto_buf_puts(b, pass == 0 ? "\t\t}\n\t\t*MESH_NUMTVERTEX 0\n"
                                       "\t\t*MESH_NORMALS {\n"
                                     : "\t\t}\n\t}\n}\n");
     }
-    free(tris);
     return 0;
 }

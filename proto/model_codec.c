@@ -5,6 +5,7 @@
  * Invariant of proto_buf: data[0..len) is valid, len ≤ cap; once failed
  * is set the buffer never changes again. */
 #include "model_codec.h"
+#include "polygon_triangulate.h"
 
 #include <errno.h>
 #include <float.h>
@@ -311,6 +312,29 @@ int proto_parse_i64(const char *tok, size_t len, int64_t *ret)
     return 0;
 }
 
+int proto_scan_coords(proto_scan *ls, uint32_t line, uint32_t i, int n,
+                      double *c, geo_err *err)
+{
+    for (int k = 0; k < n; k++) {
+        const char *t;
+        size_t len;
+        char shown[32];
+        if (!proto_scan_token(ls, &t, &len))
+            return geo_err_set(err, -EINVAL,
+                               "line %u: vertices[%u]: expected %d numbers",
+                               line, i, n);
+        int e = proto_parse_double(t, len, &c[k]);
+        if (e < 0)
+            return geo_err_set(err, -EINVAL,
+                               "line %u: vertices[%u][%d]: %s, found \"%s\"",
+                               line, i, k,
+                               e == -ERANGE ? "number out of range"
+                                            : "expected a number",
+                               proto_tok_show(t, len, shown));
+    }
+    return 0;
+}
+
 const char *proto_tok_show(const char *tok, size_t len, char *out)
 {
     size_t n = len > 24 ? 24 : len;
@@ -487,5 +511,68 @@ int proto_finish_planes(geo_poly *p, const bool *given,
             note_mismatch(rep, "facets[%u].plane: the normal points against "
                                "the vertex order (inward)", f);
     }
+    return 0;
+}
+
+geo_poly *proto_poly_alloc(uint64_t nv, uint64_t nf, uint64_t nc,
+                           bool **ret_given, geo_err *err)
+{
+    geo_poly *p = geo_poly_new();
+    bool *given = ret_given ? calloc(nf ? nf : 1, sizeof *given) : NULL;
+    if (!p || (ret_given && !given) || geo_poly_reserve(p, nv, nf, nc) < 0) {
+        free(given);
+        geo_err_set(err, -ENOMEM, "out of memory");
+        return geo_poly_free(p);
+    }
+    if (ret_given)
+        *ret_given = given;
+    return p;
+}
+
+geo_poly *proto_read_done(geo_poly *p, bool *given, proto_read_report *rep,
+                          geo_err *err)
+{
+    int r = proto_finish_planes(p, given, rep, err);
+    free(given);
+    return r < 0 ? geo_poly_free(p) : p;
+}
+
+void proto_buf_vertex_lines(proto_buf *b, const geo_poly *p,
+                            const char *prefix)
+{
+    for (uint32_t i = 0; i < p->nverts; i++) {
+        proto_buf_puts(b, prefix);
+        for (int k = 0; k < 3; k++) {
+            if (k)
+                proto_buf_puts(b, " ");
+            proto_buf_double(b, p->verts[i][k]);
+        }
+        proto_buf_puts(b, "\n");
+    }
+}
+
+int proto_each_triangle(const geo_poly *p,
+                        void (*emit)(const geo_poly *p, uint32_t f,
+                                     const uint32_t *q, void *arg),
+                        void *arg, geo_err *err)
+{
+    uint32_t maxn = 3;
+    for (uint32_t f = 0; f < p->nfacets; f++)
+        if (geo_poly_facet_size(p, f) > maxn)
+            maxn = geo_poly_facet_size(p, f);
+    uint32_t (*tris)[3] = malloc((size_t)(maxn - 2) * sizeof *tris);
+    if (!tris)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        uint32_t n = geo_poly_facet_size(p, f);
+        if (geo_polygon_triangulate(&p->verts[0][0], geo_poly_facet(p, f), n,
+                                    tris) < 0) {
+            free(tris);
+            return geo_err_set(err, -ENOMEM, "out of memory");
+        }
+        for (uint32_t k = 0; k + 2 < n; k++)
+            emit(p, f, tris[k], arg);
+    }
+    free(tris);
     return 0;
 }

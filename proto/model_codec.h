@@ -86,6 +86,12 @@ int proto_parse_double(const char *tok, size_t len, double *ret);
 int proto_parse_u32(const char *tok, size_t len, uint32_t *ret);
 /* A signed decimal integer within ±2^62. 0, -EINVAL or -ERANGE. */
 int proto_parse_i64(const char *tok, size_t len, int64_t *ret);
+/* Reads the n coordinates (n <= 4) of vertex i, the rest of text line
+ * `line`, into c: 0, or -EINVAL with err "line L: vertices[I]: expected
+ * N numbers" or "line L: vertices[I][K]: expected a number, found \"X\""
+ * ("number out of range" for an overflow). */
+int proto_scan_coords(proto_scan *ls, uint32_t line, uint32_t i, int n,
+                      double *c, geo_err *err);
 /* Formats a token for an error message: at most 24 bytes, non-printable
  * bytes as '?', into out (32 bytes). */
 const char *proto_tok_show(const char *tok, size_t len, char *out);
@@ -110,6 +116,33 @@ int proto_check_limits(const proto_limits *lim, uint64_t nverts,
  * too small) or the facet (a plane that cannot be computed in doubles). */
 int proto_finish_planes(geo_poly *p, const bool *given,
                         proto_read_report *rep, geo_err *err);
+
+/* A new model with room for nv vertices, nf facets and nc corners, and,
+ * when ret_given is not NULL, *ret_given an array of nf flags (false) for
+ * the readers of formats that give planes. NULL with err set on
+ * out-of-memory, nothing left allocated. */
+geo_poly *proto_poly_alloc(uint64_t nv, uint64_t nf, uint64_t nc,
+                           bool **ret_given, geo_err *err);
+
+/* The end of every reader: p completed by proto_finish_planes and
+ * returned, or freed and NULL when that fails; given (may be NULL) is
+ * freed either way. */
+geo_poly *proto_read_done(geo_poly *p, bool *given, proto_read_report *rep,
+                          geo_err *err);
+
+/* Appends every vertex of p as a line "PREFIXx y z" (prefix "" or "v "),
+ * coordinates as by proto_buf_double. */
+void proto_buf_vertex_lines(proto_buf *b, const geo_poly *p,
+                            const char *prefix);
+
+/* Calls emit(p, f, q, arg) for every triangle of every facet f of p
+ * (polygon_triangulate.h), q holding its corners as positions in the
+ * facet's vertex list, in the facet's turning direction. 0, or -ENOMEM
+ * with err set. */
+int proto_each_triangle(const geo_poly *p,
+                        void (*emit)(const geo_poly *p, uint32_t f,
+                                     const uint32_t *q, void *arg),
+                        void *arg, geo_err *err);
 
 /* The codecs. */
 geo_poly *proto_json_read(const void *data, size_t len,

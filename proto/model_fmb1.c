@@ -78,12 +78,10 @@ geo_poly *proto_fmb1_read(const void *data, size_t len,
         geo_err_prefix(err, "byte 8");
         return NULL;
     }
-    geo_poly *p = geo_poly_new();
-    bool *given = malloc(nf ? nf : 1);
-    if (!p || !given || geo_poly_reserve(p, nv, nf, nc) < 0) {
-        geo_err_set(err, -ENOMEM, "out of memory");
-        goto fail;
-    }
+    bool *given = NULL;
+    geo_poly *p = proto_poly_alloc(nv, nf, nc, &given, err);
+    if (!p)
+        return NULL;
     for (uint32_t i = 0; i < nv; i++)
         for (int k = 0; k < 3; k++) {
             size_t at = HEAD + (size_t)i * VERT + 8 * (size_t)k;
@@ -135,10 +133,7 @@ geo_poly *proto_fmb1_read(const void *data, size_t len,
         given[f] = true;
         o += FACET_HEAD + 4 * (size_t)n;
     }
-    if (proto_finish_planes(p, given, rep, err) < 0)
-        goto fail;
-    free(given);
-    return p;
+    return proto_read_done(p, given, rep, err);
 fail:
     free(given);
     return geo_poly_free(p);

@@ -3,6 +3,7 @@
  * whole-file reading under the size limit and atomic file writing
  * (temporary file in the target's directory, fsync, rename), so a reader
  * of the target sees the old file or the new one, never a partial one. */
+#include <ctype.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
@@ -23,23 +24,82 @@ void proto_limits_default(proto_limits *lim)
     lim->max_bytes = (size_t)512 << 20;
 }
 
+typedef geo_poly *(*reader_fn)(const void *data, size_t len,
+                               const proto_limits *lim,
+                               proto_read_report *rep, geo_err *err);
+typedef int (*writer_fn)(const geo_poly *p, proto_buf *buf, geo_err *err);
+
+static int stl_binary_write(const geo_poly *p, proto_buf *b, geo_err *err)
+{
+    return proto_stl_write(p, false, b, err);
+}
+
+static int stl_ascii_write(const geo_poly *p, proto_buf *b, geo_err *err)
+{
+    return proto_stl_write(p, true, b, err);
+}
+
+static int ply_binary_write(const geo_poly *p, proto_buf *b, geo_err *err)
+{
+    return proto_ply_write(p, false, b, err);
+}
+
+static int ply_ascii_write(const geo_poly *p, proto_buf *b, geo_err *err)
+{
+    return proto_ply_write(p, true, b, err);
+}
+
+/* Every format once: its names, its media type and its codec. A NULL
+ * extension is a variant reached by name only; a NULL reader, a format
+ * that is written only. */
 static const struct {
     proto_format fmt;
     const char *name, *ext, *mime;
+    reader_fn read;
+    writer_fn write;
 } formats[] = {
-    {PROTO_FMT_JSON, "json", "json", "application/json"},
-    {PROTO_FMT_POLY, "poly", "poly", "text/plain"},
-    {PROTO_FMT_OBJ, "obj", "obj", "model/obj"},
-    {PROTO_FMT_STL, "stl", "stl", "model/stl"},
-    {PROTO_FMT_STL_ASCII, "stl-ascii", NULL, "model/stl"},
-    {PROTO_FMT_PLY, "ply", "ply", "application/x-ply"},
-    {PROTO_FMT_PLY_ASCII, "ply-ascii", NULL, "application/x-ply"},
-    {PROTO_FMT_ASE, "ase", "ase", "text/plain"},
-    {PROTO_FMT_FMB1, "fmb1", "fmb", "application/octet-stream"},
-    {PROTO_FMT_OFF, "off", "off", "text/plain"},
-    {PROTO_FMT_ASC, "asc", "asc", "text/plain"},
+    {PROTO_FMT_JSON, "json", "json", "application/json", proto_json_read,
+     proto_json_write},
+    {PROTO_FMT_POLY, "poly", "poly", "text/plain", proto_polytxt_read,
+     proto_polytxt_write},
+    {PROTO_FMT_OBJ, "obj", "obj", "model/obj", proto_obj_read,
+     proto_obj_write},
+    {PROTO_FMT_STL, "stl", "stl", "model/stl", proto_stl_read,
+     stl_binary_write},
+    {PROTO_FMT_STL_ASCII, "stl-ascii", NULL, "model/stl", proto_stl_read,
+     stl_ascii_write},
+    {PROTO_FMT_PLY, "ply", "ply", "application/x-ply", proto_ply_read,
+     ply_binary_write},
+    {PROTO_FMT_PLY_ASCII, "ply-ascii", NULL, "application/x-ply",
+     proto_ply_read, ply_ascii_write},
+    {PROTO_FMT_ASE, "ase", "ase", "text/plain", NULL, proto_ase_write},
+    {PROTO_FMT_FMB1, "fmb1", "fmb", "application/octet-stream",
+     proto_fmb1_read, proto_fmb1_write},
+    {PROTO_FMT_OFF, "off", "off", "text/plain", proto_off_read,
+     proto_off_write},
+    {PROTO_FMT_ASC, "asc", "asc", "text/plain", proto_asc_read,
+     proto_asc_write},
 };
 enum { NFORMATS = sizeof formats / sizeof formats[0] };
+
+/* The table row of fmt, or -1. */
+static int format_index(proto_format fmt)
+{
+    for (int i = 0; i < NFORMATS; i++)
+        if (formats[i].fmt == fmt)
+            return i;
+    return -1;
+}
+
+/* lim, or the defaults filled into *dl when lim is NULL. */
+static const proto_limits *limits_or_default(const proto_limits *lim,
+                                             proto_limits *dl)
+{
+    if (lim)
+        return lim;
+    proto_limits_default(dl);
+    return dl;
+}
 
 proto_format proto_format_at(size_t i)
 {
@@ -87,18 +147,14 @@ proto_format proto_format_from_name(const char *name)
 
 const char *proto_format_name(proto_format fmt)
 {
-    for (int i = 0; i < NFORMATS; i++)
-        if (formats[i].fmt == fmt)
-            return formats[i].name;
-    return "unknown";
+    int i = format_index(fmt);
+    return i < 0 ? "unknown" : formats[i].name;
 }
 
 const char *proto_format_mime(proto_format fmt)
 {
-    for (int i = 0; i < NFORMATS; i++)
-        if (formats[i].fmt == fmt)
-            return formats[i].mime;
-    return "application/octet-stream";
+    int i = format_index(fmt);
+    return i < 0 ? "application/octet-stream" : formats[i].mime;
 }
 
 geo_poly *proto_model_read_mem_ex(const void *data, size_t len,
@@ -106,10 +162,7 @@ geo_poly *proto_model_read_mem_ex(const void *data, size_t len,
                                   proto_read_report *ret_report, geo_err *err)
 {
     proto_limits dl;
-    if (!lim) {
-        proto_limits_default(&dl);
-        lim = &dl;
-    }
+    lim = limits_or_default(lim, &dl);
     if (len > lim->max_bytes) {
         geo_err_set(err, -ERANGE, "%zu bytes exceed the limit of %zu", len,
                     lim->max_bytes);
@@ -124,41 +177,18 @@ geo_poly *proto_model_read_mem_ex(const void *data, size_t len,
     proto_read_report rep;
     memset(&rep, 0, sizeof rep);
     geo_poly *p = NULL;
-    switch (fmt) {
-    case PROTO_FMT_JSON:
-        p = proto_json_read(data, len, lim, &rep, err);
-        break;
-    case PROTO_FMT_POLY:
-        p = proto_polytxt_read(data, len, lim, &rep, err);
-        break;
-    case PROTO_FMT_OBJ:
-        p = proto_obj_read(data, len, lim, &rep, err);
-        break;
-    case PROTO_FMT_STL:
-    case PROTO_FMT_STL_ASCII:
-        p = proto_stl_read(data, len, lim, &rep, err);
-        break;
-    case PROTO_FMT_PLY:
-    case PROTO_FMT_PLY_ASCII:
-        p = proto_ply_read(data, len, lim, &rep, err);
-        break;
-    case PROTO_FMT_FMB1:
-        p = proto_fmb1_read(data, len, lim, &rep, err);
-        break;
-    case PROTO_FMT_OFF:
-        p = proto_off_read(data, len, lim, &rep, err);
-        break;
-    case PROTO_FMT_ASC:
-        p = proto_asc_read(data, len, lim, &rep, err);
-        break;
-    case PROTO_FMT_ASE:
-        geo_err_set(err, -EINVAL, "ASE files can be written, not read");
-        break;
-    case PROTO_FMT_UNKNOWN:
-    default:
+    int i = format_index(fmt);
+    if (i < 0)
         geo_err_set(err, -EINVAL, "unknown model format");
-        break;
-    }
+    else if (!formats[i].read) {
+        char upper[16];
+        size_t k = 0;
+        for (; formats[i].name[k] && k + 1 < sizeof upper; k++)
+            upper[k] = (char)toupper((unsigned char)formats[i].name[k]);
+        upper[k] = 0;
+        geo_err_set(err, -EINVAL, "%s files can be written, not read", upper);
+    } else
+        p = formats[i].read(data, len, lim, &rep, err);
     if (p && ret_report)
         *ret_report = rep;
     return p;
@@ -228,8 +258,23 @@ int proto_read_fd_all(int fd, size_t max, char **ret, size_t *ret_len,
     return 0;
 }
 
-static const char *EXTENSIONS =
-    ".json .poly .obj .stl .ply .ase .fmb .off .asc";
+/* Fails for a path whose name tells no format: "PATH: cannot tell the
+ * format from the name (known extensions: .json .poly ...)". */
+static int unknown_extension(const char *path, geo_err *err)
+{
+    char list[128] = "";
+    size_t len = 0;
+    for (int i = 0; i < NFORMATS; i++) {
+        if (!formats[i].ext || len >= sizeof list)
+            continue;
+        int w = snprintf(list + len, sizeof list - len, "%s.%s",
+                         len ? " " : "", formats[i].ext);
+        if (w > 0)
+            len += (size_t)w;
+    }
+    return geo_err_set(err, -EINVAL, "%s: cannot tell the format from the "
+                       "name (known extensions: %s)", path, list);
+}
 
 geo_poly *proto_model_read_file_ex(const char *path, proto_format fmt,
                                    const proto_limits *lim,
@@ -237,16 +282,11 @@ geo_poly *proto_model_read_file_ex(const char *path, proto_format fmt,
                                    geo_err *err)
 {
     proto_limits dl;
-    if (!lim) {
-        proto_limits_default(&dl);
-        lim = &dl;
-    }
+    lim = limits_or_default(lim, &dl);
     if (fmt == PROTO_FMT_UNKNOWN) {
         fmt = proto_format_from_path(path);
         if (fmt == PROTO_FMT_UNKNOWN) {
-            geo_err_set(err, -EINVAL,
-                        "%s: cannot tell the format from the name (known "
-                        "extensions: %s)", path, EXTENSIONS);
+            unknown_extension(path, err);
             return NULL;
         }
     }
@@ -300,41 +340,9 @@ int proto_model_write_mem(const geo_poly *p, proto_format fmt, char **ret_buf,
     if (r < 0)
         return r;
     proto_buf b = {0};
-    switch (fmt) {
-    case PROTO_FMT_JSON:
-        r = proto_json_write(p, &b, err);
-        break;
-    case PROTO_FMT_POLY:
-        r = proto_polytxt_write(p, &b, err);
-        break;
-    case PROTO_FMT_OBJ:
-        r = proto_obj_write(p, &b, err);
-        break;
-    case PROTO_FMT_STL:
-    case PROTO_FMT_STL_ASCII:
-        r = proto_stl_write(p, fmt == PROTO_FMT_STL_ASCII, &b, err);
-        break;
-    case PROTO_FMT_PLY:
-    case PROTO_FMT_PLY_ASCII:
-        r = proto_ply_write(p, fmt == PROTO_FMT_PLY_ASCII, &b, err);
-        break;
-    case PROTO_FMT_ASE:
-        r = proto_ase_write(p, &b, err);
-        break;
-    case PROTO_FMT_FMB1:
-        r = proto_fmb1_write(p, &b, err);
-        break;
-    case PROTO_FMT_OFF:
-        r = proto_off_write(p, &b, err);
-        break;
-    case PROTO_FMT_ASC:
-        r = proto_asc_write(p, &b, err);
-        break;
-    case PROTO_FMT_UNKNOWN:
-    default:
-        r = geo_err_set(err, -EINVAL, "unknown model format");
-        break;
-    }
+    int i = format_index(fmt);
+    r = i < 0 ? geo_err_set(err, -EINVAL, "unknown model format")
+              : formats[i].write(p, &b, err);
     if (r == 0 && b.failed)
         r = geo_err_set(err, -ENOMEM, "out of memory");
     if (r < 0) {
@@ -430,9 +438,7 @@ int proto_model_write_file(const geo_poly *p, const char *path,
     if (fmt == PROTO_FMT_UNKNOWN) {
         fmt = proto_format_from_path(path);
         if (fmt == PROTO_FMT_UNKNOWN)
-            return geo_err_set(err, -EINVAL,
-                               "%s: cannot tell the format from the name "
-                               "(known extensions: %s)", path, EXTENSIONS);
+            return unknown_extension(path, err);
     }
     char *data;
     size_t len;
@@ -475,10 +481,7 @@ geo_poly *proto_model_from_json_ex(const json_t *root, const proto_limits *lim,
                                    geo_err *err)
 {
     proto_limits dl;
-    if (!lim) {
-        proto_limits_default(&dl);
-        lim = &dl;
-    }
+    lim = limits_or_default(lim, &dl);
     proto_read_report rep;
     memset(&rep, 0, sizeof rep);
     geo_poly *p = proto_json_from_value(root, lim, &rep, err);
@@ -502,10 +505,7 @@ geo_poly *proto_model_from_jpull(proto_jpull *j, proto_jtok first,
                                  bool *ret_syntax, geo_err *err)
 {
     proto_limits dl;
-    if (!lim) {
-        proto_limits_default(&dl);
-        lim = &dl;
-    }
+    lim = limits_or_default(lim, &dl);
     proto_read_report rep;
     memset(&rep, 0, sizeof rep);
     bool syntax;

@@ -192,12 +192,10 @@ geo_poly *proto_json_from_value(const json_t *root, const proto_limits *lim,
         proto_check_limits(lim, nv, nf, nc, err) < 0)
         return NULL;
 
-    geo_poly *p = geo_poly_new();
-    bool *given = malloc(nf ? nf : 1);
-    if (!p || !given || geo_poly_reserve(p, nv, nf, nc) < 0) {
-        geo_err_set(err, -ENOMEM, "out of memory");
-        goto fail;
-    }
+    bool *given = NULL;
+    geo_poly *p = proto_poly_alloc(nv, nf, nc, &given, err);
+    if (!p)
+        return NULL;
     p->nverts = (uint32_t)nv;
     if (read_vertices(va, p, err) < 0)
         goto fail;
@@ -206,10 +204,7 @@ geo_poly *proto_json_from_value(const json_t *root, const proto_limits *lim,
             goto fail;
         p->nfacets = f + 1;
     }
-    if (proto_finish_planes(p, given, rep, err) < 0)
-        goto fail;
-    free(given);
-    return p;
+    return proto_read_done(p, given, rep, err);
 fail:
     free(given);
     return geo_poly_free(p);

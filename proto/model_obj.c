@@ -36,24 +36,10 @@ static enum stmt statement(const char *line, size_t n)
 static int read_vertex(proto_scan *ls, geo_poly *p, uint32_t line,
                        geo_err *err)
 {
-    uint32_t i = p->nverts;
-    for (int k = 0; k < 3; k++) {
-        const char *t;
-        size_t n;
-        char shown[32];
-        if (!proto_scan_token(ls, &t, &n))
-            return geo_err_set(err, -EINVAL,
-                               "line %u: vertices[%u]: expected 3 numbers",
-                               line, i);
-        int e = proto_parse_double(t, n, &p->verts[i][k]);
-        if (e < 0)
-            return geo_err_set(err, -EINVAL,
-                               "line %u: vertices[%u][%d]: %s, found \"%s\"",
-                               line, i, k,
-                               e == -ERANGE ? "number out of range"
-                                            : "expected a number",
-                               proto_tok_show(t, n, shown));
-    }
+    int e = proto_scan_coords(ls, line, p->nverts, 3, p->verts[p->nverts],
+                              err);
+    if (e < 0)
+        return e;
     p->nverts++;
     return 0;
 }
@@ -131,11 +117,9 @@ geo_poly *proto_obj_read(const void *data, size_t len,
     }
     if (proto_check_limits(lim, nv, nf, 0, err) < 0)
         return NULL;
-    geo_poly *p = geo_poly_new();
-    if (!p || geo_poly_reserve(p, nv, nf, nf * 3) < 0) {
-        geo_err_set(err, -ENOMEM, "out of memory");
-        return geo_poly_free(p);
-    }
+    geo_poly *p = proto_poly_alloc(nv, nf, nf * 3, NULL, err);
+    if (!p)
+        return NULL;
     proto_scan_init(&s, data, len, false);
     while (proto_scan_line(&s, &line, &n)) {
         uint32_t ln = s.tok_line;
@@ -152,9 +136,7 @@ geo_poly *proto_obj_read(const void *data, size_t len,
         if (e < 0)
             return geo_poly_free(p);
     }
-    if (proto_finish_planes(p, NULL, rep, err) < 0)
-        return geo_poly_free(p);
-    return p;
+    return proto_read_done(p, NULL, rep, err);
 }
 
 int proto_obj_write(const geo_poly *p, proto_buf *b, geo_err *err)
@@ -163,14 +145,7 @@ int proto_obj_write(const geo_poly *p, proto_buf *b, geo_err *err)
     proto_buf_printf(b, "# %u vertices, %u facets (counter-clockwise seen "
                         "from outside), millimetres\n",
                      p->nverts, p->nfacets);
-    for (uint32_t i = 0; i < p->nverts; i++) {
-        proto_buf_puts(b, "v");
-        for (int k = 0; k < 3; k++) {
-            proto_buf_puts(b, " ");
-            proto_buf_double(b, p->verts[i][k]);
-        }
-        proto_buf_puts(b, "\n");
-    }
+    proto_buf_vertex_lines(b, p, "v ");
     for (uint32_t f = 0; f < p->nfacets; f++) {
         uint32_t n = geo_poly_facet_size(p, f);
         const uint32_t *v = geo_poly_facet(p, f);

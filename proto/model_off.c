@@ -115,23 +115,9 @@ static int read_vertex(proto_scan *ls, geo_poly *p, const off_header *h,
     uint32_t i = p->nverts;
     int ncoords = h->homogeneous ? 4 : 3;
     double c[4];
-    for (int k = 0; k < ncoords; k++) {
-        const char *t;
-        size_t n;
-        char shown[32];
-        if (!proto_scan_token(ls, &t, &n))
-            return geo_err_set(err, -EINVAL,
-                               "line %u: vertices[%u]: expected %d numbers",
-                               line, i, ncoords);
-        int e = proto_parse_double(t, n, &c[k]);
-        if (e < 0)
-            return geo_err_set(err, -EINVAL,
-                               "line %u: vertices[%u][%d]: %s, found \"%s\"",
-                               line, i, k,
-                               e == -ERANGE ? "number out of range"
-                                            : "expected a number",
-                               proto_tok_show(t, n, shown));
-    }
+    int e = proto_scan_coords(ls, line, i, ncoords, c, err);
+    if (e < 0)
+        return e;
     if (h->homogeneous) {
         if (!(c[3] != 0))
             return geo_err_set(err, -EINVAL,
@@ -314,11 +300,9 @@ geo_poly *proto_off_read(const void *data, size_t len,
                     "bytes left cannot hold them", s.tok_line, nv, nf, left);
         return NULL;
     }
-    geo_poly *p = geo_poly_new();
-    if (!p || geo_poly_reserve(p, nv, nf, (size_t)nf * 3) < 0) {
-        geo_err_set(err, -ENOMEM, "out of memory");
-        return geo_poly_free(p);
-    }
+    geo_poly *p = proto_poly_alloc(nv, nf, (uint64_t)nf * 3, NULL, err);
+    if (!p)
+        return NULL;
     const char *line;
     size_t n;
     uint32_t ln = s.tok_line;
@@ -348,9 +332,7 @@ geo_poly *proto_off_read(const void *data, size_t len,
                     "announced)", ln, proto_tok_show(line, n, shown), nf);
         return geo_poly_free(p);
     }
-    if (proto_finish_planes(p, NULL, rep, err) < 0)
-        return geo_poly_free(p);
-    return p;
+    return proto_read_done(p, NULL, rep, err);
 }
 
 int proto_off_write(const geo_poly *p, proto_buf *b, geo_err *err)
@@ -359,14 +341,7 @@ int proto_off_write(const geo_poly *p, proto_buf *b, geo_err *err)
     proto_buf_printf(b, "OFF\n# %u vertices, %u facets (counter-clockwise "
                         "seen from outside), millimetres\n%u %u 0\n",
                      p->nverts, p->nfacets, p->nverts, p->nfacets);
-    for (uint32_t i = 0; i < p->nverts; i++) {
-        for (int k = 0; k < 3; k++) {
-            if (k)
-                proto_buf_puts(b, " ");
-            proto_buf_double(b, p->verts[i][k]);
-        }
-        proto_buf_puts(b, "\n");
-    }
+    proto_buf_vertex_lines(b, p, "");
     for (uint32_t f = 0; f < p->nfacets; f++) {
         uint32_t n = geo_poly_facet_size(p, f);
         const uint32_t *v = geo_poly_facet(p, f);

@@ -539,12 +539,9 @@ geo_poly *proto_ply_read(const void *data, size_t len,
                     (unsigned long long)need, len - h->body);
         goto fail;
     }
-    p = geo_poly_new();
-    given = calloc(nf ? nf : 1, sizeof *given);
-    if (!p || !given || geo_poly_reserve(p, nv, nf, 3 * (size_t)nf) < 0) {
-        geo_err_set(err, -ENOMEM, "out of memory");
+    p = proto_poly_alloc(nv, nf, 3 * (uint64_t)nf, &given, err);
+    if (!p)
         goto fail;
-    }
     p->nverts = nv;
     body b = {.h = h, .d = data, .len = len, .pos = h->body, .err = err};
     if (h->ascii)
@@ -567,11 +564,8 @@ geo_poly *proto_ply_read(const void *data, size_t len,
                                       "element", b.pos, len - b.pos);
         goto fail;
     }
-    if (proto_finish_planes(p, given, rep, err) < 0)
-        goto fail;
-    free(given);
     free(h);
-    return p;
+    return proto_read_done(p, given, rep, err);
 fail:
     free(given);
     free(h);

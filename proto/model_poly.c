@@ -148,12 +148,10 @@ geo_poly *proto_polytxt_read(const void *data, size_t len,
                     nf, rest - 1);
         return NULL;
     }
-    geo_poly *p = geo_poly_new();
-    bool *given = malloc(nf ? nf : 1);
-    if (!p || !given || geo_poly_reserve(p, nv, nf, (size_t)nf * 3) < 0) {
-        geo_err_set(err, -ENOMEM, "out of memory");
-        goto fail;
-    }
+    bool *given = NULL;
+    geo_poly *p = proto_poly_alloc(nv, nf, (uint64_t)nf * 3, &given, err);
+    if (!p)
+        return NULL;
     for (uint32_t i = 0; i < nv; i++)
         for (uint32_t k = 0; k < 3; k++)
             if (next_double(&r, &p->verts[i][k], "vertices[%u][%u]", i, k) < 0)
@@ -176,10 +174,7 @@ geo_poly *proto_polytxt_read(const void *data, size_t len,
                     proto_tok_show(t, tl, shown), nf);
         goto fail;
     }
-    if (proto_finish_planes(p, given, rep, err) < 0)
-        goto fail;
-    free(given);
-    return p;
+    return proto_read_done(p, given, rep, err);
 fail:
     free(given);
     return geo_poly_free(p);
@@ -193,14 +188,7 @@ int proto_polytxt_write(const geo_poly *p, proto_buf *b, geo_err *err)
                       "(outward), 0-based vertex indices counter-clockwise "
                       "from outside\n");
     proto_buf_printf(b, "%u %u\n", p->nverts, p->nfacets);
-    for (uint32_t i = 0; i < p->nverts; i++) {
-        for (int k = 0; k < 3; k++) {
-            if (k)
-                proto_buf_puts(b, " ");
-            proto_buf_double(b, p->verts[i][k]);
-        }
-        proto_buf_puts(b, "\n");
-    }
+    proto_buf_vertex_lines(b, p, "");
     for (uint32_t f = 0; f < p->nfacets; f++) {
         uint32_t n = geo_poly_facet_size(p, f);
         const uint32_t *v = geo_poly_facet(p, f);

@@ -139,6 +139,15 @@ static int merge_error(int e, const char *place, uint32_t maxv, geo_err *err)
     return geo_err_set(err, -ENOMEM, "out of memory");
 }
 
+/* The end of both readers: the merger's table freed, then p completed
+ * (ok) or freed. */
+static geo_poly *read_end(merger *m, geo_poly *p, bool ok,
+                          proto_read_report *rep, geo_err *err)
+{
+    free(m->slots);
+    return ok ? proto_read_done(p, NULL, rep, err) : geo_poly_free(p);
+}
+
 static geo_poly *read_binary(const unsigned char *d, size_t len,
                              const proto_limits *lim, proto_read_report *rep,
                              geo_err *err)
@@ -189,14 +198,9 @@ static geo_poly *read_binary(const unsigned char *d, size_t len,
         if (add_triangle(p, tri, place, err) < 0)
             goto fail;
     }
-    free(m.slots);
-    m.slots = NULL;
-    if (proto_finish_planes(p, NULL, rep, err) < 0)
-        goto fail;
-    return p;
+    return read_end(&m, p, true, rep, err);
 fail:
-    free(m.slots);
-    return geo_poly_free(p);
+    return read_end(&m, p, false, rep, err);
 }
 
 static bool keyword(const char *t, size_t n, const char *kw)
@@ -353,14 +357,9 @@ static geo_poly *read_ascii(const void *data, size_t len,
                                   "end of the file", s.line);
         goto fail;
     }
-    free(m.slots);
-    m.slots = NULL;
-    if (proto_finish_planes(p, NULL, rep, err) < 0)
-        goto fail;
-    return p;
+    return read_end(&m, p, true, rep, err);
 fail:
-    free(m.slots);
-    return geo_poly_free(p);
+    return read_end(&m, p, false, rep, err);
 }
 
 static bool starts_with_solid(const unsigned char *d, size_t len)
@@ -389,52 +388,24 @@ geo_poly *proto_stl_read(const void *data, size_t len,
     return NULL;
 }
 
-/* Calls emit(p, f, tri, arg) for every triangle of every facet, tri
- * holding vertex numbers in the facet's turning direction. */
-static int each_triangle(const geo_poly *p,
-                         void (*emit)(const geo_poly *, uint32_t,
-                                      const uint32_t *, void *),
-                         void *arg, geo_err *err)
-{
-    uint32_t maxn = 3;
-    for (uint32_t f = 0; f < p->nfacets; f++)
-        if (geo_poly_facet_size(p, f) > maxn)
-            maxn = geo_poly_facet_size(p, f);
-    uint32_t (*tris)[3] = malloc((size_t)(maxn - 2) * sizeof *tris);
-    if (!tris)
-        return geo_err_set(err, -ENOMEM, "out of memory");
-    for (uint32_t f = 0; f < p->nfacets; f++) {
-        uint32_t n = geo_poly_facet_size(p, f);
-        const uint32_t *v = geo_poly_facet(p, f);
-        if (geo_polygon_triangulate(&p->verts[0][0], v, n, tris) < 0) {
-            free(tris);
-            return geo_err_set(err, -ENOMEM, "out of memory");
-        }
-        for (uint32_t k = 0; k + 2 < n; k++) {
-            uint32_t tri[3] = {v[tris[k][0]], v[tris[k][1]], v[tris[k][2]]};
-            emit(p, f, tri, arg);
-        }
-    }
-    free(tris);
-    return 0;
-}
-
-static void emit_binary(const geo_poly *p, uint32_t f, const uint32_t *tri,
+static void emit_binary(const geo_poly *p, uint32_t f, const uint32_t *q,
                         void *arg)
 {
     proto_buf *b = arg;
+    const uint32_t *v = geo_poly_facet(p, f);
     for (int k = 0; k < 3; k++)
         proto_buf_f32le(b, (float)p->planes[f][k]);
     for (int c = 0; c < 3; c++)
         for (int k = 0; k < 3; k++)
-            proto_buf_f32le(b, (float)p->verts[tri[c]][k]);
+            proto_buf_f32le(b, (float)p->verts[v[q[c]]][k]);
     proto_buf_u16le(b, 0);
 }
 
-static void emit_ascii(const geo_poly *p, uint32_t f, const uint32_t *tri,
+static void emit_ascii(const geo_poly *p, uint32_t f, const uint32_t *q,
                        void *arg)
 {
     proto_buf *b = arg;
+    const uint32_t *v = geo_poly_facet(p, f);
     proto_buf_puts(b, "  facet normal");
     for (int k = 0; k < 3; k++) {
         proto_buf_puts(b, " ");
@@ -445,7 +416,7 @@ static void emit_ascii(const geo_poly *p, uint32_t f, const uint32_t *tri,
         proto_buf_puts(b, "      vertex");
         for (int k = 0; k < 3; k++) {
             proto_buf_puts(b, " ");
-            proto_buf_double(b, p->verts[tri[c]][k]);
+            proto_buf_double(b, p->verts[v[q[c]]][k]);
         }
         proto_buf_puts(b, "\n");
     }
@@ -457,7 +428,7 @@ int proto_stl_write(const geo_poly *p, bool ascii, proto_buf *b,
 {
     if (ascii) {
         proto_buf_puts(b, "solid facetd\n");
-        int e = each_triangle(p, emit_ascii, b, err);
+        int e = proto_each_triangle(p, emit_ascii, b, err);
         proto_buf_puts(b, "endsolid facetd\n");
         return e;
     }
@@ -481,5 +452,5 @@ int proto_stl_write(const geo_poly *p, bool ascii, proto_buf *b,
     memcpy(header, title, sizeof title - 1);
     proto_buf_append(b, header, sizeof header);
     proto_buf_u32le(b, (uint32_t)nt);
-    return each_triangle(p, emit_binary, b, err);
+    return proto_each_triangle(p, emit_binary, b, err);
 }

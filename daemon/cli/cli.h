@@ -36,6 +36,9 @@ int cli_input_error(const char *cmd, const char *fmt, ...)
 typedef struct json_t json_t;
 int cli_print_json(const char *cmd, json_t *j, size_t flags);
 
+/* A monotonic clock in milliseconds, for the "ms" a command reports. */
+double cli_mono_ms(void);
+
 /* True when argv holds -h or --help. */
 bool cli_wants_help(int argc, char **argv);
 

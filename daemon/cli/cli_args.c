@@ -19,6 +19,14 @@ void cli_args_init(cli_args *a, const char *cmd, int argc, char **argv,
         assert(o->key >= 0 && o->name[0] == '-');
 }
 
+void cli_args_positionals(cli_args *a, const char **slots, int n)
+{
+    a->slots = slots;
+    a->nslots = n;
+    for (int k = 0; k < n; k++)
+        slots[k] = NULL;
+}
+
 int cli_args_next(cli_args *a, const char **val)
 {
     *val = NULL;
@@ -30,8 +38,16 @@ int cli_args_next(cli_args *a, const char **val)
         return cli_args_next(a, val);
     }
     if (a->only_positional || s[0] != '-' || s[1] == '\0') {
-        *val = s;
-        return CLI_ARGS_POSITIONAL;
+        if (!a->slots) {
+            *val = s;
+            return CLI_ARGS_POSITIONAL;
+        }
+        for (int k = 0; k < a->nslots; k++)
+            if (!a->slots[k]) {
+                a->slots[k] = s;
+                return cli_args_next(a, val);
+            }
+        return cli_args_unexpected(a, s);
     }
     const char *eq = strncmp(s, "--", 2) == 0 ? strchr(s, '=') : NULL;
     size_t len = eq ? (size_t)(eq - s) : strlen(s);
@@ -90,6 +106,24 @@ int cli_args_double(cli_args *a, const char *s, double lo, double hi,
     return 0;
 }
 
+int cli_args_invalid(cli_args *a, const char *s, const char *expected)
+{
+    cli_usage_error(a->cmd, "%s: expected %s, got '%s'", a->opt, expected, s);
+    return CLI_ARGS_ERROR;
+}
+
+int cli_args_positive(cli_args *a, const char *s, double hi,
+                      const char *expected, double *ret)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (end == s || *end || errno || !isfinite(v) || v <= 0 || v > hi)
+        return cli_args_invalid(a, s, expected);
+    *ret = v;
+    return 0;
+}
+
 int cli_args_format(cli_args *a, const char *s, proto_format *ret)
 {
     proto_format f = proto_format_from_name(s);
@@ -122,6 +156,16 @@ bad:
     cli_usage_error(a->cmd, "%s: expected a direction X,Y,Z (not all zero), "
                     "got '%s'", a->opt, s);
     return CLI_ARGS_ERROR;
+}
+
+int cli_args_output(cli_args *a, const char *out)
+{
+    if (!out)
+        return cli_usage_error(a->cmd, "needs -o OUT");
+    if (proto_format_from_path(out) == PROTO_FMT_UNKNOWN)
+        return cli_usage_error(a->cmd, "%s: cannot tell the format from the "
+                               "name", out);
+    return CLI_OK;
 }
 
 int cli_args_unexpected(cli_args *a, const char *arg)

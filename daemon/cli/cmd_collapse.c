@@ -50,6 +50,7 @@ int cmd_collapse(int argc, char **argv)
     geo_collapse_opts_default(&o);
     cli_args a;
     cli_args_init(&a, "collapse", argc, argv, opts);
+    cli_args_positionals(&a, &in, 1);
     for (int k; (k = cli_args_next(&a, &val)) != CLI_ARGS_END;) {
         int r = 0;
         switch (k) {
@@ -59,11 +60,6 @@ int cmd_collapse(int argc, char **argv)
             break;
         case O_FROM: r = cli_args_format(&a, val, &from); break;
         case O_TO: r = cli_args_format(&a, val, &to); break;
-        case CLI_ARGS_POSITIONAL:
-            if (in)
-                r = cli_args_unexpected(&a, val);
-            in = val;
-            break;
         default: r = CLI_ARGS_ERROR;
         }
         if (r)

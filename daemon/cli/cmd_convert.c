@@ -4,12 +4,11 @@
  * given. Given planes that disagree with their vertices are reported on
  * stderr as a warning; the conversion still succeeds. --width scales the
  * model (a GemCad design has no units) to a given outline width. */
-#include <math.h>
+#include <float.h>
 #include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
 
 #include "cli.h"
+#include "cli_args.h"
 #include "model_io.h"
 
 static const char USAGE[] =
@@ -43,15 +42,6 @@ static const char USAGE[] =
     "exit status: 0 success, 1 bad input (the error names file and place),\n"
     "2 usage error\n";
 
-static int parse_format(const char *opt, const char *name, proto_format *ret)
-{
-    *ret = proto_format_from_name(name);
-    if (*ret == PROTO_FMT_UNKNOWN)
-        return cli_usage_error("convert", "%s: unknown format '%s'", opt,
-                               name);
-    return CLI_OK;
-}
-
 int cmd_convert(int argc, char **argv)
 {
     if (cli_wants_help(argc, argv)) {
@@ -59,38 +49,32 @@ int cmd_convert(int argc, char **argv)
         return CLI_OK;
     }
     const char *files[2] = {NULL, NULL};
-    int nfiles = 0;
     proto_format from = PROTO_FMT_UNKNOWN, to = PROTO_FMT_UNKNOWN;
-    bool only_files = false;
     double width = 0.0;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (!only_files && strcmp(a, "--") == 0) {
-            only_files = true;
-        } else if (!only_files &&
-                   (strcmp(a, "--from") == 0 || strcmp(a, "--to") == 0)) {
-            if (i + 1 == argc)
-                return cli_usage_error("convert", "%s needs a format", a);
-            int r = parse_format(a, argv[++i], a[2] == 'f' ? &from : &to);
-            if (r != CLI_OK)
-                return r;
-        } else if (!only_files && strcmp(a, "--width") == 0) {
-            char *end = NULL;
-            if (i + 1 == argc)
-                return cli_usage_error("convert", "--width needs MM");
-            width = strtod(argv[++i], &end);
-            if (*end || !(width > 0) || !isfinite(width))
-                return cli_usage_error("convert", "--width: '%s' is not a "
-                                       "positive number of mm", argv[i]);
-        } else if (!only_files && a[0] == '-' && a[1] != '\0') {
-            return cli_usage_error("convert", "unknown option '%s'", a);
-        } else if (nfiles < 2) {
-            files[nfiles++] = a;
-        } else {
-            return cli_usage_error("convert", "unexpected argument '%s'", a);
+    enum { O_FROM, O_TO, O_WIDTH };
+    static const cli_opt opts[] = {
+        {"--from", O_FROM, true}, {"--to", O_TO, true},
+        {"--width", O_WIDTH, true}, {NULL, 0, false},
+    };
+    cli_args a;
+    const char *v;
+    cli_args_init(&a, "convert", argc, argv, opts);
+    cli_args_positionals(&a, files, 2);
+    for (int k; (k = cli_args_next(&a, &v)) != CLI_ARGS_END;) {
+        int r = 0;
+        switch (k) {
+        case O_FROM: r = cli_args_format(&a, v, &from); break;
+        case O_TO: r = cli_args_format(&a, v, &to); break;
+        case O_WIDTH:
+            r = cli_args_positive(&a, v, DBL_MAX, "a positive number of mm",
+                                  &width);
+            break;
+        default: r = CLI_ARGS_ERROR;
         }
+        if (r)
+            return CLI_USAGE;
     }
-    if (nfiles < 2)
+    if (!files[1])
         return cli_usage_error("convert", "needs an input and an output file");
     if (from == PROTO_FMT_UNKNOWN)
         from = proto_format_from_path(files[0]);

@@ -2,15 +2,13 @@
  * automatic post-scan correction (lib/correct/correct.h: merge the slivers of
  * each true facet, collapse vertex clusters), the same call the daemon's
  * "auto" pipeline makes, so both give the same model. */
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
 
 #include <jansson.h>
 
 #include "cli.h"
+#include "cli_args.h"
 #include "correct.h"
 #include "correct_json.h"
 #include "model_io.h"
@@ -46,17 +44,6 @@ static const char USAGE[] =
     "exit status: 0 success, 1 bad input (e.g. a model that is not closed),\n"
     "2 usage error\n";
 
-static int parse_number(const char *s, double hi, double *ret)
-{
-    char *end;
-    errno = 0;
-    double v = strtod(s, &end);
-    if (end == s || *end || errno || !isfinite(v) || v <= 0 || v > hi)
-        return -1;
-    *ret = v;
-    return 0;
-}
-
 int cmd_correct(int argc, char **argv)
 {
     if (cli_wants_help(argc, argv)) {
@@ -66,63 +53,59 @@ int cmd_correct(int argc, char **argv)
     const char *in = NULL, *outpath = NULL, *report = NULL;
     geo_correct_opts o;
     geo_correct_opts_default(&o);
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (strcmp(a, "--no-collapse") == 0) {
-            o.collapse_clusters = false;
-        } else if (strcmp(a, "--convex") == 0) {
-            o.convex = true;
-        } else if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0 ||
-                   strcmp(a, "--report") == 0 || strcmp(a, "--max-angle") == 0 ||
-                   strcmp(a, "--max-deviation") == 0 ||
-                   strcmp(a, "--views") == 0 || strcmp(a, "--noise") == 0 ||
-                   strcmp(a, "--radius") == 0) {
-            if (i + 1 == argc)
-                return cli_usage_error("correct", "%s needs a value", a);
-            const char *v = argv[++i];
-            if (strcmp(a, "--report") == 0)
-                report = v;
-            else if (strcmp(a, "--max-angle") == 0) {
-                if (parse_number(v, 89.999, &o.merge.max_angle_deg) < 0)
-                    return cli_usage_error("correct", "--max-angle: expected "
-                                           "degrees in (0, 90), got '%s'", v);
-            } else if (strcmp(a, "--max-deviation") == 0) {
-                if (parse_number(v, 1e9, &o.merge.max_deviation) < 0)
-                    return cli_usage_error("correct", "--max-deviation: "
-                                           "expected a positive length in mm, "
-                                           "got '%s'", v);
-            } else if (strcmp(a, "--views") == 0) {
-                double k;
-                if (parse_number(v, 1e5, &k) < 0 || k != floor(k) || k < 2)
-                    return cli_usage_error("correct", "--views: expected a "
-                                           "whole number of views, got '%s'", v);
-                o.merge.views = (uint32_t)k;
-            } else if (strcmp(a, "--noise") == 0) {
-                if (parse_number(v, 1e9, &o.merge.noise) < 0)
-                    return cli_usage_error("correct", "--noise: expected a "
-                                           "positive length in mm, got '%s'", v);
-            } else if (strcmp(a, "--radius") == 0) {
-                if (parse_number(v, 1e9, &o.collapse.radius) < 0)
-                    return cli_usage_error("correct", "--radius: expected a "
-                                           "positive length in mm, got '%s'", v);
-            } else {
-                outpath = v;
-            }
-        } else if (a[0] == '-' && a[1] != '\0') {
-            return cli_usage_error("correct", "unknown option '%s'", a);
-        } else if (!in) {
-            in = a;
-        } else {
-            return cli_usage_error("correct", "unexpected argument '%s'", a);
+    enum { O_OUT, O_REPORT, O_ANGLE, O_DEV, O_VIEWS, O_NOISE, O_RADIUS,
+           O_NO_COLLAPSE, O_CONVEX };
+    static const cli_opt opts[] = {
+        {"-o", O_OUT, true},              {"--output", O_OUT, true},
+        {"--report", O_REPORT, true},     {"--max-angle", O_ANGLE, true},
+        {"--max-deviation", O_DEV, true}, {"--views", O_VIEWS, true},
+        {"--noise", O_NOISE, true},       {"--radius", O_RADIUS, true},
+        {"--no-collapse", O_NO_COLLAPSE, false},
+        {"--convex", O_CONVEX, false},    {NULL, 0, false},
+    };
+    static const char LENGTH[] = "a positive length in mm";
+    static const char VIEWS[] = "a whole number of views";
+    cli_args a;
+    const char *v;
+    cli_args_init(&a, "correct", argc, argv, opts);
+    cli_args_positionals(&a, &in, 1);
+    for (int k; (k = cli_args_next(&a, &v)) != CLI_ARGS_END;) {
+        int r = 0;
+        double views;
+        switch (k) {
+        case O_OUT: outpath = v; break;
+        case O_REPORT: report = v; break;
+        case O_ANGLE:
+            r = cli_args_positive(&a, v, 89.999, "degrees in (0, 90)",
+                                  &o.merge.max_angle_deg);
+            break;
+        case O_DEV:
+            r = cli_args_positive(&a, v, 1e9, LENGTH, &o.merge.max_deviation);
+            break;
+        case O_VIEWS:
+            r = cli_args_positive(&a, v, 1e5, VIEWS, &views);
+            if (r == 0 && (views != floor(views) || views < 2))
+                r = cli_args_invalid(&a, v, VIEWS);
+            if (r == 0)
+                o.merge.views = (uint32_t)views;
+            break;
+        case O_NOISE:
+            r = cli_args_positive(&a, v, 1e9, LENGTH, &o.merge.noise);
+            break;
+        case O_RADIUS:
+            r = cli_args_positive(&a, v, 1e9, LENGTH, &o.collapse.radius);
+            break;
+        case O_NO_COLLAPSE: o.collapse_clusters = false; break;
+        case O_CONVEX: o.convex = true; break;
+        default: r = CLI_ARGS_ERROR;
         }
+        if (r)
+            return CLI_USAGE;
     }
     if (!in)
         return cli_usage_error("correct", "needs a model file");
-    if (!outpath)
-        return cli_usage_error("correct", "needs -o OUT");
-    if (proto_format_from_path(outpath) == PROTO_FMT_UNKNOWN)
-        return cli_usage_error("correct", "%s: cannot tell the format from "
-                               "the name", outpath);
+    if (cli_args_output(&a, outpath) != CLI_OK)
+        return CLI_USAGE;
 
     geo_err err = {{0}};
     geo_poly *p = proto_model_read_file(in, PROTO_FMT_UNKNOWN, NULL, &err);

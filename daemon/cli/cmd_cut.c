@@ -77,6 +77,7 @@ int cmd_cut(int argc, char **argv)
     const char *v;
     long f;
     cli_args_init(&a, "cut", argc, argv, cut_opts);
+    cli_args_positionals(&a, &in, 1);
     for (int k; (k = cli_args_next(&a, &v)) != CLI_ARGS_END;) {
         int r = 0;
         switch (k) {
@@ -91,11 +92,6 @@ int cmd_cut(int argc, char **argv)
             r = cli_args_long(&a, v, 0, GEO_NONE - 1L, &f);
             opts.main_facet = (uint32_t)f;
             break;
-        case CLI_ARGS_POSITIONAL:
-            if (in)
-                r = cli_args_unexpected(&a, v);
-            in = v;
-            break;
         default: r = CLI_ARGS_ERROR;
         }
         if (r)
@@ -105,11 +101,8 @@ int cmd_cut(int argc, char **argv)
         return cli_usage_error("cut", "needs a model file");
     if (!have_plane)
         return cli_usage_error("cut", "needs --plane A,B,C,D");
-    if (!outpath)
-        return cli_usage_error("cut", "needs -o OUT");
-    if (proto_format_from_path(outpath) == PROTO_FMT_UNKNOWN)
-        return cli_usage_error("cut", "%s: cannot tell the format from the "
-                               "name", outpath);
+    if (cli_args_output(&a, outpath) != CLI_OK)
+        return CLI_USAGE;
 
     geo_err err = {{0}};
     geo_poly *p = proto_model_read_file(in, PROTO_FMT_UNKNOWN, NULL, &err);

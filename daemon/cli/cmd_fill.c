@@ -11,9 +11,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "cli.h"
+#include "cli_args.h"
 #include "fill.h"
 #include "fill_json.h"
 #include "model_io.h"
@@ -48,13 +48,6 @@ static const char USAGE[] =
     "reasons on stderr; OUT not written unless --keep-invalid), 2 usage\n"
     "error\n";
 
-static double mono_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
-}
-
 int cmd_fill(int argc, char **argv)
 {
     if (cli_wants_help(argc, argv)) {
@@ -65,58 +58,56 @@ int cmd_fill(int argc, char **argv)
     bool keep_invalid = false;
     geo_mesh_fill_opts o;
     geo_mesh_fill_opts_default(&o);
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0 ||
-            strcmp(a, "--weight") == 0 || strcmp(a, "--report") == 0) {
-            if (i + 1 == argc)
-                return cli_usage_error("fill", "%s needs a value", a);
-            const char *v = argv[++i];
-            if (strcmp(a, "--weight") == 0) {
-                if (strcmp(v, "area") == 0)
-                    o.fill.weight = GEO_FILL_AREA;
-                else if (strcmp(v, "edges") == 0)
-                    o.fill.weight = GEO_FILL_EDGES;
-                else if (strcmp(v, "angle") == 0)
-                    o.fill.weight = GEO_FILL_ANGLE;
-                else
-                    return cli_usage_error("fill", "--weight: expected area, "
-                                           "edges or angle, got '%s'", v);
-            } else if (strcmp(a, "--report") == 0) {
-                report = v;
-            } else {
-                outpath = v;
-            }
-        } else if (strcmp(a, "--no-refine") == 0) {
-            o.fill.refine = false;
-        } else if (strcmp(a, "--no-fair") == 0) {
-            o.fill.fair = GEO_FAIR_NONE;
-        } else if (strcmp(a, "--keep-invalid") == 0) {
-            keep_invalid = true;
-        } else if (a[0] == '-' && a[1] != '\0') {
-            return cli_usage_error("fill", "unknown option '%s'", a);
-        } else if (!in) {
-            in = a;
-        } else {
-            return cli_usage_error("fill", "unexpected argument '%s'", a);
+    enum { O_OUT, O_REPORT, O_WEIGHT, O_NO_REFINE, O_NO_FAIR,
+           O_KEEP_INVALID };
+    static const cli_opt opts[] = {
+        {"-o", O_OUT, true},              {"--output", O_OUT, true},
+        {"--report", O_REPORT, true},     {"--weight", O_WEIGHT, true},
+        {"--no-refine", O_NO_REFINE, false},
+        {"--no-fair", O_NO_FAIR, false},
+        {"--keep-invalid", O_KEEP_INVALID, false},
+        {NULL, 0, false},
+    };
+    cli_args a;
+    const char *v;
+    cli_args_init(&a, "fill", argc, argv, opts);
+    cli_args_positionals(&a, &in, 1);
+    for (int k; (k = cli_args_next(&a, &v)) != CLI_ARGS_END;) {
+        int r = 0;
+        switch (k) {
+        case O_OUT: outpath = v; break;
+        case O_REPORT: report = v; break;
+        case O_WEIGHT:
+            if (strcmp(v, "area") == 0)
+                o.fill.weight = GEO_FILL_AREA;
+            else if (strcmp(v, "edges") == 0)
+                o.fill.weight = GEO_FILL_EDGES;
+            else if (strcmp(v, "angle") == 0)
+                o.fill.weight = GEO_FILL_ANGLE;
+            else
+                r = cli_args_invalid(&a, v, "area, edges or angle");
+            break;
+        case O_NO_REFINE: o.fill.refine = false; break;
+        case O_NO_FAIR: o.fill.fair = GEO_FAIR_NONE; break;
+        case O_KEEP_INVALID: keep_invalid = true; break;
+        default: r = CLI_ARGS_ERROR;
         }
+        if (r)
+            return CLI_USAGE;
     }
     if (!in)
         return cli_usage_error("fill", "needs a model file");
-    if (!outpath)
-        return cli_usage_error("fill", "needs -o OUT");
-    if (proto_format_from_path(outpath) == PROTO_FMT_UNKNOWN)
-        return cli_usage_error("fill", "%s: cannot tell the format from the "
-                               "name", outpath);
+    if (cli_args_output(&a, outpath) != CLI_OK)
+        return CLI_USAGE;
 
     geo_err err = {{0}};
     geo_poly *p = proto_model_read_file(in, PROTO_FMT_UNKNOWN, NULL, &err);
     if (!p)
         return cli_input_error("fill", "%s", err.msg);
     geo_mesh_fill_report rep;
-    double t0 = mono_ms();
+    double t0 = cli_mono_ms();
     int r = geo_fill(p, &o, NULL, &rep, &err);
-    double ms = mono_ms() - t0;
+    double ms = cli_mono_ms() - t0;
     if (r < 0) {
         geo_poly_free(p);
         return cli_input_error("fill", "%s: %s", in, err.msg);

@@ -74,7 +74,6 @@ int cmd_inside(int argc, char **argv)
         return CLI_OK;
     }
     const char *files[2] = {NULL, NULL};
-    int nfiles = 0;
     unsigned long threads = 0, seed = 1;
     const char *method = "auto";
     enum { O_THREADS, O_SEED, O_METHOD };
@@ -85,6 +84,7 @@ int cmd_inside(int argc, char **argv)
     cli_args args;
     const char *val;
     cli_args_init(&args, "inside", argc, argv, opts);
+    cli_args_positionals(&args, files, 2);
     for (int k; (k = cli_args_next(&args, &val)) != CLI_ARGS_END;) {
         int r = CLI_OK;
         switch (k) {
@@ -100,18 +100,12 @@ int cmd_inside(int argc, char **argv)
             else
                 method = val;
             break;
-        case CLI_ARGS_POSITIONAL:
-            if (nfiles == 2)
-                r = cli_usage_error("inside", "unexpected argument '%s'", val);
-            else
-                files[nfiles++] = val;
-            break;
         default: r = CLI_USAGE;
         }
         if (r != CLI_OK)
             return r;
     }
-    if (nfiles < 2)
+    if (!files[1])
         return cli_usage_error("inside", "needs a model and a points file");
 
     geo_err err = {{0}};

@@ -51,6 +51,7 @@ int cmd_inspect(int argc, char **argv)
                                    {NULL, 0, false}};
     cli_args a;
     cli_args_init(&a, "inspect", argc, argv, opts);
+    cli_args_positionals(&a, &path, 1);
     for (int k; (k = cli_args_next(&a, &val)) != CLI_ARGS_END;) {
         int r = 0;
         switch (k) {
@@ -61,11 +62,6 @@ int cmd_inspect(int argc, char **argv)
             break;
         case O_THREADS: r = cli_args_long(&a, val, 0, 1024, &threads); break;
         case O_FROM: r = cli_args_format(&a, val, &fmt); break;
-        case CLI_ARGS_POSITIONAL:
-            if (path)
-                r = cli_args_unexpected(&a, val);
-            path = val;
-            break;
         default: r = CLI_ARGS_ERROR;
         }
         if (r)

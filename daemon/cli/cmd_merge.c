@@ -2,7 +2,6 @@
  * -o OUT`: merges groups of adjacent, nearly coplanar facets into one
  * facet each (lib/correct/merge.h), writes the result and prints a summary. */
 #include <errno.h>
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -91,17 +90,6 @@ bad:
     return -1;
 }
 
-static int parse_number(const char *s, double lo, double hi, double *ret)
-{
-    char *end;
-    errno = 0;
-    double v = strtod(s, &end);
-    if (end == s || *end || errno || !isfinite(v) || v <= lo || v > hi)
-        return -1;
-    *ret = v;
-    return 0;
-}
-
 int cmd_merge(int argc, char **argv)
 {
     if (cli_wants_help(argc, argv)) {
@@ -123,6 +111,7 @@ int cmd_merge(int argc, char **argv)
     cli_args args;
     const char *v;
     cli_args_init(&args, "merge", argc, argv, opts);
+    cli_args_positionals(&args, &in, 1);
     for (int k; (k = cli_args_next(&args, &v)) != CLI_ARGS_END;) {
         switch (k) {
         case O_AUTO: automatic = true; break;
@@ -130,14 +119,14 @@ int cmd_merge(int argc, char **argv)
         case O_REPORT: report = v; break;
         case O_OUT: outpath = v; break;
         case O_ANGLE:
-            if (parse_number(v, 0, 89.999, &o.max_angle_deg) < 0)
-                return cli_usage_error("merge", "--max-angle: expected "
-                                       "degrees in (0, 90), got '%s'", v);
+            if (cli_args_positive(&args, v, 89.999, "degrees in (0, 90)",
+                                  &o.max_angle_deg) < 0)
+                return CLI_USAGE;
             break;
         case O_DEV:
-            if (parse_number(v, 0, 1e9, &o.max_deviation) < 0)
-                return cli_usage_error("merge", "--max-deviation: expected "
-                                       "a positive length in mm, got '%s'", v);
+            if (cli_args_positive(&args, v, 1e9, "a positive length in mm",
+                                  &o.max_deviation) < 0)
+                return CLI_USAGE;
             break;
         case O_PLANE:
             if (strcmp(v, "contour") == 0)
@@ -146,14 +135,10 @@ int cmd_merge(int argc, char **argv)
                 o.plane = GEO_MERGE_PLANE_CONTOUR_WEIGHTED;
             else if (strcmp(v, "area") == 0)
                 o.plane = GEO_MERGE_PLANE_AREA;
-            else
-                return cli_usage_error("merge", "--plane: expected contour, "
-                                       "weighted or area, got '%s'", v);
-            break;
-        case CLI_ARGS_POSITIONAL:
-            if (in)
-                return cli_usage_error("merge", "unexpected argument '%s'", v);
-            in = v;
+            else {
+                cli_args_invalid(&args, v, "contour, weighted or area");
+                return CLI_USAGE;
+            }
             break;
         default: return CLI_USAGE;
         }
@@ -162,11 +147,8 @@ int cmd_merge(int argc, char **argv)
         return cli_usage_error("merge", "needs a model file");
     if (!!groups == automatic)
         return cli_usage_error("merge", "needs exactly one of --groups and --auto");
-    if (!outpath)
-        return cli_usage_error("merge", "needs -o OUT");
-    if (proto_format_from_path(outpath) == PROTO_FMT_UNKNOWN)
-        return cli_usage_error("merge", "%s: cannot tell the format from the "
-                               "name", outpath);
+    if (cli_args_output(&args, outpath) != CLI_OK)
+        return CLI_USAGE;
     uint32_t ng = 0, *gstart = NULL, *gfacets = NULL;
     if (groups && parse_groups(groups, &ng, &gstart, &gfacets) < 0)
         return cli_usage_error("merge", "--groups: expected facet indices "

@@ -49,7 +49,6 @@ int cmd_run(int argc, char **argv)
         return CLI_OK;
     }
     const char *files[2] = {NULL, NULL}, *out = NULL, *stats_path = NULL;
-    int nfiles = 0;
     enum { O_OUT, O_STATS };
     static const cli_opt opts[] = {{"-o", O_OUT, true},
                                    {"--output", O_OUT, true},
@@ -58,19 +57,16 @@ int cmd_run(int argc, char **argv)
     cli_args args;
     const char *val;
     cli_args_init(&args, "run", argc, argv, opts);
+    cli_args_positionals(&args, files, 2);
     for (int k; (k = cli_args_next(&args, &val)) != CLI_ARGS_END;) {
         if (k == O_OUT)
             out = val;
         else if (k == O_STATS)
             stats_path = val;
-        else if (k == CLI_ARGS_POSITIONAL && nfiles < 2)
-            files[nfiles++] = val;
-        else if (k == CLI_ARGS_POSITIONAL)
-            return cli_usage_error("run", "unexpected argument %s", val);
         else
             return CLI_USAGE;
     }
-    if (nfiles != 2 || !out)
+    if (!files[1] || !out)
         return cli_usage_error("run", "needs PIPELINE.json, MODEL and -o OUT");
     json_error_t je;
     json_t *pj = json_load_file(files[0], JSON_DECODE_ANY |

@@ -10,9 +10,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "cli.h"
+#include "cli_args.h"
 #include "fill_json.h"
 #include "model_io.h"
 #include "stats.h"
@@ -40,13 +40,6 @@ static const char USAGE[] =
     "valid closed solid (the reasons on stderr; OUT not written unless\n"
     "--keep-invalid), 2 usage error\n";
 
-static double mono_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
-}
-
 int cmd_stitch(int argc, char **argv)
 {
     if (cli_wants_help(argc, argv)) {
@@ -54,35 +47,32 @@ int cmd_stitch(int argc, char **argv)
         return CLI_OK;
     }
     const char *in[2] = {NULL, NULL}, *outpath = NULL, *report = NULL;
-    int nin = 0;
     bool keep_invalid = false;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0 ||
-            strcmp(a, "--report") == 0) {
-            if (i + 1 == argc)
-                return cli_usage_error("stitch", "%s needs a value", a);
-            if (strcmp(a, "--report") == 0)
-                report = argv[++i];
-            else
-                outpath = argv[++i];
-        } else if (strcmp(a, "--keep-invalid") == 0) {
-            keep_invalid = true;
-        } else if (a[0] == '-' && a[1] != '\0') {
-            return cli_usage_error("stitch", "unknown option '%s'", a);
-        } else if (nin < 2) {
-            in[nin++] = a;
-        } else {
-            return cli_usage_error("stitch", "unexpected argument '%s'", a);
+    enum { O_OUT, O_REPORT, O_KEEP_INVALID };
+    static const cli_opt opts[] = {
+        {"-o", O_OUT, true},           {"--output", O_OUT, true},
+        {"--report", O_REPORT, true},  {"--keep-invalid", O_KEEP_INVALID, false},
+        {NULL, 0, false},
+    };
+    cli_args a;
+    const char *v;
+    cli_args_init(&a, "stitch", argc, argv, opts);
+    cli_args_positionals(&a, in, 2);
+    for (int k; (k = cli_args_next(&a, &v)) != CLI_ARGS_END;) {
+        int r = 0;
+        switch (k) {
+        case O_OUT: outpath = v; break;
+        case O_REPORT: report = v; break;
+        case O_KEEP_INVALID: keep_invalid = true; break;
+        default: r = CLI_ARGS_ERROR;
         }
+        if (r)
+            return CLI_USAGE;
     }
-    if (nin < 2)
+    if (!in[1])
         return cli_usage_error("stitch", "needs two model files");
-    if (!outpath)
-        return cli_usage_error("stitch", "needs -o OUT");
-    if (proto_format_from_path(outpath) == PROTO_FMT_UNKNOWN)
-        return cli_usage_error("stitch", "%s: cannot tell the format from "
-                               "the name", outpath);
+    if (cli_args_output(&a, outpath) != CLI_OK)
+        return CLI_USAGE;
     geo_err err = {{0}};
     geo_poly *m[2] = {NULL, NULL}, *out = NULL;
     json_t *sj = NULL, *vj = NULL, *doc = NULL;
@@ -98,9 +88,9 @@ int cmd_stitch(int argc, char **argv)
         goto out;
     }
     geo_stitch_report rep;
-    double t0 = mono_ms();
+    double t0 = cli_mono_ms();
     int r = geo_stitch(m[0], m[1], NULL, NULL, out, &rep, &err);
-    double ms = mono_ms() - t0;
+    double ms = cli_mono_ms() - t0;
     if (r < 0) {
         rc = cli_input_error("stitch", "%s, %s: %s", in[0], in[1], err.msg);
         goto out;

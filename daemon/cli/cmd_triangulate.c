@@ -99,6 +99,7 @@ int cmd_triangulate(int argc, char **argv)
     cli_args args;
     const char *val;
     cli_args_init(&args, "triangulate", argc, argv, opts);
+    cli_args_positionals(&args, &in, 1);
     for (int k; (k = cli_args_next(&args, &val)) != CLI_ARGS_END;) {
         const char *a = args.opt;
         int r = CLI_OK;
@@ -142,12 +143,6 @@ int cmd_triangulate(int argc, char **argv)
             break;
         case O_NO_REFINE: o.refine = false; break;
         case O_NO_SHARPEN: o.sharpen = false; break;
-        case CLI_ARGS_POSITIONAL:
-            if (in)
-                r = cli_usage_error("triangulate", "unexpected argument '%s'",
-                                    val);
-            in = val;
-            break;
         default: r = CLI_USAGE;
         }
         if (r != CLI_OK)

@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include <jansson.h>
 
@@ -92,6 +93,13 @@ int cli_print_json(const char *cmd, json_t *j, size_t flags)
               fflush(stdout) != EOF;
     free(text);
     return ok ? CLI_OK : cli_input_error(cmd, "cannot write the output");
+}
+
+double cli_mono_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
 }
 
 bool cli_wants_help(int argc, char **argv)

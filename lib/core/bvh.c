@@ -74,28 +74,34 @@ geo_bvh *geo_bvh_free(geo_bvh *h)
     return NULL;
 }
 
+/* The state of one build. The median build takes its split from the
+ * centroids and copies each item's box from in[] as its leaf is formed
+ * (h->boxes then is in leaf order without a pass of its own); the Morton
+ * build takes it from the sorted codes and has h->boxes in leaf order
+ * before (in NULL). */
 typedef struct builder {
     geo_bvh *h;
-    const geo_bbox *in;  /* input boxes by item index */
-    double (*cent)[3];   /* centroids by item index */
+    const geo_bbox *in;       /* median: input boxes by item index */
+    const double (*cent)[3];  /* median: centroids by item index */
+    const uint32_t *code;     /* Morton: codes by item index, sorted */
 } builder;
 
 /* Partially orders items[lo..hi) so that items[k] has the k-th smallest
  * centroid along axis: quickselect with median-of-three pivots and a
  * three-way partition (so runs of equal centroids always make progress). */
-static void select_kth(const builder *b, uint32_t *items, uint32_t lo,
+static void select_kth(const double (*cent)[3], uint32_t *items, uint32_t lo,
                        uint32_t hi, uint32_t k, int axis)
 {
     while (hi - lo > 1) {
         uint32_t mid = lo + (hi - lo) / 2;
-        double a = b->cent[items[lo]][axis], m = b->cent[items[mid]][axis],
-               z = b->cent[items[hi - 1]][axis];
+        double a = cent[items[lo]][axis], m = cent[items[mid]][axis],
+               z = cent[items[hi - 1]][axis];
         double pivot = a < m ? (m < z ? m : (a < z ? z : a))
                              : (a < z ? a : (m < z ? z : m));
         /* [lo, lt) < pivot, [lt, i) == pivot, (gt, hi) > pivot */
         uint32_t lt = lo, i = lo, gt = hi;
         while (i < gt) {
-            double c = b->cent[items[i]][axis];
+            double c = cent[items[i]][axis];
             uint32_t t = items[i];
             if (c < pivot) {
                 items[i++] = items[lt];
@@ -116,22 +122,11 @@ static void select_kth(const builder *b, uint32_t *items, uint32_t lo,
     }
 }
 
-/* A node's box is the union of its children's (a leaf's: of its items'),
- * formed after the children are built: the same box as the union of all
- * its items, taken in the same order, without a pass over them per
- * level. Only the centroids' bounds (the split axis) need that pass. */
-static void build_node(builder *b, uint32_t node, uint32_t lo, uint32_t hi)
+/* The median split of items[lo, hi) on the longest axis of their
+ * centroids' bounds. */
+static uint32_t median_split(const builder *b, uint32_t lo, uint32_t hi)
 {
-    geo_bvh *h = b->h;
-    geo_bvh_node *n = &h->nodes[node];
-    geo_bbox_empty(&n->box);
-    if (hi - lo <= GEO_BVH_LEAF) {
-        for (uint32_t i = lo; i < hi; i++)
-            geo_bbox_union(&n->box, &b->in[h->items[i]]);
-        n->child = lo;
-        n->count = hi - lo;
-        return;
-    }
+    const geo_bvh *h = b->h;
     geo_bbox cb;
     geo_bbox_empty(&cb);
     for (uint32_t i = lo; i < hi; i++)
@@ -141,7 +136,52 @@ static void build_node(builder *b, uint32_t node, uint32_t lo, uint32_t hi)
         if (cb.hi[k] - cb.lo[k] > cb.hi[axis] - cb.lo[axis])
             axis = k;
     uint32_t mid = lo + (hi - lo) / 2;
-    select_kth(b, h->items, lo, hi, mid, axis);
+    select_kth(b->cent, h->items, lo, hi, mid, axis);
+    return mid;
+}
+
+/* The Morton split of items[lo, hi): the first item whose code has the
+ * highest differing bit set (codes are sorted, so a binary search), or
+ * the middle when all codes are equal; lo < mid < hi. */
+static uint32_t morton_split(const builder *b, uint32_t lo, uint32_t hi)
+{
+    const geo_bvh *h = b->h;
+    uint32_t c0 = b->code[h->items[lo]], c1 = b->code[h->items[hi - 1]];
+    if (c0 == c1)
+        return lo + (hi - lo) / 2;
+    uint32_t bit = 31 - (uint32_t)__builtin_clz(c0 ^ c1);
+    uint32_t l = lo + 1, r = hi - 1;
+    while (l < r) {
+        uint32_t m = l + (r - l) / 2;
+        if (b->code[h->items[m]] >> bit & 1)
+            r = m;
+        else
+            l = m + 1;
+    }
+    return l;
+}
+
+/* A node's box is the union of its children's (a leaf's: of its items'),
+ * formed after the children are built: the same box as the union of all
+ * its items, taken in the same order, without a pass over them per
+ * level. */
+static void build_node(const builder *b, uint32_t node, uint32_t lo,
+                       uint32_t hi)
+{
+    geo_bvh *h = b->h;
+    geo_bvh_node *n = &h->nodes[node];
+    geo_bbox_empty(&n->box);
+    if (hi - lo <= GEO_BVH_LEAF) {
+        for (uint32_t i = lo; i < hi; i++) {
+            if (b->in)
+                h->boxes[i] = b->in[h->items[i]];
+            geo_bbox_union(&n->box, &h->boxes[i]);
+        }
+        n->child = lo;
+        n->count = hi - lo;
+        return;
+    }
+    uint32_t mid = b->code ? morton_split(b, lo, hi) : median_split(b, lo, hi);
     uint32_t child = h->nnodes;
     h->nnodes += 2;
     n->child = child;
@@ -153,37 +193,42 @@ static void build_node(builder *b, uint32_t node, uint32_t lo, uint32_t hi)
     geo_bbox_union(&n->box, &h->nodes[child + 1].box);
 }
 
-geo_bvh *geo_bvh_build(const geo_bbox *boxes, uint32_t n, geo_err *err)
+/* A tree with room for n items and its nodes, or NULL. */
+static geo_bvh *bvh_alloc(uint32_t n)
 {
     geo_bvh *h = calloc(1, sizeof *h);
-    builder b = {h, boxes, NULL};
     if (!h)
-        goto oom;
+        return NULL;
     h->nitems = n;
     h->nodes = malloc((2 * (size_t)n + 1) * sizeof *h->nodes);
     h->items = malloc(((size_t)n + 1) * sizeof *h->items);
     h->boxes = malloc(((size_t)n + 1) * sizeof *h->boxes);
-    b.cent = malloc(((size_t)n + 1) * sizeof *b.cent);
-    if (!h->nodes || !h->items || !h->boxes || !b.cent)
-        goto oom;
+    if (!h->nodes || !h->items || !h->boxes)
+        return geo_bvh_free(h);
+    return h;
+}
+
+geo_bvh *geo_bvh_build(const geo_bbox *boxes, uint32_t n, geo_err *err)
+{
+    geo_bvh *h = bvh_alloc(n);
+    double (*cent)[3] = malloc(((size_t)n + 1) * sizeof *cent);
+    if (!h || !cent) {
+        free(cent);
+        geo_err_set(err, -ENOMEM, "out of memory building the BVH");
+        return geo_bvh_free(h);
+    }
     for (uint32_t i = 0; i < n; i++) {
         h->items[i] = i;
         for (int k = 0; k < 3; k++)
-            b.cent[i][k] = 0.5 * (boxes[i].lo[k] + boxes[i].hi[k]);
+            cent[i][k] = 0.5 * (boxes[i].lo[k] + boxes[i].hi[k]);
     }
     if (n > 0) {
+        builder b = {h, boxes, (const double (*)[3])cent, NULL};
         h->nnodes = 1;
         build_node(&b, 0, 0, n);
     }
-    for (uint32_t i = 0; i < n; i++)
-        h->boxes[i] = boxes[h->items[i]];
-    free(b.cent);
+    free(cent);
     return h;
-oom:
-    if (h)
-        free(b.cent);
-    geo_err_set(err, -ENOMEM, "out of memory building the BVH");
-    return geo_bvh_free(h);
 }
 
 /* A BVH over p's facet boxes built by build (either builder). */
@@ -217,51 +262,6 @@ static uint32_t spread10(uint32_t x)
     x = (x | x << 4) & 0x030C30C3u;
     x = (x | x << 2) & 0x09249249u;
     return x;
-}
-
-typedef struct morton_builder {
-    geo_bvh *h;           /* boxes in leaf order */
-    const uint32_t *code; /* Morton code by item index */
-} morton_builder;
-
-static void build_morton_node(const morton_builder *b, uint32_t node,
-                              uint32_t lo, uint32_t hi)
-{
-    geo_bvh *h = b->h;
-    geo_bvh_node *n = &h->nodes[node];
-    geo_bbox_empty(&n->box);
-    if (hi - lo <= GEO_BVH_LEAF) {
-        for (uint32_t i = lo; i < hi; i++)
-            geo_bbox_union(&n->box, &h->boxes[i]);
-        n->child = lo;
-        n->count = hi - lo;
-        return;
-    }
-    uint32_t mid = lo + (hi - lo) / 2;
-    uint32_t c0 = b->code[h->items[lo]], c1 = b->code[h->items[hi - 1]];
-    if (c0 != c1) {
-        /* the first item whose code has the highest differing bit set:
-         * codes are sorted, so a binary search; lo < mid < hi */
-        uint32_t bit = 31 - (uint32_t)__builtin_clz(c0 ^ c1);
-        uint32_t l = lo + 1, r = hi - 1;
-        while (l < r) {
-            uint32_t m = l + (r - l) / 2;
-            if (b->code[h->items[m]] >> bit & 1)
-                r = m;
-            else
-                l = m + 1;
-        }
-        mid = l;
-    }
-    uint32_t child = h->nnodes;
-    h->nnodes += 2;
-    n->child = child;
-    n->count = 0;
-    build_morton_node(b, child, lo, mid);
-    build_morton_node(b, child + 1, mid, hi);
-    n = &h->nodes[node];
-    geo_bbox_union(&n->box, &h->nodes[child].box);
-    geo_bbox_union(&n->box, &h->nodes[child + 1].box);
 }
 
 /* Where a Morton build takes its items' boxes from: an array by item
@@ -335,57 +335,49 @@ static int morton_core(geo_bvh *h, const box_source *src)
     for (uint32_t k = 0; k < n; k++)
         source_box(src, h->items[k], &h->boxes[k]);
     if (n > 0) {
-        morton_builder mb = {h, code};
+        builder mb = {h, NULL, NULL, code};
         h->nnodes = 1;
-        build_morton_node(&mb, 0, 0, n);
+        build_node(&mb, 0, 0, n);
     }
     free(code);
     return 0;
 }
 
-/* A tree with room for n items and its nodes, or NULL. */
-static geo_bvh *bvh_alloc(uint32_t n)
+/* The Morton build over n boxes of src. */
+static geo_bvh *morton_build(const box_source *src, uint32_t n, geo_err *err)
 {
-    geo_bvh *h = calloc(1, sizeof *h);
-    if (!h)
-        return NULL;
-    h->nitems = n;
-    h->nodes = malloc((2 * (size_t)n + 1) * sizeof *h->nodes);
-    h->items = malloc(((size_t)n + 1) * sizeof *h->items);
-    h->boxes = malloc(((size_t)n + 1) * sizeof *h->boxes);
-    if (!h->nodes || !h->items || !h->boxes)
+    geo_bvh *h = bvh_alloc(n);
+    if (!h || morton_core(h, src) < 0) {
+        geo_err_set(err, -ENOMEM, "out of memory building the BVH");
         return geo_bvh_free(h);
+    }
     return h;
 }
 
 geo_bvh *geo_bvh_build_morton(const geo_bbox *boxes, uint32_t n, geo_err *err)
 {
     box_source src = {boxes, NULL};
-    geo_bvh *h = bvh_alloc(n);
-    if (!h || morton_core(h, &src) < 0) {
-        geo_err_set(err, -ENOMEM, "out of memory building the BVH");
-        return geo_bvh_free(h);
-    }
-    return h;
+    return morton_build(&src, n, err);
 }
 
 geo_bvh *geo_bvh_build_facets_morton(const geo_poly *p, geo_err *err)
 {
     box_source src = {NULL, p};
-    geo_bvh *h = bvh_alloc(p->nfacets);
-    if (!h || morton_core(h, &src) < 0) {
-        geo_err_set(err, -ENOMEM, "out of memory building the BVH");
-        return geo_bvh_free(h);
-    }
-    return h;
+    return morton_build(&src, p->nfacets, err);
 }
 
 /* An explicit stack: depth is bounded by the tree height (median splits:
  * ≤ 2·log2 n; Morton splits: ≤ 30 + log2 n) plus one. */
 enum { STACK = 128 };
 
-bool geo_bvh_query_box(const geo_bvh *h, const geo_bbox *q,
-                       geo_bvh_visit_fn visit, void *user)
+/* Which boxes a query descends into and whose items it visits. */
+typedef bool (*box_test_fn)(const geo_bbox *b, const void *query);
+
+/* The one traversal of the queries. Always inlined, so that each query
+ * gets it with its own test compiled in, not called through a pointer. */
+static inline __attribute__((always_inline)) bool
+query(const geo_bvh *h, box_test_fn hits, const void *q,
+      geo_bvh_visit_fn visit, void *user)
 {
     if (h->nitems == 0)
         return true;
@@ -393,12 +385,11 @@ bool geo_bvh_query_box(const geo_bvh *h, const geo_bbox *q,
     stack[sp++] = 0;
     while (sp) {
         const geo_bvh_node *n = &h->nodes[stack[--sp]];
-        if (!geo_bbox_overlap(&n->box, q))
+        if (!hits(&n->box, q))
             continue;
         if (n->count) {
             for (uint32_t i = n->child; i < n->child + n->count; i++)
-                if (geo_bbox_overlap(&h->boxes[i], q) &&
-                    !visit(user, h->items[i]))
+                if (hits(&h->boxes[i], q) && !visit(user, h->items[i]))
                     return false;
         } else {
             stack[sp++] = n->child;
@@ -408,28 +399,26 @@ bool geo_bvh_query_box(const geo_bvh *h, const geo_bbox *q,
     return true;
 }
 
+static bool box_hits(const geo_bbox *b, const void *q)
+{
+    return geo_bbox_overlap(b, q);
+}
+
+bool geo_bvh_query_box(const geo_bvh *h, const geo_bbox *q,
+                       geo_bvh_visit_fn visit, void *user)
+{
+    return query(h, box_hits, q, visit, user);
+}
+
+static bool plane_hits(const geo_bbox *b, const void *plane)
+{
+    return geo_bbox_plane_side(b, plane) == 0;
+}
+
 bool geo_bvh_query_plane(const geo_bvh *h, const double plane[4],
                          geo_bvh_visit_fn visit, void *user)
 {
-    if (h->nitems == 0)
-        return true;
-    uint32_t stack[STACK], sp = 0;
-    stack[sp++] = 0;
-    while (sp) {
-        const geo_bvh_node *n = &h->nodes[stack[--sp]];
-        if (geo_bbox_plane_side(&n->box, plane) != 0)
-            continue;
-        if (n->count) {
-            for (uint32_t i = n->child; i < n->child + n->count; i++)
-                if (geo_bbox_plane_side(&h->boxes[i], plane) == 0 &&
-                    !visit(user, h->items[i]))
-                    return false;
-        } else {
-            stack[sp++] = n->child;
-            stack[sp++] = n->child + 1;
-        }
-    }
-    return true;
+    return query(h, plane_hits, plane, visit, user);
 }
 
 static bool ray_hits_box(const geo_bbox *b, const double o[3],
@@ -461,28 +450,22 @@ static bool ray_hits_box(const geo_bbox *b, const double o[3],
     return true;
 }
 
+typedef struct segment {
+    const double *o, *d;
+    double tmax;
+} segment;
+
+static bool segment_hits(const geo_bbox *b, const void *q)
+{
+    const segment *sg = q;
+    return ray_hits_box(b, sg->o, sg->d, sg->tmax);
+}
+
 bool geo_bvh_query_ray(const geo_bvh *h, const double o[3], const double d[3],
                        double tmax, geo_bvh_visit_fn visit, void *user)
 {
-    if (h->nitems == 0)
-        return true;
-    uint32_t stack[STACK], sp = 0;
-    stack[sp++] = 0;
-    while (sp) {
-        const geo_bvh_node *n = &h->nodes[stack[--sp]];
-        if (!ray_hits_box(&n->box, o, d, tmax))
-            continue;
-        if (n->count) {
-            for (uint32_t i = n->child; i < n->child + n->count; i++)
-                if (ray_hits_box(&h->boxes[i], o, d, tmax) &&
-                    !visit(user, h->items[i]))
-                    return false;
-        } else {
-            stack[sp++] = n->child;
-            stack[sp++] = n->child + 1;
-        }
-    }
-    return true;
+    segment sg = {o, d, tmax};
+    return query(h, segment_hits, &sg, visit, user);
 }
 
 static double box_extent(const geo_bbox *b)

@@ -238,6 +238,16 @@ oom:
     return geo_topo_free(t);
 }
 
+geo_topo *geo_topo_build_checked(const geo_poly *p, int *ret_rc,
+                                 geo_err *err)
+{
+    int rc = geo_poly_validate_indices(p, err);
+    geo_topo *t = rc < 0 ? NULL : geo_topo_build(p, err);
+    if (!t)
+        *ret_rc = rc < 0 ? rc : -ENOMEM;
+    return t;
+}
+
 /* The boundary corner that follows boundary corner c around its hole:
  * walk the fan of c's end vertex from c's facet to the next free edge. */
 static uint32_t next_boundary(const geo_poly *p, const geo_topo *t,

@@ -59,6 +59,12 @@ typedef struct geo_topo {
  * (geo_poly_validate_indices). */
 geo_topo *geo_topo_build(const geo_poly *p, geo_err *err);
 
+/* geo_topo_build of a model whose indices are checked first
+ * (geo_poly_validate_indices): NULL with *ret_rc -EINVAL (bad indices)
+ * or -ENOMEM, and err set. */
+geo_topo *geo_topo_build_checked(const geo_poly *p, int *ret_rc,
+                                 geo_err *err);
+
 /* Releases t; accepts NULL; returns NULL. */
 geo_topo *geo_topo_free(geo_topo *t);
 

@@ -64,6 +64,30 @@ static int decline(geo_convex_report *rep, const char *fmt, ...)
     return 1;
 }
 
+/* Intersects the half-spaces of cp's planes into *q and *src (replacing
+ * what they held): 0, -ENOMEM with err set, or 1 when they bound no
+ * solid, with rep->reason "WHAT: why" (why cut to prec characters). */
+static int intersect(const geo_convex_planes *cp, double tol,
+                     const char *what, int prec, geo_poly **q,
+                     uint32_t **src, geo_convex_report *rep, geo_err *err)
+{
+    geo_poly *q2 = NULL;
+    uint32_t *src2 = NULL;
+    enum geo_halfspace_status st;
+    geo_err perr;
+    int r = geo_halfspace_intersect(&cp->planes[0][0], cp->nplanes, tol, &q2,
+                                    &src2, &st, &perr);
+    if (r == -ENOMEM)
+        return geo_err_set(err, r, "out of memory");
+    if (r < 0)
+        return decline(rep, "%s: %.*s", what, prec, perr.msg);
+    geo_poly_free(*q);
+    free(*src);
+    *q = q2;
+    *src = src2;
+    return 0;
+}
+
 int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
                        double max_dev, enum geo_convex_fit fit,
                        const geo_ctx *ctx, geo_poly **ret,
@@ -94,20 +118,11 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
     rep->dropped = cp.dropped;
     geo_poly *q = NULL;
     uint32_t *src = NULL;
-    enum geo_halfspace_status st;
     double merge_tol = GEO_HALFSPACE_MERGE * geo_poly_size(p);
-    r = geo_halfspace_intersect(&cp.planes[0][0], cp.nplanes, merge_tol, &q, &src, &st,
-                                &perr);
-    if (r == -ENOMEM) {
-        r = geo_err_set(err, r, "out of memory");
+    r = intersect(&cp, merge_tol, "the recovered planes", 170, &q, &src, rep,
+                  err);
+    if (r != 0)
         goto done;
-    }
-    if (r < 0) {
-        snprintf(rep->reason, sizeof rep->reason, "the recovered planes: %.170s",
-                 perr.msg);
-        r = 1;
-        goto done;
-    }
     /* a facet narrower than the scan can resolve (NARROW noise bounds)
      * is a bevel the support test let through at a corner where many
      * planes meet: its plane goes and the rest are intersected again */
@@ -133,24 +148,10 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
                 memmove(cp.planes[m++], cp.planes[i], sizeof cp.planes[0]);
         cp.nplanes = m;
         rep->narrow += gone;
-        geo_poly *q2 = NULL;
-        uint32_t *src2 = NULL;
-        r = geo_halfspace_intersect(&cp.planes[0][0], cp.nplanes, merge_tol, &q2, &src2,
-                                    &st, &perr);
-        if (r == -ENOMEM) {
-            r = geo_err_set(err, r, "out of memory");
+        r = intersect(&cp, merge_tol, "the recovered planes without the "
+                      "narrow ones", 150, &q, &src, rep, err);
+        if (r != 0)
             goto done;
-        }
-        if (r < 0) {
-            snprintf(rep->reason, sizeof rep->reason, "the recovered planes "
-                     "without the narrow ones: %.150s", perr.msg);
-            r = 1;
-            goto done;
-        }
-        geo_poly_free(q);
-        free(src);
-        q = q2;
-        src = src2;
     }
     if (fit == GEO_CONVEX_FIT_SILHOUETTE) {
         double sc;
@@ -160,24 +161,10 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
             goto done;
         }
         if (r == 0) {
-            geo_poly *q2 = NULL;
-            uint32_t *src2 = NULL;
-            r = geo_halfspace_intersect(&cp.planes[0][0], cp.nplanes, merge_tol, &q2,
-                                        &src2, &st, &perr);
-            if (r == -ENOMEM) {
-                r = geo_err_set(err, r, "out of memory");
+            r = intersect(&cp, merge_tol, "the adjusted planes", 170, &q,
+                          &src, rep, err);
+            if (r != 0)
                 goto done;
-            }
-            if (r < 0) {
-                snprintf(rep->reason, sizeof rep->reason, "the adjusted "
-                         "planes: %.170s", perr.msg);
-                r = 1;
-                goto done;
-            }
-            geo_poly_free(q);
-            free(src);
-            q = q2;
-            src = src2;
         }
     }
     uint8_t *seen = calloc((size_t)cp.nplanes + 1, 1);

@@ -395,12 +395,10 @@ static int session_open(session *s, const geo_poly *p, const geo_merge_opts *o,
                         geo_merge_report *rep, geo_err *err)
 {
     memset(s, 0, sizeof *s);
-    int r = geo_poly_validate_indices(p, err);
-    if (r < 0)
-        return r;
-    geo_topo *t = geo_topo_build(p, err);
+    int r;
+    geo_topo *t = geo_topo_build_checked(p, &r, err);
     if (!t)
-        return -ENOMEM;
+        return r;
     bool ok = geo_topo_is_closed_manifold(t);
     geo_topo_free(t);
     if (!ok)
@@ -467,6 +465,21 @@ static int session_finish(session *s, geo_poly *p, geo_merge_report *rep,
     }
     geo_poly_free(out);
     return 0;
+}
+
+/* The end of a merge whose work so far returned r: the session finished
+ * into p when r is 0, then closed; the report is cleared on failure, the
+ * caller's local one (when it passed none) always. */
+static int session_end(session *s, int r, geo_poly *p, geo_merge_report *rep,
+                       geo_merge_report *local, geo_err *err)
+{
+    if (r == 0)
+        r = session_finish(s, p, rep, err);
+    session_close(s);
+    if (r < 0)
+        geo_merge_report_clear(rep);
+    geo_merge_report_clear(local);
+    return r;
 }
 
 /* The set-up of every entry point: the options (opts, or the defaults)
@@ -544,13 +557,7 @@ int geo_merge_groups(geo_poly *p, uint32_t ngroups, const uint32_t *gstart,
         else if (r < 0)
             geo_err_set(err, r, "%s", gerr.msg);
     }
-    if (r == 0)
-        r = session_finish(&s, p, rep, err);
-    session_close(&s);
-    if (r < 0)
-        geo_merge_report_clear(rep);
-    geo_merge_report_clear(&local);
-    return r;
+    return session_end(&s, r, p, rep, &local, err);
 }
 
 int geo_merge(geo_poly *p, const uint32_t *group, uint32_t n,
@@ -630,11 +637,5 @@ int geo_merge_auto(geo_poly *p, const geo_merge_opts *opts,
         if (r == 0 && geo_edit_gc(s.e) < 0)
             r = geo_err_set(err, -ENOMEM, "out of memory");
     }
-    if (r == 0)
-        r = session_finish(&s, p, rep, err);
-    session_close(&s);
-    if (r < 0)
-        geo_merge_report_clear(rep);
-    geo_merge_report_clear(&local);
-    return r;
+    return session_end(&s, r, p, rep, &local, err);
 }

@@ -261,12 +261,10 @@ int geo_orient_repair(geo_poly *p, geo_orient_report *ret, geo_err *err)
     if (!ret)
         ret = &local;
     memset(ret, 0, sizeof *ret);
-    int rc = geo_poly_validate_indices(p, err);
-    if (rc < 0)
-        return rc;
-    geo_topo *t = geo_topo_build(p, err);
+    int rc;
+    geo_topo *t = geo_topo_build_checked(p, &rc, err);
     if (!t)
-        return -ENOMEM;
+        return rc;
     uint8_t *flip = malloc((size_t)p->nfacets + 1);
     if (!flip) {
         geo_topo_free(t);

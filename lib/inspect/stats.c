@@ -280,12 +280,10 @@ int geo_inspect(const geo_poly *p, const geo_inspect_opts *opts,
         o = *opts;
     else
         geo_inspect_opts_default(&o);
-    int rc = geo_poly_validate_indices(p, err);
-    if (rc < 0)
-        return rc;
-    geo_topo *t = geo_topo_build(p, err);
+    int rc;
+    geo_topo *t = geo_topo_build_checked(p, &rc, err);
     if (!t)
-        return -ENOMEM;
+        return rc;
 
     ret->vertices = p->nverts;
     ret->facets = p->nfacets;

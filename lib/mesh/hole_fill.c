@@ -1060,6 +1060,18 @@ oom:
     return -ENOMEM;
 }
 
+/* Whether a vertex of facet f has a mark of at least level. */
+static bool facet_marked(const geo_poly *p, uint32_t f, const uint8_t *mark,
+                         uint8_t level)
+{
+    const uint32_t *fv = geo_poly_facet(p, f);
+    uint32_t k = geo_poly_facet_size(p, f);
+    for (uint32_t i = 0; i < k; i++)
+        if (mark[fv[i]] >= level)
+            return true;
+    return false;
+}
+
 static int refine(geo_poly *p, uint8_t *in_region, const geo_fill_opts *o,
                   geo_fill_stats *st, const geo_ctx *ctx)
 {
@@ -1095,27 +1107,18 @@ static int refine(geo_poly *p, uint8_t *in_region, const geo_fill_opts *o,
         for (int k = 0; k < 3; k++)
             near[R.m.t[t][k]] = 2;
     for (uint32_t f = 0; f < p->nfacets; f++) {
-        if (in_region[f])
+        if (in_region[f] || !facet_marked(p, f, near, 2))
             continue;
         const uint32_t *fv = geo_poly_facet(p, f);
-        uint32_t k = geo_poly_facet_size(p, f);
-        bool touches = false;
-        for (uint32_t i = 0; i < k; i++)
-            touches |= near[fv[i]] == 2;
-        for (uint32_t i = 0; i < k && touches; i++)
+        for (uint32_t i = 0; i < geo_poly_facet_size(p, f); i++)
             if (!near[fv[i]])
                 near[fv[i]] = 1;
     }
     for (uint32_t f = 0; f < p->nfacets; f++) {
-        if (in_region[f])
+        if (in_region[f] || !facet_marked(p, f, near, 1))
             continue;
         const uint32_t *fv = geo_poly_facet(p, f);
         uint32_t k = geo_poly_facet_size(p, f);
-        bool touches = false;
-        for (uint32_t i = 0; i < k; i++)
-            touches |= near[fv[i]] != 0;
-        if (!touches)
-            continue;
         /* an edge between region vertices belongs to such a facet */
         for (uint32_t i = 0; i < k; i++)
             if (geo_edgemap_put(&R.outside,
@@ -1564,32 +1567,11 @@ static int fair_cg(geo_poly *p, const adjacency *A, uint32_t first_free,
                    const uint8_t *pinned, geo_fill_stats *st,
                    const geo_ctx *ctx)
 {
-    uint32_t nv = p->nverts, nfree = nv - first_free, nu = 0, m = 0;
-    size_t ring = 0;
-    for (uint32_t k = 0; k < nfree; k++)
-        ring += A->start[first_free + k + 1] - A->start[first_free + k];
-    uint32_t *loc = malloc((size_t)nv * sizeof *loc);
-    uint32_t *S = malloc((nfree + ring + 1) * sizeof *S);
-    int rc = -ENOMEM;
+    uint32_t nu = 0, m = 0, *loc = NULL, *S = NULL;
     double(*buf)[3] = NULL, *diag = NULL;
-    if (!loc || !S)
+    int rc = fair_unknowns(p, A, first_free, pinned, &S, &loc, &nu, &m);
+    if (rc < 0)
         goto out;
-    memset(loc, 0xff, (size_t)nv * sizeof *loc);
-    for (uint32_t k = 0; k < nfree; k++) {
-        uint32_t v = first_free + k;
-        if (!pinned[k] && A->start[v + 1] > A->start[v]) {
-            loc[v] = m;
-            S[m++] = v;
-        }
-    }
-    nu = m;
-    for (uint32_t u = 0; u < nu; u++)
-        for (uint32_t q = A->start[S[u]]; q < A->start[S[u] + 1]; q++)
-            if (loc[A->nb[q]] == UINT32_MAX) {
-                loc[A->nb[q]] = m;
-                S[m++] = A->nb[q];
-            }
-    rc = 0;
     if (nu == 0)
         goto out;
     /* z over S; x, b, r, d, Kd, h over the unknowns */
@@ -1980,6 +1962,23 @@ static int check_opts(const geo_fill_opts *opts, geo_fill_opts *o,
     return 0;
 }
 
+/* What every entry point checks first: the options (into *o) and p's
+ * indices. */
+static int check_input(const geo_poly *p, const geo_fill_opts *opts,
+                       geo_fill_opts *o, geo_err *err)
+{
+    int rc = check_opts(opts, o, err);
+    return rc < 0 ? rc : geo_poly_validate_indices(p, err);
+}
+
+/* Sets err for a failure of the work itself, which can only be a cancel
+ * or out-of-memory; returns rc. */
+static int work_failed(int rc, geo_err *err)
+{
+    return geo_err_set(err, rc, rc == -ECANCELED ? "canceled"
+                                                 : "out of memory");
+}
+
 /* Refinement and fairing of q in place; in_region may be changed. */
 static int refine_and_fair(geo_poly *q, uint8_t *in_region,
                            const geo_fill_opts *o, geo_fill_stats *st,
@@ -2004,10 +2003,8 @@ int geo_refine_region(geo_poly *p, const uint8_t *region,
                       geo_fill_stats *stats, geo_err *err)
 {
     geo_fill_opts o;
-    int rc = check_opts(opts, &o, err);
+    int rc = check_input(p, opts, &o, err);
     if (rc < 0)
-        return rc;
-    if ((rc = geo_poly_validate_indices(p, err)) < 0)
         return rc;
     geo_fill_stats st = {0};
     geo_poly *q = geo_poly_copy(p);
@@ -2026,7 +2023,7 @@ int geo_refine_region(geo_poly *p, const uint8_t *region,
         if (stats)
             *stats = st;
     } else {
-        geo_err_set(err, rc, rc == -ECANCELED ? "canceled" : "out of memory");
+        work_failed(rc, err);
     }
     geo_poly_free(q);
     free(in_region);
@@ -2038,10 +2035,8 @@ int geo_fair_vertices(geo_poly *p, uint32_t first_free,
                       geo_fill_stats *stats, geo_err *err)
 {
     geo_fill_opts o;
-    int rc = check_opts(opts, &o, err);
+    int rc = check_input(p, opts, &o, err);
     if (rc < 0)
-        return rc;
-    if ((rc = geo_poly_validate_indices(p, err)) < 0)
         return rc;
     if (first_free > p->nverts)
         return geo_err_set(err, -EINVAL, "first free vertex %u beyond the "
@@ -2049,8 +2044,7 @@ int geo_fair_vertices(geo_poly *p, uint32_t first_free,
     geo_fill_stats st = {0};
     rc = fair(p, first_free, &o, &st, ctx);
     if (rc < 0)
-        return geo_err_set(err, rc, rc == -ECANCELED ? "canceled"
-                                                     : "out of memory");
+        return work_failed(rc, err);
     if (stats)
         *stats = st;
     return 0;
@@ -2060,10 +2054,8 @@ int geo_fill_loops(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
                    geo_fill_stats *stats, geo_err *err)
 {
     geo_fill_opts o;
-    int rc = check_opts(opts, &o, err);
+    int rc = check_input(p, opts, &o, err);
     if (rc < 0)
-        return rc;
-    if ((rc = geo_poly_validate_indices(p, err)) < 0)
         return rc;
     geo_fill_stats st = {0};
     filler F = {.p = p, .o = o};
@@ -2178,7 +2170,7 @@ int geo_fill_loops(geo_poly *p, const geo_fill_opts *opts, const geo_ctx *ctx,
 oom:
     rc = -ENOMEM;
 fail:
-    geo_err_set(err, rc, rc == -ECANCELED ? "canceled" : "out of memory");
+    work_failed(rc, err);
 done:
     geo_poly_free(q);
     geo_topo_free(t);

@@ -45,13 +45,16 @@ static const char *name_of(unsigned v, const char *const *names, size_t n)
     return v < n ? names[v] : "unknown";
 }
 
-/* The index of name in names, or -1. */
-static int index_of(const char *name, const char *const *names, size_t n)
+/* 0 with *ret the index of name in names, or -EINVAL. */
+static int index_of(const char *name, const char *const *names, size_t n,
+                    int *ret)
 {
     for (size_t i = 0; name && i < n; i++)
-        if (strcmp(name, names[i]) == 0)
-            return (int)i;
-    return -1;
+        if (strcmp(name, names[i]) == 0) {
+            *ret = (int)i;
+            return 0;
+        }
+    return -EINVAL;
 }
 
 const char *geo_replanar_schedule_name(enum geo_replanar_schedule s)
@@ -62,11 +65,10 @@ const char *geo_replanar_schedule_name(enum geo_replanar_schedule s)
 int geo_replanar_schedule_parse(const char *name,
                                 enum geo_replanar_schedule *ret)
 {
-    int i = index_of(name, SCHEDULE_NAMES, NNAMES(SCHEDULE_NAMES));
-    if (i < 0)
-        return -EINVAL;
-    *ret = (enum geo_replanar_schedule)i;
-    return 0;
+    int i, r = index_of(name, SCHEDULE_NAMES, NNAMES(SCHEDULE_NAMES), &i);
+    if (r == 0)
+        *ret = (enum geo_replanar_schedule)i;
+    return r;
 }
 
 const char *geo_replanar_fit_name(enum geo_replanar_fit f)
@@ -76,11 +78,10 @@ const char *geo_replanar_fit_name(enum geo_replanar_fit f)
 
 int geo_replanar_fit_parse(const char *name, enum geo_replanar_fit *ret)
 {
-    int i = index_of(name, FIT_NAMES, NNAMES(FIT_NAMES));
-    if (i < 0)
-        return -EINVAL;
-    *ret = (enum geo_replanar_fit)i;
-    return 0;
+    int i, r = index_of(name, FIT_NAMES, NNAMES(FIT_NAMES), &i);
+    if (r == 0)
+        *ret = (enum geo_replanar_fit)i;
+    return r;
 }
 
 const char *geo_replanar_scaled_k_name(enum geo_replanar_scaled_k k)
@@ -91,11 +92,10 @@ const char *geo_replanar_scaled_k_name(enum geo_replanar_scaled_k k)
 int geo_replanar_scaled_k_parse(const char *name,
                                 enum geo_replanar_scaled_k *ret)
 {
-    int i = index_of(name, SCALED_K_NAMES, NNAMES(SCALED_K_NAMES));
-    if (i < 0)
-        return -EINVAL;
-    *ret = (enum geo_replanar_scaled_k)i;
-    return 0;
+    int i, r = index_of(name, SCALED_K_NAMES, NNAMES(SCALED_K_NAMES), &i);
+    if (r == 0)
+        *ret = (enum geo_replanar_scaled_k)i;
+    return r;
 }
 
 void geo_replanar_opts_default(geo_replanar_opts *o,
@@ -938,11 +938,14 @@ int geo_replanar_solve(const geo_replanar_prep *prep, uint32_t nfixed,
     return rc;
 }
 
-int geo_replanarize(geo_poly *p, const uint32_t *fixed, uint32_t nfixed,
-                    enum geo_replanar_schedule schedule,
-                    const geo_replanar_opts *opts, const geo_ctx *ctx,
-                    geo_replanar_log *log, geo_replanar_result *ret,
-                    geo_err *err)
+/* One solve from p's own start (validated and prepared for it), the
+ * result written back into p. */
+static int solve_once(geo_poly *p, uint32_t nfixed, const uint32_t *fixed,
+                      const double (*targets)[3],
+                      enum geo_replanar_schedule schedule,
+                      const geo_replanar_opts *opts, const geo_ctx *ctx,
+                      geo_replanar_log *log, geo_replanar_result *ret,
+                      geo_err *err)
 {
     int rc = validate_model(p, err);
     if (rc < 0)
@@ -950,10 +953,20 @@ int geo_replanarize(geo_poly *p, const uint32_t *fixed, uint32_t nfixed,
     geo_replanar_prep *prep = geo_replanar_prepare(p, err);
     if (!prep)
         return -ENOMEM;
-    rc = geo_replanar_solve(prep, nfixed, fixed, NULL, schedule, opts, ctx,
+    rc = geo_replanar_solve(prep, nfixed, fixed, targets, schedule, opts, ctx,
                             log, ret, p, err);
     geo_replanar_prep_free(prep);
     return rc;
+}
+
+int geo_replanarize(geo_poly *p, const uint32_t *fixed, uint32_t nfixed,
+                    enum geo_replanar_schedule schedule,
+                    const geo_replanar_opts *opts, const geo_ctx *ctx,
+                    geo_replanar_log *log, geo_replanar_result *ret,
+                    geo_err *err)
+{
+    return solve_once(p, nfixed, fixed, NULL, schedule, opts, ctx, log, ret,
+                      err);
 }
 
 int geo_move(geo_poly *p, uint32_t v, const double target[3],
@@ -966,15 +979,6 @@ int geo_move(geo_poly *p, uint32_t v, const double target[3],
         return geo_err_set(err, -EINVAL,
                            "vertex %u out of range (%u vertices)", v,
                            p->nverts);
-    int rc = validate_model(p, err);
-    if (rc < 0)
-        return rc;
-    geo_replanar_prep *prep = geo_replanar_prepare(p, err);
-    if (!prep)
-        return -ENOMEM;
-    const double(*t)[3] = (const double(*)[3])target;
-    rc = geo_replanar_solve(prep, 1, &v, t, schedule, opts, ctx, log, ret,
-                                p, err);
-    geo_replanar_prep_free(prep);
-    return rc;
+    return solve_once(p, 1, &v, (const double(*)[3])target, schedule, opts,
+                      ctx, log, ret, err);
 }
