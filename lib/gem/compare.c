@@ -990,14 +990,15 @@ static int measure(direction *d)
             geo_vadd(c, p->verts[u], c);
             if (!seen[u]) {
                 seen[u] = 1;
-                d->max2 = fmax(d->max2, geo_surface_dist2(s, p->verts[u],
-                                                          &hint, NULL));
+                d->max2 = fmax(d->max2, geo_surface_dist2_above(
+                                            s, p->verts[u], d->max2, &hint));
             }
             if (u < v) {
                 double m[3];
                 geo_vadd(p->verts[u], p->verts[v], m);
                 geo_vscale(m, 0.5, m);
-                d->max2 = fmax(d->max2, geo_surface_dist2(s, m, &hint, NULL));
+                d->max2 = fmax(d->max2,
+                               geo_surface_dist2_above(s, m, d->max2, &hint));
             }
             if (tick(&count, d->ctx)) {
                 r = -ECANCELED;
@@ -1005,7 +1006,7 @@ static int measure(direction *d)
             }
         }
         geo_vscale(c, 1.0 / n, c);
-        d->max2 = fmax(d->max2, geo_surface_dist2(s, c, &hint, NULL));
+        d->max2 = fmax(d->max2, geo_surface_dist2_above(s, c, d->max2, &hint));
         if ((r = geo_polygon_triangulate(&p->verts[0][0], ix, n, tris)) < 0)
             goto out;
         for (uint32_t t = 0; t + 2 < n; t++) {

@@ -43,14 +43,14 @@ static int directed(const geo_poly *a, const geo_poly *b, const geo_ctx *ctx,
             geo_vscale(m, 0.5, m);
             if (!seen[vs[i]]) {
                 seen[vs[i]] = 1;
-                worst = fmax(worst, geo_surface_dist2(s, a->verts[vs[i]],
-                                                          &hint, NULL));
+                worst = fmax(worst, geo_surface_dist2_above(
+                                        s, a->verts[vs[i]], worst, &hint));
             }
-            worst = fmax(worst, geo_surface_dist2(s, m, &hint, NULL));
+            worst = fmax(worst, geo_surface_dist2_above(s, m, worst, &hint));
         }
         if (n) {
             geo_vscale(c, 1.0 / n, c);
-            worst = fmax(worst, geo_surface_dist2(s, c, &hint, NULL));
+            worst = fmax(worst, geo_surface_dist2_above(s, c, worst, &hint));
         }
     }
     free(seen);

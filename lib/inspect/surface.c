@@ -171,12 +171,14 @@ static double box_dist2(const geo_bbox *b, const double p[3])
 }
 
 /* Nearest facet distance², depth-first with the nearer child first;
- * *arg is the facet that gave *best. */
+ * *arg is the facet that gave *best. The search ends as soon as *best ≤
+ * stop (stop < 0: never). */
 static void nearest(const geo_poly *g, const geo_bvh *h, uint32_t node,
-                    const double p[3], double *best, uint32_t *arg)
+                    const double p[3], double *best, uint32_t *arg,
+                    double stop)
 {
     const geo_bvh_node *n = &h->nodes[node];
-    if (box_dist2(&n->box, p) >= *best)
+    if (*best <= stop || box_dist2(&n->box, p) >= *best)
         return;
     if (n->count) {
         for (uint32_t i = n->child; i < n->child + n->count; i++)
@@ -196,8 +198,20 @@ static void nearest(const geo_poly *g, const geo_bvh *h, uint32_t node,
         c0 = c1;
         c1 = t;
     }
-    nearest(g, h, c0, p, best, arg);
-    nearest(g, h, c1, p, best, arg);
+    nearest(g, h, c0, p, best, arg, stop);
+    nearest(g, h, c1, p, best, arg, stop);
+}
+
+static double query(const geo_surface *s, const double p[3], double stop,
+                    uint32_t *hint)
+{
+    double best = INFINITY;
+    if (*hint != UINT32_MAX && *hint < s->g->nfacets)
+        best = facet_dist2(s->g, *hint, p, INFINITY);
+    else
+        *hint = UINT32_MAX;
+    nearest(s->g, s->bvh, 0, p, &best, hint, stop);
+    return best;
 }
 
 /* The search starts with the bound given by the piece nearest to the
@@ -206,13 +220,14 @@ static void nearest(const geo_poly *g, const geo_bvh *h, uint32_t node,
 double geo_surface_dist2(const geo_surface *s, const double p[3],
                          uint32_t *hint, uint32_t *facet)
 {
-    double best = INFINITY;
-    if (*hint != UINT32_MAX && *hint < s->g->nfacets)
-        best = facet_dist2(s->g, *hint, p, INFINITY);
-    else
-        *hint = UINT32_MAX;
-    nearest(s->g, s->bvh, 0, p, &best, hint);
+    double best = query(s, p, -1, hint);
     if (facet)
         *facet = s->origin ? s->origin[*hint] : *hint;
     return best;
+}
+
+double geo_surface_dist2_above(const geo_surface *s, const double p[3],
+                               double floor2, uint32_t *hint)
+{
+    return query(s, p, floor2, hint);
 }

@@ -35,4 +35,11 @@ void geo_surface_free(geo_surface *s);
 double geo_surface_dist2(const geo_surface *s, const double p[3],
                          uint32_t *hint, uint32_t *facet);
 
+/* For the largest of many distances: the squared distance from p when it
+ * is above floor2, else some value in [it, floor2] (the search stops at
+ * the first facet within floor2, which cannot raise a maximum already
+ * at floor2: Taha & Hanbury's early break). *hint as above. */
+double geo_surface_dist2_above(const geo_surface *s, const double p[3],
+                               double floor2, uint32_t *hint);
+
 #endif
