@@ -2,6 +2,7 @@
  * The stored input is an FMB1 model or a frep-object/1 JSON text
  * (job_submit.h). Every failure leaves a message naming its place in
  * ret->error. */
+#include "json_text.h"
 #include "job_exec.h"
 
 #include <errno.h>
@@ -76,7 +77,8 @@ int job_exec(void *user, const job_rec *job, const void *input,
         if (r == 0) {
             ret->model = buf;
             ret->model_len = len;
-            ret->stats = json_dumps(stats, JSON_COMPACT);
+            /* the same text, its reals without snprintf */
+            ret->stats = proto_json_dumps(stats, JSON_COMPACT);
             ret->stats_len = ret->stats ? strlen(ret->stats) : 0;
             ret->summary = json_dumps(summary, JSON_COMPACT);
             if (!ret->stats || !ret->summary)

@@ -199,12 +199,12 @@ int proto_decimal_from_parts(bool neg, uint64_t w, int64_t q, bool inexact,
     return parse_libc(s, len, ret);
 }
 
-static size_t format_libc(char *out, double x)
+static size_t format_libc(char *out, double x, int nmin)
 {
     /* %.17g always reads back; shorter forms are tried first so that 0.1
      * prints as 0.1 rather than 0.10000000000000001 */
     int n = 0;
-    for (int prec = 15; prec <= 17; prec++) {
+    for (int prec = nmin; prec <= 17; prec++) {
         n = snprintf(out, PROTO_DECIMAL_MAX, "%.*g", prec, x);
         if (prec == 17 || strtod(out, NULL) == x)
             break;
@@ -271,8 +271,12 @@ static size_t emit_g(char *out, bool neg, uint64_t d, int n, int X)
     return (size_t)(o - out);
 }
 
-size_t proto_decimal_format(char *out, double x)
+/* The %.{n}g text of x for the first n in nmin..17 that reads back as x
+ * (nmin 17: printf's %.17g itself). */
+static size_t format_g(char *out, double x, int nmin)
 {
+    if (nmin == 17 && (x == 0 || !isfinite(x)))
+        return (size_t)snprintf(out, PROTO_DECIMAL_MAX, "%.17g", x);
     if (x == 0) {
         /* "-0" would read back as the JSON integer 0: keep the sign */
         const char *z = signbit(x) ? "-0.0" : "0";
@@ -286,14 +290,14 @@ size_t proto_decimal_format(char *out, double x)
     /* subnormals, and powers of two (whose lower rounding gap is half the
      * upper one), go to the C library */
     if (be == 0 || (bits & MANT_MASK) == 0)
-        return format_libc(out, x);
+        return format_libc(out, x, nmin);
     uint64_t m = (bits & MANT_MASK) | UINT64_C(1) << 52;
     int e = be - 1075; /* x = m · 2^e */
     int X = log10_pow2(be - 1023) + 1;
     for (int tries = 0; tries < 4; tries++) {
         int p = 16 - X;
         if (p < 0 || p > 27)
-            return format_libc(out, x);
+            return format_libc(out, x, nmin);
         /* V = |x|·10^p = M·2^s = I + rem/2^t exactly */
         u128 M = (u128)m * POW5[p];
         int s = e + p, t = s < 0 ? -s : 0;
@@ -326,7 +330,7 @@ size_t proto_decimal_format(char *out, double x)
          * the half ulp, the ends counting when m is even. */
         u128 Vu = (s >= 0 ? M << s : M) << 1;
         u128 Hu = (u128)POW5[p] << (s >= 0 ? s : 0);
-        for (int n = 15; n <= 17; n++) {
+        for (int n = nmin; n <= 17; n++) {
             uint64_t dv = POW10U[17 - n];
             uint64_t qn = I / dv, r = I % dv;
             u128 f2 = ((u128)r << (t + 1)) + (rem << 1);
@@ -346,5 +350,15 @@ size_t proto_decimal_format(char *out, double x)
         }
         break;
     }
-    return format_libc(out, x);
+    return format_libc(out, x, nmin);
+}
+
+size_t proto_decimal_format(char *out, double x)
+{
+    return format_g(out, x, 15);
+}
+
+size_t proto_decimal_format_g17(char *out, double x)
+{
+    return format_g(out, x, 17);
 }

@@ -10,6 +10,7 @@
 #include <jansson.h>
 
 #include "cli.h"
+#include "json_text.h"
 
 static int cmd_version(int argc, char **argv)
 {
@@ -84,7 +85,7 @@ int cli_input_error(const char *cmd, const char *fmt, ...)
 
 int cli_print_json(const char *cmd, json_t *j, size_t flags)
 {
-    char *text = j ? json_dumps(j, flags) : NULL;
+    char *text = j ? proto_json_dumps(j, flags) : NULL;
     json_decref(j);
     if (!text)
         return cli_input_error(cmd, "out of memory");
