@@ -2,7 +2,6 @@
  * The stored input is an FMB1 model or a frep-object/1 JSON text
  * (job_submit.h). Every failure leaves a message naming its place in
  * ret->error. */
-#include "json_text.h"
 #include "job_exec.h"
 
 #include <errno.h>
@@ -10,6 +9,7 @@
 #include <string.h>
 
 #include "frep_json.h"
+#include "json_text.h"
 #include "model_io.h"
 #include "runner.h"
 
