@@ -561,18 +561,23 @@ static int parse_op(const json_t *v, const place *pl, proto_op *op,
     op->kind = (proto_op_kind)kind;
     set_defaults(op);
     op->alias = alias;
-    if (!json_is_object(v))
-        return 0;
     const char *key;
     const json_t *val;
-    json_object_foreach((json_t *)v, key, val) {
-        bool known = false;
-        for (int i = 0; op_keys[kind][i]; i++)
-            known |= strcmp(key, op_keys[kind][i]) == 0;
-        if (!known)
-            return FAIL(pl, key, "unknown parameter of %s", name);
-    }
-    int r = parse_params(v, pl, op, err);
+    if (json_is_object(v))
+        json_object_foreach((json_t *)v, key, val) {
+            bool known = false;
+            for (int i = 0; op_keys[kind][i]; i++)
+                known |= strcmp(key, op_keys[kind][i]) == 0;
+            if (!known)
+                return FAIL(pl, key, "unknown parameter of %s", name);
+        }
+    /* a bare name is the op with no parameters: what it requires (cut's
+     * plane, move's vertex) is still required */
+    json_t *none = json_is_object(v) ? NULL : json_object();
+    if (!json_is_object(v) && !none)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    int r = parse_params(none ? none : v, pl, op, err);
+    json_decref(none);
     if (r < 0)
         op_free(op);
     return r;

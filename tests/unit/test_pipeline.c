@@ -117,6 +117,12 @@ static void test_errors_name_the_place(void **state)
                  "\"max_angle_deg\":\"1\"}]",
                  "pipeline[2].max_angle_deg: expected a number");
     expect_error("[\"flatten\"]", "pipeline[0]: unknown operation 'flatten'");
+    /* a bare name still needs what the op requires (found by fuzzing:
+     * ["cut"] was accepted with a zero plane its canonical form refused) */
+    expect_error("[\"cut\"]", "pipeline[0].plane: required");
+    expect_error("[\"inspect\", \"move\"]", "pipeline[1].vertex: required");
+    expect_error("[\"compare\"]", "pipeline[0].reference: required (the "
+                 "facet-model/1 to compare the job's model with)");
     expect_error("[{\"op\":\"cut\",\"plane\":[0,0,1,0],\"keep\":1}]",
                  "pipeline[0].keep: unknown parameter of cut");
     expect_error("[{\"op\":\"cut\"}]", "pipeline[0].plane: required");
