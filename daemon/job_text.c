@@ -7,9 +7,9 @@
  * texts (compact JSON the daemon itself wrote) are copied as they are,
  * after a check that they are one JSON value (the pull tokenizer, no
  * tree); a text that is not is written as a string, as job_to_json does.
- * Strings are escaped and reals printed as jansson does (%.17g, ".0"
- * added to integral values, no '+' or leading zeros in the exponent),
- * which tests/unit/test_job_text.c checks against jansson. */
+ * Strings are escaped and reals printed as jansson does
+ * (proto/json_text.h), which tests/unit/test_job_text.c checks against
+ * jansson. */
 #include "job.h"
 
 #include <stdio.h>
@@ -17,32 +17,13 @@
 #include <string.h>
 
 #include "json_pull.h"
+#include "json_text.h"
 
-typedef struct text {
-    char *s;
-    size_t len, cap;
-    bool failed;
-} text;
+typedef proto_text text;
 
 static void put(text *t, const char *s, size_t n)
 {
-    if (t->failed)
-        return;
-    if (t->len + n + 1 > t->cap) {
-        size_t cap = t->cap ? t->cap : 512;
-        while (cap < t->len + n + 1)
-            cap *= 2;
-        char *p = realloc(t->s, cap);
-        if (!p) {
-            t->failed = true;
-            return;
-        }
-        t->s = p;
-        t->cap = cap;
-    }
-    memcpy(t->s + t->len, s, n);
-    t->len += n;
-    t->s[t->len] = '\0';
+    proto_text_put(t, s, n);
 }
 
 static void puts_(text *t, const char *s)
@@ -50,59 +31,9 @@ static void puts_(text *t, const char *s)
     put(t, s, strlen(s));
 }
 
-/* A JSON string as jansson writes it without JSON_ENSURE_ASCII and
- * JSON_ESCAPE_SLASH: quotes, backslashes and control characters
- * escaped, everything else as it is. */
 static void put_string(text *t, const char *s)
 {
-    put(t, "\"", 1);
-    const char *run = s;
-    for (; *s; s++) {
-        unsigned char c = (unsigned char)*s;
-        if (c >= 0x20 && c != '"' && c != '\\')
-            continue;
-        put(t, run, (size_t)(s - run));
-        char esc[8];
-        switch (c) {
-        case '"': puts_(t, "\\\""); break;
-        case '\\': puts_(t, "\\\\"); break;
-        case '\b': puts_(t, "\\b"); break;
-        case '\f': puts_(t, "\\f"); break;
-        case '\n': puts_(t, "\\n"); break;
-        case '\r': puts_(t, "\\r"); break;
-        case '\t': puts_(t, "\\t"); break;
-        default:
-            snprintf(esc, sizeof esc, "\\u%04X", c);
-            puts_(t, esc);
-        }
-        run = s + 1;
-    }
-    put(t, run, (size_t)(s - run));
-    put(t, "\"", 1);
-}
-
-/* A real as jansson's jsonp_dtostr with precision 17. */
-static void put_real(text *t, double v)
-{
-    char buf[40];
-    int n = snprintf(buf, sizeof buf, "%.17g", v);
-    if (n < 0 || (size_t)n >= sizeof buf - 3) {
-        t->failed = true;
-        return;
-    }
-    if (!strchr(buf, '.') && !strchr(buf, 'e'))
-        strcat(buf, ".0");
-    char *e = strchr(buf, 'e');
-    if (e) {
-        char *start = e + 1, *end = start + 1;
-        if (*start == '-')
-            start++;
-        while (*end == '0')
-            end++;
-        if (end != start)
-            memmove(start, end, strlen(end) + 1);
-    }
-    puts_(t, buf);
+    proto_text_string(t, s, strlen(s));
 }
 
 static void put_int(text *t, long long v)
@@ -168,7 +99,7 @@ char *job_to_text(const job_rec *r, size_t *ret_len)
     else
         put_string(&t, state);
     put_key(&t, "progress");
-    put_real(&t, r->progress);
+    proto_text_real(&t, r->progress);
     put_key(&t, "priority");
     put_string(&t, r->priority == JOB_PRIO_HIGH ? "high" : "normal");
     put_key(&t, "source");

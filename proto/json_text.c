@@ -13,23 +13,19 @@
 
 #include "decimal.h"
 
-typedef struct out {
-    char *s;
-    size_t len, cap;
-    bool oom;
-} out;
+typedef proto_text out;
 
-static void put(out *o, const char *s, size_t n)
+void proto_text_put(proto_text *o, const char *s, size_t n)
 {
-    if (o->oom)
+    if (o->failed)
         return;
     if (o->len + n + 1 > o->cap) {
-        size_t cap = o->cap ? o->cap : 4096;
+        size_t cap = o->cap ? o->cap : 512;
         while (cap < o->len + n + 1)
             cap *= 2;
         char *t = realloc(o->s, cap);
         if (!t) {
-            o->oom = true;
+            o->failed = true;
             return;
         }
         o->s = t;
@@ -37,6 +33,12 @@ static void put(out *o, const char *s, size_t n)
     }
     memcpy(o->s + o->len, s, n);
     o->len += n;
+    o->s[o->len] = '\0';
+}
+
+static void put(out *o, const char *s, size_t n)
+{
+    proto_text_put(o, s, n);
 }
 
 static void put_indent(out *o, size_t flags, int depth, bool space)
@@ -51,7 +53,7 @@ static void put_indent(out *o, size_t flags, int depth, bool space)
     }
 }
 
-static void put_string(out *o, const char *s, size_t n)
+void proto_text_string(proto_text *o, const char *s, size_t n)
 {
     put(o, "\"", 1);
     size_t run = 0;
@@ -80,7 +82,7 @@ static void put_string(out *o, const char *s, size_t n)
 }
 
 /* jansson's jsonp_dtostr with precision 17. */
-static void put_real(out *o, double v)
+void proto_text_real(proto_text *o, double v)
 {
     char b[PROTO_DECIMAL_MAX + 4];
     size_t n = proto_decimal_format_g17(b, v);
@@ -115,9 +117,9 @@ static void dump(out *o, const json_t *j, size_t flags, int depth)
         put(o, b, (size_t)snprintf(b, sizeof b, "%" JSON_INTEGER_FORMAT,
                                    json_integer_value(j)));
         return;
-    case JSON_REAL: put_real(o, json_real_value(j)); return;
+    case JSON_REAL: proto_text_real(o, json_real_value(j)); return;
     case JSON_STRING:
-        put_string(o, json_string_value(j), json_string_length(j));
+        proto_text_string(o, json_string_value(j), json_string_length(j));
         return;
     case JSON_ARRAY: {
         size_t n = json_array_size(j);
@@ -150,7 +152,7 @@ static void dump(out *o, const json_t *j, size_t flags, int depth)
         put_indent(o, flags, depth + 1, false);
         while (it) {
             const char *k = json_object_iter_key(it);
-            put_string(o, k, json_object_iter_key_len(it));
+            proto_text_string(o, k, json_object_iter_key_len(it));
             put(o, sep, strlen(sep));
             dump(o, json_object_iter_value(it), flags, depth + 1);
             it = json_object_iter_next((json_t *)j, it);
@@ -174,12 +176,11 @@ char *proto_json_dumps(const json_t *j, size_t flags)
     if (!j || (flags & ~own) || (!json_is_object(j) && !json_is_array(j)))
         return json_dumps(j, flags);
     out o = {0};
-    dump(&o, j, flags, 0);
     put(&o, "", 0);
-    if (o.oom) {
+    dump(&o, j, flags, 0);
+    if (o.failed) {
         free(o.s);
         return NULL;
     }
-    o.s[o.len] = '\0';
     return o.s;
 }
