@@ -637,30 +637,35 @@ static bool refine(const model *A, const model *B, bool all,
     return true;
 }
 
+/* Area share of from's subsample (all of it when all) whose normal,
+ * turned by R (or by its transpose when back), finds one of to's within
+ * cos_tol. */
+static double covered(const model *from, const model *to, double R[3][3],
+                      bool back, bool all, double cos_tol)
+{
+    double covered_area = 0, total = 0;
+    uint32_t n = all ? from->n : from->nsub;
+    for (uint32_t k = 0; k < n; k++) {
+        uint32_t j = all ? k : from->order[k];
+        double v[3];
+        if (back)
+            mat_tvec(R, from->nrm[j], v);
+        else
+            mat_vec(R, from->nrm[j], v);
+        total += from->area[j];
+        if (nearest_normal(to, v, cos_tol) != UINT32_MAX)
+            covered_area += from->area[j];
+    }
+    return covered_area / total;
+}
+
 /* Area share of both subsamples whose normal finds the other model's
  * within 1° under R. */
 static double coverage(const model *A, const model *B, double R[3][3],
                        bool all)
 {
-    double c1 = cos(1 * DEG), sa = 0, ta = 0, sb = 0, tb = 0;
-    uint32_t nb = all ? B->n : B->nsub, na = all ? A->n : A->nsub;
-    for (uint32_t k = 0; k < nb; k++) {
-        uint32_t j = all ? k : B->order[k];
-        double v[3];
-        mat_vec(R, B->nrm[j], v);
-        tb += B->area[j];
-        if (nearest_normal(A, v, c1) != UINT32_MAX)
-            sb += B->area[j];
-    }
-    for (uint32_t k = 0; k < na; k++) {
-        uint32_t i = all ? k : A->order[k];
-        double v[3];
-        mat_tvec(R, A->nrm[i], v);
-        ta += A->area[i];
-        if (nearest_normal(B, v, c1) != UINT32_MAX)
-            sa += A->area[i];
-    }
-    return (sa / ta + sb / tb) / 2;
+    double c1 = cos(1 * DEG);
+    return (covered(A, B, R, true, all, c1) + covered(B, A, R, false, all, c1)) / 2;
 }
 
 typedef struct best_rot {
