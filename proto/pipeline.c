@@ -62,7 +62,7 @@ static const char *const op_keys[PROTO_OP_COUNT][8] = {
                               "refine", "fair", "sharpen"},
     [PROTO_OP_FILL] = {"op", "weight", "refine", "fair"},
     [PROTO_OP_STITCH] = {"op"},
-    [PROTO_OP_REPORT] = {"op", "gear", "axis"},
+    [PROTO_OP_REPORT] = {"op", "gear", "axis", "scan"},
     [PROTO_OP_COMPARE] = {"op", "reference", "axis"},
     [PROTO_OP_CORRECT] = {"op", "radius", "max_angle_deg", "max_deviation",
                        "views"},
@@ -356,6 +356,8 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
                 return FAIL(pl, "axis", "must be a non-zero vector");
             op->u.report.have_axis = true;
         }
+        if (r == 0)
+            r = get_bool(o, "scan", pl, &op->u.report.scan, err);
         return r;
     }
     case PROTO_OP_COMPARE: {
@@ -776,6 +778,8 @@ static json_t *op_to_json(const proto_op *op)
                                  json_integer(op->u.report.gear));
         if (op->u.report.have_axis)
             e |= json_object_set_new(o, "axis", vec(op->u.report.axis, 3));
+        if (op->u.report.scan)
+            e |= json_object_set_new(o, "scan", json_true());
         break;
     case PROTO_OP_COMPARE:
         e |= json_object_set_new(o, "reference",

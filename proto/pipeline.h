@@ -37,9 +37,11 @@
  *                 a frep-object/1
  *   fill {weight "area"|"length" ["area"], refine [true], fair [true]}
  *   stitch
- *   report {gear 1..100000 [96], axis?: [x, y, z]} — the stone's tiers,
- *                 proportions and facet table (lib/gem/report.h); reads
- *                 the model, changes nothing
+ *   report {gear 1..100000 [96], axis?: [x, y, z], scan [false]} — the
+ *                 stone's tiers, proportions and facet table
+ *                 (lib/gem/report.h); with scan, each facet's deviation
+ *                 from the job's input model (the raw scan a correction
+ *                 started from); reads the model, changes nothing
  *   compare {reference: facet-model/1, axis?: [x, y, z]} — lays the job's
  *                 model onto the reference (its design, an earlier scan)
  *                 and measures them (lib/gem/compare.h); the reference is
@@ -149,6 +151,7 @@ typedef struct proto_op {
             uint32_t gear;       /* teeth of the index gear */
             bool have_axis;
             double axis[3];      /* the main axis, when given */
+            bool scan;           /* deviations from the job's input */
         } report;
         struct {
             geo_poly *reference; /* A, owned; the job's model is B */

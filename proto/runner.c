@@ -112,15 +112,15 @@ static int inspect_checked(const proto_op *op, geo_poly **model,
 }
 
 /* report (lib/gem/report.h): the stone's tiers, proportions and facet
- * table, model unchanged. A model without a table (a rough) and no axis
- * is not an error of the job, whose model is still the result: the report
- * says {"table": false, "reason": ...} and the summary has no
+ * table, model unchanged; with scan, each facet's deviation from input
+ * (the job's model as submitted). A model without a table (a rough) and
+ * no axis is not an error of the job, whose model is still the result:
+ * the report says {"table": false, "reason": ...} and the summary has no
  * proportions. */
 static int run_report(const proto_op *op, geo_poly **model,
-                      const geo_ctx *ctx, json_t **ret_report,
+                      const geo_poly *input, json_t **ret_report,
                       json_t *summary, geo_err *err)
 {
-    (void)ctx;
     geo_report rep;
     geo_err why = {{0}};
     int r = geo_report_compute(*model, op->u.report.have_axis
@@ -133,6 +133,11 @@ static int run_report(const proto_op *op, geo_poly **model,
     if (r < 0) {
         j = json_pack("{s:b, s:s}", "table", 0, "reason", why.msg);
     } else {
+        if (op->u.report.scan && input &&
+            (r = geo_report_scan_deviation(&rep, *model, input, err)) < 0) {
+            geo_report_free(&rep);
+            return r;
+        }
         j = proto_report_to_json(&rep);
         if (rep.has_table) {
             e |= json_object_set_new(summary, "table_percent",
@@ -579,7 +584,7 @@ static const op_entry ops[PROTO_OP_COUNT] = {
     [PROTO_OP_CUT] = {run_cut, true},
     [PROTO_OP_MOVE] = {run_move, true},
     [PROTO_OP_INVERSION_STATS] = {run_inversion_stats, false},
-    [PROTO_OP_REPORT] = {run_report, false},
+    [PROTO_OP_REPORT] = {NULL, false}, /* run_report, given the input */
     [PROTO_OP_COMPARE] = {run_compare, false},
 };
 
@@ -678,6 +683,15 @@ static int run_pipeline(const proto_pipeline *p, const geo_frep *frep,
     json_t *before = NULL, *after = NULL;
     bool changed = false;
     double t_start = mono_seconds();
+    /* the model as submitted, kept only for a report that measures the
+     * result against it */
+    geo_poly *input = NULL;
+    for (size_t i = 0; i < p->nops && *model && !input; i++)
+        if (p->ops[i].kind == PROTO_OP_REPORT && p->ops[i].u.report.scan &&
+            !(input = geo_poly_copy(*model))) {
+            r = geo_err_set(err, -ENOMEM, "out of memory");
+            goto fail;
+        }
     if (!stats || !list || !summary ||
         (*model && add_counts(summary, "before", *model))) {
         r = geo_err_set(err, -ENOMEM, "out of memory");
@@ -700,13 +714,16 @@ static int run_pipeline(const proto_pipeline *p, const geo_frep *frep,
         double t0 = mono_seconds();
         /* every op the parser knows has its kernel in the table */
         assert((unsigned)op->kind < PROTO_OP_COUNT &&
-               (ops[op->kind].run || ops[op->kind].run_frep));
+               (ops[op->kind].run || ops[op->kind].run_frep ||
+                op->kind == PROTO_OP_REPORT));
         r = ops[op->kind].run_frep
                 ? ops[op->kind].run_frep(op, frep, model, &sub, &report,
                                          summary, err)
             : op->kind == PROTO_OP_INSPECT
                 ? inspect_checked(op, model, &sub, changed, &report, summary,
                                   err)
+            : op->kind == PROTO_OP_REPORT
+                ? run_report(op, model, input, &report, summary, err)
                 : ops[op->kind].run(op, model, &sub, &report, summary, err);
         double secs = mono_seconds() - t0;
         if (timer)
@@ -752,10 +769,12 @@ static int run_pipeline(const proto_pipeline *p, const geo_frep *frep,
         r = geo_err_set(err, -ENOMEM, "out of memory");
         goto fail;
     }
+    geo_poly_free(input);
     *ret_stats = stats;
     *ret_summary = summary;
     return 0;
 fail:
+    geo_poly_free(input);
     json_decref(stats);
     json_decref(list);
     json_decref(summary);

@@ -55,4 +55,18 @@ expect_eq "a missing scan exits 1" 1 "$?"
 check "naming the file" grep -q "missing.json" "$T/err"
 "$F" report "$T/corr.json" --scan 2> /dev/null
 expect_eq "--scan without a value exits 2" 2 "$?"
+
+# in facetd: {"op": "report", "scan": true} measures against the job's input
+start_facetd --workers 1 || { not_ok "facetd starts"; finish; exit 1; }
+submit brilliant.scan-k400.json '["correct", {"op":"report","scan":true}]'
+expect_eq "a job with report scan is accepted" 202 "$CODE"
+wait_job "$ID" 60
+expect_eq "it succeeds" succeeded "$STATE_OF"
+req GET "/v1/jobs/$ID/stats"
+expect_eq "its report gives the facets their deviation from the submitted scan" true \
+    "$(jq '[.ops[1].report.facets[].scan_deviation_um | select(. != null) | .max] | (length > 50 and max > 1 and max < 10)' "$BODY")"
+submit brilliant.scan-k400.json '[{"op":"report","scan":"yes"}]'
+expect_eq "a scan that is not a boolean is 422" 422 "$CODE"
+check "naming the place" grep -q 'pipeline\[0\].scan' "$BODY"
+stop_facetd
 finish

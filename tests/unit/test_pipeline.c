@@ -112,7 +112,9 @@ static void test_errors_name_the_place(void **state)
     expect_error("[{\"op\":\"report\",\"axis\":[0,0,0]}]",
                  "pipeline[0].axis: must be a non-zero vector");
     expect_error("[{\"op\":\"report\",\"scan\":1}]",
-                 "pipeline[0].scan: unknown parameter of report");
+                 "pipeline[0].scan: expected true or false");
+    expect_error("[{\"op\":\"report\",\"deviation\":true}]",
+                 "pipeline[0].deviation: unknown parameter of report");
     expect_error("[\"inspect\", \"inspect\", {\"op\":\"merge\","
                  "\"max_angle_deg\":\"1\"}]",
                  "pipeline[2].max_angle_deg: expected a number");

@@ -270,6 +270,43 @@ static void test_report_gives_the_proportions(void **state)
     geo_poly_free(m);
 }
 
+/* report with scan measures the result against the model as submitted:
+ * after a correction of the k400 scan every facet of the result has a
+ * deviation of a few µm (the scan's noise and slivers); without scan the
+ * facets carry none. */
+static void test_report_scan_measures_against_the_input(void **state)
+{
+    (void)state;
+    geo_poly *m = tu_load_model("brilliant.scan-k400.json");
+    json_t *stats;
+    geo_err err = {{0}};
+    if (run("[\"correct\", {\"op\":\"report\",\"scan\":true}, \"report\"]",
+            &m, NULL, &stats, &err) != 0)
+        fail_msg("%s", err.msg);
+    json_t *fs = json_object_get(report(stats, 1), "facets");
+    assert_int_equal(json_array_size(fs), m->nfacets);
+    double worst = 0;
+    size_t measured = 0, i;
+    json_t *f;
+    json_array_foreach(fs, i, f) {
+        json_t *d = json_object_get(f, "scan_deviation_um");
+        assert_non_null(d);
+        if (json_is_null(d))
+            continue;
+        measured++;
+        double mx = num(d, "max"), rms = num(d, "rms");
+        assert_true(rms >= 0 && rms <= mx);
+        worst = mx > worst ? mx : worst;
+    }
+    /* the raw scan lies within a few µm of its correction */
+    assert_true(measured > m->nfacets / 2);
+    assert_true(worst > 0.1 && worst < 20);
+    json_t *plain = json_array_get(json_object_get(report(stats, 2), "facets"), 0);
+    assert_null(json_object_get(plain, "scan_deviation_um"));
+    json_decref(stats);
+    geo_poly_free(m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -280,6 +317,7 @@ int main(void)
         cmocka_unit_test(test_inversion_stats_reads_only_and_ignores_threads),
         cmocka_unit_test(test_changes_model_follows_the_ops),
         cmocka_unit_test(test_report_gives_the_proportions),
+        cmocka_unit_test(test_report_scan_measures_against_the_input),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
