@@ -53,6 +53,21 @@
  *    band is made. Any other pair of loops (one per mesh) that coincides
  *    — a torus cut across its hole has two on each half — is welded the
  *    same way, whatever was done with the chosen pair.
+ * 5b. Loops facing across a gap that are planar, each edge on its facet's
+ *    plane, are first joined by the facet planes extended into the gap:
+ *    the planes along both loops (those within 0.05° and through the
+ *    same edge ends, as the pieces of one facet on both sides of a cut,
+ *    taken once) and the two loops' planes, as walls of the slab
+ *    between them, are intersected exactly (lib/core/halfspace.h). When
+ *    each wall of that convex gap is its loop — every wall corner a loop
+ *    vertex, every loop vertex on the wall's border — the walls are
+ *    dropped, the gap's side facets take the loops' vertices, and a
+ *    facet cut on both sides comes back whole between its pieces,
+ *    neighbouring planes meeting in the true edges (a girdle). The
+ *    result, with the openings left filled, is kept only if geo_inspect
+ *    finds it valid; otherwise (loops not planar, a pair not convex
+ *    about the gap, no valid solid) steps 6–8 build the band
+ *    (report: method).
  * 6. The vertex matrix P: row 0 the A ends, the last row the B ends
  *    (B_j repeated where several meridians meet it), between them K rows
  *    of points dividing each meridian evenly, K + 1 = round(mean meridian
@@ -93,7 +108,18 @@ typedef struct geo_stitch_opts {
 /* Fills the defaults above. */
 void geo_stitch_opts_default(geo_stitch_opts *o);
 
+/* How the chosen pair of loops was closed. */
+enum geo_stitch_method {
+    GEO_STITCH_BAND = 0, /* the band of meridians, steps 6–7 */
+    GEO_STITCH_PLANES,   /* the facet planes extended into the gap, 5b */
+    GEO_STITCH_WELD,     /* the loops coincide and were welded, 5a */
+};
+
+/* "band", "planes", "weld". */
+const char *geo_stitch_method_name(enum geo_stitch_method m);
+
 typedef struct geo_stitch_report {
+    enum geo_stitch_method method;
     uint32_t loops1, loops2;   /* free-edge loops of each mesh */
     uint32_t loop1, loop2;     /* the pair joined (index among each) */
     uint32_t nloop1, nloop2;   /* their vertices */
@@ -106,7 +132,9 @@ typedef struct geo_stitch_report {
     uint32_t rows;             /* rows of P, both lines included */
     double meridian_length;    /* total length of the meridians, mm */
     double segment;            /* segment length used, mm */
-    uint32_t band_vertices, band_facets;
+    uint32_t planes;           /* distinct facet planes extended (5b) */
+    uint32_t band_vertices, band_facets; /* added between the loops (by
+                                  either method) */
     uint32_t welded;           /* loop vertex pairs welded (loops that
                                   coincide, see step 5a) */
     uint32_t welded_loops;     /* other loop pairs welded (step 5a) */

@@ -112,10 +112,11 @@ int main(int argc, char **argv)
             worst = hd;
         printf("{\"case\":%d,\"tilt_deg\":%.1f,\"z\":%.3f,\"band_mm\":%.3f,"
                "\"stitched\":%s,\"valid\":%s,\"hausdorff_um\":%.1f,"
-               "\"band\":%s,\"welded\":%u,\"left_open\":%u}\n",
+               "\"method\":\"%s\",\"planes\":%u,\"band\":%s,\"welded\":%u,"
+               "\"left_open\":%u}\n",
                i, tilt * 180 / M_PI, z, band, r == 0 ? "true" : "false",
                valid ? "true" : "false", hd * 1000,
-               rep.band ? "true" : "false", rep.welded, rep.fill.nopen);
+               geo_stitch_method_name(rep.method), rep.planes, rep.band ? "true" : "false", rep.welded, rep.fill.nopen);
         geo_stitch_report_clear(&rep);
         geo_poly_free(top);
         geo_poly_free(bot);
