@@ -4,7 +4,9 @@
  * as given) is removed around that plane, the two halves are opened
  * (their cap facets dropped) and stitched back (lib/mesh/stitch.h); the
  * result's validity and its Hausdorff distance to the original are
- * printed, one JSON line per case.
+ * printed, one JSON line per case, with the facets of the model wholly
+ * inside the band (lost: no piece of them is left on either half), the
+ * stitch's method and its time.
  *
  *   stitch_halves MODEL CASES [MAX_BAND_MM]
  *
@@ -15,6 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "ctx.h"
 #include "cut.h"
@@ -90,11 +93,25 @@ int main(int argc, char **argv)
             snprintf(path, sizeof path, "%s/case%d-bot.json", dump, i);
             proto_model_write_file(bot, path, PROTO_FMT_JSON, &err);
         }
+        /* facets wholly inside the band: nothing of them is left to extend */
+        unsigned lost = 0;
+        for (uint32_t f = 0; f < m->nfacets; f++) {
+            bool inside = true;
+            for (uint32_t k = 0; k < geo_poly_facet_size(m, f) && inside; k++) {
+                const double *x = m->verts[geo_poly_facet(m, f)[k]];
+                inside = geo_plane_eval(ptop, x) > 0 && geo_plane_eval(pbot, x) > 0;
+            }
+            lost += inside;
+        }
         geo_poly *out = geo_poly_new();
         geo_stitch_report rep;
         memset(&rep, 0, sizeof rep);
+        struct timespec t0, t1;
+        clock_gettime(CLOCK_MONOTONIC, &t0);
         int r = top && bot ? geo_stitch(top, bot, NULL, NULL, out, &rep, &err)
                            : -1;
+        clock_gettime(CLOCK_MONOTONIC, &t1);
+        double ms = (t1.tv_sec - t0.tv_sec) * 1e3 + (t1.tv_nsec - t0.tv_nsec) / 1e6;
         bool valid = false;
         double hd = INFINITY;
         if (r == 0) {
@@ -111,12 +128,12 @@ int main(int argc, char **argv)
         else if (hd > worst)
             worst = hd;
         printf("{\"case\":%d,\"tilt_deg\":%.1f,\"z\":%.3f,\"band_mm\":%.3f,"
-               "\"stitched\":%s,\"valid\":%s,\"hausdorff_um\":%.1f,"
+               "\"lost_facets\":%u,\"stitched\":%s,\"valid\":%s,\"hausdorff_um\":%.1f,"
                "\"method\":\"%s\",\"planes\":%u,\"band\":%s,\"welded\":%u,"
-               "\"left_open\":%u}\n",
-               i, tilt * 180 / M_PI, z, band, r == 0 ? "true" : "false",
+               "\"left_open\":%u,\"ms\":%.2f}\n",
+               i, tilt * 180 / M_PI, z, band, lost, r == 0 ? "true" : "false",
                valid ? "true" : "false", hd * 1000,
-               geo_stitch_method_name(rep.method), rep.planes, rep.band ? "true" : "false", rep.welded, rep.fill.nopen);
+               geo_stitch_method_name(rep.method), rep.planes, rep.band ? "true" : "false", rep.welded, rep.fill.nopen, ms);
         geo_stitch_report_clear(&rep);
         geo_poly_free(top);
         geo_poly_free(bot);
