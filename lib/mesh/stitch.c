@@ -566,32 +566,150 @@ out:
     return rc;
 }
 
+/* Step 5a for loops on one polyline sampled differently. */
+
+typedef struct insert {
+    uint32_t facet, after; /* the facet, and its corner before the edge */
+    double t;              /* position along the edge, 0 to 1 */
+    uint32_t v;            /* the vertex put there */
+} insert;
+
+static int insert_cmp(const void *a, const void *b)
+{
+    const insert *x = a, *y = b;
+    if (x->facet != y->facet)
+        return x->facet < y->facet ? -1 : 1;
+    if (x->after != y->after)
+        return x->after < y->after ? -1 : 1;
+    return (x->t > y->t) - (x->t < y->t);
+}
+
+/* Each vertex of rim a either within tol of a vertex of rim b (paired:
+ * appended to pa, pb when a is mesh 2's rim, as pb → pa) or within tol
+ * of the inside of one of b's edges (an insert into that edge's facet).
+ * False when a vertex is off b's polyline. */
+static bool seam_side(const geo_poly *out, const rim *a, const rim *b,
+                      bool a_is_2, double tol, uint32_t *wa, uint32_t *wb,
+                      uint32_t *nw, uint8_t *paired, insert *ins, uint32_t *nins)
+{
+    for (uint32_t i = 0; i < a->n; i++) {
+        const double *x = out->verts[a->v[i]];
+        uint32_t near_v = GEO_NONE, near_e = GEO_NONE;
+        for (uint32_t j = 0; j < b->n && near_v == GEO_NONE; j++)
+            if (geo_vdist(x, out->verts[b->v[j]]) <= tol)
+                near_v = j;
+        if (near_v != GEO_NONE) {
+            /* mesh 1's vertex stays; each pair once */
+            uint32_t v1 = a_is_2 ? b->v[near_v] : a->v[i],
+                     v2 = a_is_2 ? a->v[i] : b->v[near_v];
+            if (!paired[a_is_2 ? near_v : i]) {
+                paired[a_is_2 ? near_v : i] = 1;
+                wa[*nw] = v1;
+                wb[*nw] = v2;
+                ++*nw;
+            }
+            continue;
+        }
+        for (uint32_t j = 0; j < b->n && near_e == GEO_NONE; j++)
+            if (seg_dist(x, out->verts[b->v[j]], out->verts[b->v[(j + 1) % b->n]]) <= tol)
+                near_e = j;
+        if (near_e == GEO_NONE)
+            return false;
+        const double *p = out->verts[b->v[near_e]],
+                     *q = out->verts[b->v[(near_e + 1) % b->n]];
+        uint32_t f = b->f[near_e], k = geo_poly_facet_size(out, f);
+        const uint32_t *fv = geo_poly_facet(out, f);
+        uint32_t after = GEO_NONE;
+        for (uint32_t c = 0; c < k; c++)
+            if (fv[c] == b->v[near_e] && fv[(c + 1) % k] == b->v[(near_e + 1) % b->n])
+                after = c;
+        if (after == GEO_NONE)
+            return false;
+        double pq[3], px[3];
+        geo_vsub(q, p, pq);
+        geo_vsub(x, p, px);
+        ins[*nins] = (insert){f, after, geo_vdot(px, pq) / geo_vdot(pq, pq), a->v[i]};
+        ++*nins;
+    }
+    return true;
+}
+
+/* Loops facing with no gap, every vertex of each on the other's polyline
+ * (within tol) but not vertex for vertex — one cut, its halves sampled
+ * differently: each loop's vertices are put into the other's edges (the
+ * edges' facets take them), the vertices that coincide are welded, and
+ * the seam is closed with no band. Appends the pairs to (wa, wb, *nw),
+ * rewrites out's facets and returns 1 (*ret_inserted the vertices put
+ * into edges), 0 when the loops are not on one polyline (out and the
+ * pairs unchanged), -ENOMEM. */
+static int seam_insert(geo_poly *out, const rim r[2], double tol,
+                       uint32_t *wa, uint32_t *wb, uint32_t *nw,
+                       uint32_t *ret_inserted)
+{
+    uint32_t n = r[0].n + r[1].n, nw0 = *nw, nins = 0;
+    insert *ins = malloc((size_t)n * sizeof *ins);
+    uint8_t *paired = calloc(n, 1);
+    geo_poly *q = geo_poly_new();
+    int rc = -ENOMEM;
+    if (!ins || !paired || !q)
+        goto out;
+    rc = 0;
+    if (!seam_side(out, &r[0], &r[1], false, tol, wa, wb, nw, paired, ins, &nins) ||
+        !seam_side(out, &r[1], &r[0], true, tol, wa, wb, nw, paired, ins, &nins) ||
+        nins == 0) {
+        *nw = nw0;
+        goto out;
+    }
+    qsort(ins, nins, sizeof *ins, insert_cmp);
+    rc = -ENOMEM;
+    if (geo_poly_reserve(q, out->nverts, out->nfacets,
+                         (size_t)geo_poly_ncorners(out) + nins) < 0)
+        goto out;
+    for (uint32_t v = 0; v < out->nverts; v++)
+        geo_poly_add_vertex(q, out->verts[v]);
+    uint32_t *fv = malloc(((size_t)geo_poly_ncorners(out) + nins) * sizeof *fv);
+    if (!fv)
+        goto out;
+    uint32_t s = 0;
+    for (uint32_t f = 0; f < out->nfacets; f++) {
+        const uint32_t *src = geo_poly_facet(out, f);
+        uint32_t k = geo_poly_facet_size(out, f), m = 0;
+        for (uint32_t c = 0; c < k; c++) {
+            fv[m++] = src[c];
+            while (s < nins && ins[s].facet == f && ins[s].after == c)
+                fv[m++] = ins[s++].v;
+        }
+        int64_t nf = geo_poly_add_facet(q, fv, m);
+        memcpy(q->planes[nf], out->planes[f], sizeof q->planes[0]);
+    }
+    free(fv);
+    rc = geo_poly_assign(out, q);
+    if (rc == 0) {
+        *ret_inserted = nins;
+        rc = 1;
+    }
+out:
+    free(ins), free(paired);
+    geo_poly_free(q);
+    return rc;
+}
+
 /* Step 5b for loops l1, l2 facing across a gap: out (mesh 1, mesh 2 as
  * merged) with the gap rebuilt from the facet planes, the other
  * coinciding loops welded (wa, wb, nw), the openings left filled, and
  * kept only when geo_inspect finds the whole valid. 1 when out holds
  * that, 0 when the construction did not apply or gave no valid solid
  * (out unchanged), -ENOMEM or -ECANCELED. */
-static int stitch_by_planes(geo_poly *out, const geo_poly *m1, const loop *l1,
-                            const loop *l2, bool flipped2, const uint32_t *wa,
-                            const uint32_t *wb, uint32_t nw,
+static int stitch_by_planes(geo_poly *out, const geo_poly *m1, const rim r[2],
+                            const uint32_t *wa, const uint32_t *wb, uint32_t nw,
                             const geo_stitch_opts *o, const geo_ctx *ctx,
                             geo_stitch_report *R, geo_err *err)
 {
-    uint32_t n = l2->n, off2 = m1->nverts;
-    rim r[2] = {{l1->v, l1->f, l1->n}, {NULL, NULL, n}};
-    r[1].v = malloc((size_t)n * sizeof *r[1].v);
-    r[1].f = malloc((size_t)n * sizeof *r[1].f);
     geo_poly *cand = geo_poly_copy(out);
     geo_mesh_fill_report fr = {0};
     int rc = -ENOMEM;
-    if (!r[1].v || !r[1].f || !cand)
+    if (!cand)
         goto out;
-    for (uint32_t k = 0; k < n; k++) {
-        /* turned over, edge v[k] → v[k + 1] is mesh 2's v[n−2−k] → v[n−1−k] */
-        r[1].v[k] = off2 + (flipped2 ? l2->v[n - 1 - k] : l2->v[k]);
-        r[1].f[k] = m1->nfacets + (flipped2 ? l2->f[(2 * n - 2 - k) % n] : l2->f[k]);
-    }
     uint32_t planes = 0, nv = 0, nf = 0;
     if ((rc = gap_from_planes(cand, r, &planes, &nv, &nf)) <= 0)
         goto out;
@@ -633,8 +751,29 @@ out:
         geo_err_set(err, rc, "out of memory stitching");
     geo_mesh_fill_report_clear(&fr);
     geo_poly_free(cand);
-    free(r[1].v), free(r[1].f);
     return rc;
+}
+
+/* The chosen loops as merged into out (mesh 2 after mesh 1, turned over
+ * when flipped2): r[1]'s arrays are malloc'd. 0 or -ENOMEM. */
+static int make_rims(const geo_poly *m1, const loop *l1, const loop *l2,
+                     bool flipped2, rim r[2])
+{
+    uint32_t n = l2->n, off2 = m1->nverts;
+    r[0] = (rim){l1->v, l1->f, l1->n};
+    r[1] = (rim){malloc((size_t)n * sizeof *r[1].v),
+                 malloc((size_t)n * sizeof *r[1].f), n};
+    if (!r[1].v || !r[1].f) {
+        free(r[1].v), free(r[1].f);
+        r[1].v = r[1].f = NULL;
+        return -ENOMEM;
+    }
+    for (uint32_t k = 0; k < n; k++) {
+        /* turned over, edge v[k] → v[k + 1] is mesh 2's v[n−2−k] → v[n−1−k] */
+        r[1].v[k] = off2 + (flipped2 ? l2->v[n - 1 - k] : l2->v[k]);
+        r[1].f[k] = m1->nfacets + (flipped2 ? l2->f[(2 * n - 2 - k) % n] : l2->f[k]);
+    }
+    return 0;
 }
 
 int geo_stitch(const geo_poly *m1, const geo_poly *m2,
@@ -662,6 +801,7 @@ int geo_stitch(const geo_poly *m1, const geo_poly *m2,
     uint32_t *X = NULL, *Y = NULL, *jof = NULL, *P = NULL;
     uint32_t *wa = NULL, *wb = NULL, *lb2 = NULL, nw = 0;
     uint8_t *keep = NULL, *used2 = NULL;
+    rim rims[2] = {{0}, {0}};
     geo_poly_clear(out);
     if ((rc = find_loops(m1, &L1, err)) < 0 ||
         (rc = find_loops(m2, &L2, err)) < 0)
@@ -879,8 +1019,17 @@ int geo_stitch(const geo_poly *m1, const geo_poly *m2,
         goto openings;
     }
     if (R.band) {
-        rc = stitch_by_planes(out, m1, l1, l2, R.flipped2, wa, wb, nw, &o, ctx,
-                              &R, err);
+        if (make_rims(m1, l1, l2, R.flipped2, rims) < 0)
+            goto oom;
+        rc = seam_insert(out, rims, tol, wa, wb, &nw, &R.inserted);
+        if (rc < 0)
+            goto oom;
+        if (rc == 1) {
+            R.rows = 1;
+            R.method = GEO_STITCH_WELD;
+            goto openings;
+        }
+        rc = stitch_by_planes(out, m1, rims, wa, wb, nw, &o, ctx, &R, err);
         if (rc < 0)
             goto fail;
         if (rc == 1) {
@@ -997,6 +1146,7 @@ done:
     loops_free(&L2);
     free(X), free(Y), free(jof), free(P), free(keep);
     free(wa), free(wb), free(lb2), free(used2);
+    free(rims[1].v), free(rims[1].f);
     if (rep)
         *rep = R;
     else

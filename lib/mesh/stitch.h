@@ -52,7 +52,13 @@
  *    1's and dropped (the vertices after them move down in order); no
  *    band is made. Any other pair of loops (one per mesh) that coincides
  *    — a torus cut across its hole has two on each half — is welded the
- *    same way, whatever was done with the chosen pair.
+ *    same way, whatever was done with the chosen pair. Facing loops on
+ *    one polyline but sampled differently (each vertex within
+ *    geo_poly_eps of a vertex or an edge of the other loop: halves of
+ *    one cut, one of them with its rim facets split) are welded too:
+ *    each loop's vertices are put into the other's edges (those edges'
+ *    facets take them, in order along the edge), then the vertices that
+ *    coincide are welded (report: inserted).
  * 5b. Loops facing across a gap that are planar, each edge on its facet's
  *    plane, are first joined by the facet planes extended into the gap:
  *    the planes along both loops (those within 0.05° and through the
@@ -138,6 +144,9 @@ typedef struct geo_stitch_report {
     uint32_t welded;           /* loop vertex pairs welded (loops that
                                   coincide, see step 5a) */
     uint32_t welded_loops;     /* other loop pairs welded (step 5a) */
+    uint32_t inserted;         /* loop vertices put into the other loop's
+                                  edges (one polyline sampled differently,
+                                  step 5a) */
     geo_mesh_fill_report fill; /* the openings closed afterwards */
 } geo_stitch_report;
 
