@@ -6,7 +6,8 @@
  * each other (algorithm 2) and the openings closed; a gem cut unevenly
  * near its girdle is joined as a band; halves of convex stones come back
  * from their facet planes extended across the gap, a non-convex pair by
- * the band; the pipeline form
+ * the band, halves on one polyline sampled differently are welded; the
+ * pipeline form
  * takes a model of two pieces and refuses any other. */
 #include "testutil.h"
 
@@ -21,6 +22,7 @@
 #include "halfspace.h"
 #include "hausdorff.h"
 #include "model_io.h"
+#include "rim_split.h"
 #include "stats.h"
 #include "stitch.h"
 #include "stone_sim.h"
@@ -448,6 +450,44 @@ static void test_non_convex_pair_is_joined_by_the_band(void **s)
     geo_poly_free(a), geo_poly_free(b), geo_poly_free(out), geo_poly_free(m);
 }
 
+/* A brilliant cut in two by one plane, the lower half's rim sampled
+ * twice as densely (each rim edge split, its facet cut there): the
+ * loops lie on one polyline but not vertex for vertex. Each loop's
+ * vertices go into the other's edges and the seam is welded: the stone
+ * comes back exactly (the band of zero width was invalid). */
+static void test_halves_on_one_polyline_sampled_differently_are_welded(void **s)
+{
+    (void)s;
+    geo_err err = {{0}};
+    geo_poly *m = proto_model_read_file(tu_model_path("brilliant.truth.json"),
+                                        PROTO_FMT_UNKNOWN, NULL, &err);
+    assert_non_null(m);
+    double t = 6 * M_PI / 180, n[3] = {0, sin(t), cos(t)};
+    geo_poly *a, *b0;
+    halves(m, n, 0.3, 0, &a, &b0);
+    geo_poly *b = rim_split(b0);
+    geo_poly *out = geo_poly_new();
+    geo_stitch_report rep;
+    assert_int_equal(geo_stitch(a, b, NULL, NULL, out, &rep, NULL), 0);
+    assert_int_equal(rep.method, GEO_STITCH_WELD);
+    assert_int_equal(rep.nloop2, 2 * rep.nloop1);
+    assert_int_equal(rep.welded, rep.nloop1);
+    assert_int_equal(rep.inserted, rep.nloop1);
+    assert_int_equal(rep.band_facets, 0);
+    assert_true(is_valid(out));
+    assert_int_equal(out->nverts, a->nverts + b->nverts - rep.welded);
+    double hd;
+    assert_int_equal(geo_hausdorff(out, m, &hd, NULL), 0);
+    if (!(hd < 1e-9))
+        fail_msg("Hausdorff %.3g mm", hd);
+    double v = geo_poly_volume(out), vm = geo_poly_volume(m);
+    if (!(fabs(v - vm) <= 1e-9 * vm))
+        fail_msg("volume %.12f, the stone's %.12f", v, vm);
+    geo_stitch_report_clear(&rep);
+    geo_poly_free(a), geo_poly_free(b0), geo_poly_free(b), geo_poly_free(out);
+    geo_poly_free(m);
+}
+
 static void test_pipeline_form_needs_exactly_two_pieces(void **s)
 {
     (void)s;
@@ -497,6 +537,7 @@ int main(void)
         cmocka_unit_test(test_convex_stone_comes_back_from_its_facet_planes),
         cmocka_unit_test(test_random_convex_halves_are_valid),
         cmocka_unit_test(test_non_convex_pair_is_joined_by_the_band),
+        cmocka_unit_test(test_halves_on_one_polyline_sampled_differently_are_welded),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
