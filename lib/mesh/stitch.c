@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "halfspace.h"
+#include "predicates.h"
 #include "stats.h"
 #include "topo.h"
 #include "vec.h"
@@ -357,8 +358,9 @@ typedef struct rim {
 
 /* The plane of r's vertices (Newell normal through their mean), signed
  * so that the other rim o lies on its negative side: the slab's wall at
- * r. False when r is off that plane by more than tol or o is not wholly
- * beyond tol on the negative side (no gap between the loops). */
+ * r. False when r is off that plane by more than tol, or o is not wholly
+ * on the negative side (exact signs) and farther than tol from it (no
+ * gap between the loops, or one too thin to close). */
 static bool cap_plane(const geo_poly *out, const rim *r, const rim *o,
                       double tol, double pl[4])
 {
@@ -382,9 +384,11 @@ static bool cap_plane(const geo_poly *out, const rim *r, const rim *o,
     for (uint32_t q = 0; q < r->n; q++)
         if (fabs(geo_plane_eval(pl, out->verts[r->v[q]])) > tol)
             return false;
-    for (uint32_t q = 0; q < o->n; q++)
-        if (!(geo_plane_eval(pl, out->verts[o->v[q]]) < -tol))
+    for (uint32_t q = 0; q < o->n; q++) {
+        const double *x = out->verts[o->v[q]];
+        if (geo_plane_sign(pl, x) >= 0 || !(fabs(geo_plane_eval(pl, x)) > tol))
             return false;
+    }
     return true;
 }
 

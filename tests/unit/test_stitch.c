@@ -366,6 +366,17 @@ static void test_convex_stone_comes_back_from_its_facet_planes(void **s)
     if (!(fabs(v - vh) <= 1e-9 * vh))
         fail_msg("volume %.12f, of all the half-spaces %.12f", v, vh);
     geo_stitch_report_clear(&rep);
+    /* the second half turned over: oriented back, then the same planes */
+    for (uint32_t f = 0; f < b->nfacets; f++)
+        geo_poly_flip_facet(b, f);
+    assert_int_equal(geo_stitch(a, b, NULL, NULL, out, &rep, NULL), 0);
+    assert_true(rep.flipped2);
+    assert_int_equal(rep.method, GEO_STITCH_PLANES);
+    assert_true(is_valid(out));
+    if (!(fabs(geo_poly_volume(out) - vh) <= 1e-9 * vh))
+        fail_msg("turned over: volume %.12f, of all the half-spaces %.12f",
+                 geo_poly_volume(out), vh);
+    geo_stitch_report_clear(&rep);
     geo_poly_free(h), geo_poly_free(a), geo_poly_free(b), geo_poly_free(out);
     geo_poly_free(m);
 }
