@@ -356,24 +356,26 @@ typedef struct rim {
  * the edge's ends on it): pieces of one facet on both sides of a cut. */
 #define PLANE_MERGE_DEG 0.05
 
-/* The plane of r's vertices (Newell normal through their mean), signed
- * so that the other rim o lies on its negative side: the slab's wall at
- * r. False when r is off that plane by more than tol, or o is not wholly
+/* The plane of the rn vertices rv of pr (Newell normal through their
+ * mean), signed so that the other loop (ov of po) lies on its negative
+ * side: the slab's wall at the first loop. False when that loop is off
+ * the plane by more than tol, or the other is not wholly
  * on the negative side (exact signs) and farther than tol from it (no
  * gap between the loops, or one too thin to close). */
-static bool cap_plane(const geo_poly *out, const rim *r, const rim *o,
+static bool cap_plane(const geo_poly *pr, const uint32_t *rv, uint32_t rn,
+                      const geo_poly *po, const uint32_t *ov, uint32_t on,
                       double tol, double pl[4])
 {
     double nw[3] = {0, 0, 0}, c[3] = {0, 0, 0}, oc[3] = {0, 0, 0};
-    for (uint32_t q = 0; q < r->n; q++) {
-        const double *a = out->verts[r->v[q]], *b = out->verts[r->v[(q + 1) % r->n]];
+    for (uint32_t q = 0; q < rn; q++) {
+        const double *a = pr->verts[rv[q]], *b = pr->verts[rv[(q + 1) % rn]];
         nw[0] += (a[1] - b[1]) * (a[2] + b[2]);
         nw[1] += (a[2] - b[2]) * (a[0] + b[0]);
         nw[2] += (a[0] - b[0]) * (a[1] + b[1]);
-        geo_vmadd(c, 1.0 / r->n, a, c);
+        geo_vmadd(c, 1.0 / rn, a, c);
     }
-    for (uint32_t q = 0; q < o->n; q++)
-        geo_vmadd(oc, 1.0 / o->n, out->verts[o->v[q]], oc);
+    for (uint32_t q = 0; q < on; q++)
+        geo_vmadd(oc, 1.0 / on, po->verts[ov[q]], oc);
     if (!(geo_vnormalize(nw) > 0))
         return false;
     memcpy(pl, nw, sizeof nw);
@@ -381,11 +383,11 @@ static bool cap_plane(const geo_poly *out, const rim *r, const rim *o,
     if (geo_plane_eval(pl, oc) > 0)
         for (int k = 0; k < 4; k++)
             pl[k] = -pl[k];
-    for (uint32_t q = 0; q < r->n; q++)
-        if (fabs(geo_plane_eval(pl, out->verts[r->v[q]])) > tol)
+    for (uint32_t q = 0; q < rn; q++)
+        if (fabs(geo_plane_eval(pl, pr->verts[rv[q]])) > tol)
             return false;
-    for (uint32_t q = 0; q < o->n; q++) {
-        const double *x = out->verts[o->v[q]];
+    for (uint32_t q = 0; q < on; q++) {
+        const double *x = po->verts[ov[q]];
         if (geo_plane_sign(pl, x) >= 0 || !(fabs(geo_plane_eval(pl, x)) > tol))
             return false;
     }
@@ -490,8 +492,8 @@ static int gap_from_planes(geo_poly *p, const rim r[2], uint32_t *ret_planes,
     if (!rim_planes(p, &r[0], eps, pl, &np) || !rim_planes(p, &r[1], eps, pl, &np))
         goto out;
     uint32_t nside = np;
-    if (!cap_plane(p, &r[0], &r[1], near, pl + 4 * (size_t)np++) ||
-        !cap_plane(p, &r[1], &r[0], near, pl + 4 * (size_t)np++))
+    if (!cap_plane(p, r[0].v, r[0].n, p, r[1].v, r[1].n, near, pl + 4 * (size_t)np++) ||
+        !cap_plane(p, r[1].v, r[1].n, p, r[0].v, r[0].n, near, pl + 4 * (size_t)np++))
         goto out;
     enum geo_halfspace_status st;
     geo_err herr = {{0}};
@@ -850,9 +852,16 @@ int geo_stitch(const geo_poly *m1, const geo_poly *m2,
     double lat[3], ax[3];
     geo_vscale(l1->nw, n1 > 0 ? 1.0 / n1 : 0.0, ax);
     geo_vmadd(a1g, -geo_vdot(a1g, ax), ax, lat);
-    R.band = n1 > 0 && n2 > 0 &&
-             fabs(geo_vdot(l1->nw, l2->nw)) >= sqrt(0.5) * n1 * n2 &&
-             geo_vlen(lat) < 0.5 * fmin(r1, r2);
+    bool parallel = n1 > 0 && n2 > 0 &&
+                    fabs(geo_vdot(l1->nw, l2->nw)) >= sqrt(0.5) * n1 * n2;
+    R.band = parallel && geo_vlen(lat) < 0.5 * fmin(r1, r2);
+    /* or: planar loops, each wholly beyond the other's plane — the walls
+     * of a slab (step 5b), however far off-axis a small loop sits */
+    double wall[4], wtol = 1e3 * geo_eps_of_size(geo_poly_size(m1) +
+                                                 geo_poly_size(m2));
+    if (!R.band && parallel)
+        R.band = cap_plane(m1, l1->v, l1->n, m2, l2->v, l2->n, wtol, wall) &&
+                 cap_plane(m2, l2->v, l2->n, m1, l1->v, l1->n, wtol, wall);
     /* facing loops of consistently oriented meshes run opposite ways */
     double agree = geo_vdot(l1->nw, l2->nw);
     R.flipped2 = R.band ? agree > 0 : agree < 0;
