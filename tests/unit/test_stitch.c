@@ -17,6 +17,7 @@
 #include <string.h>
 
 #include "cut.h"
+#include "design.h"
 #include "gen_convex.h"
 #include "gen_sphere.h"
 #include "halfspace.h"
@@ -499,6 +500,39 @@ static void test_halves_on_one_polyline_sampled_differently_are_welded(void **s)
     geo_poly_free(m);
 }
 
+/* A trilliant cut 16° tilted near its culet, a tenth of its height
+ * removed: the lower loop is small and sits off the upper loop's axis by
+ * more than half its radius, so the loops were taken for side-by-side
+ * ones (a bridge 0.5 mm off the stone); each is planar and wholly beyond
+ * the other's plane, so they face across a gap and the facet planes
+ * give the stone back. */
+static void test_small_loop_off_axis_still_faces_across_the_gap(void **s)
+{
+    (void)s;
+    geo_err err = {{0}};
+    geo_poly *m = proto_model_read_file(design_path("trilliant.asc"),
+                                        PROTO_FMT_UNKNOWN, NULL, &err);
+    assert_non_null(m);
+    double lo, hi, blo[3], bhi[3];
+    geo_poly_bbox(m, blo, bhi);
+    lo = blo[2], hi = bhi[2];
+    double t = 16 * M_PI / 180, n[3] = {sin(t), 0, cos(t)};
+    geo_poly *a, *b;
+    halves(m, n, -(lo + 0.15 * (hi - lo)), 0.1 * (hi - lo), &a, &b);
+    geo_poly *out = geo_poly_new();
+    geo_stitch_report rep;
+    assert_int_equal(geo_stitch(a, b, NULL, NULL, out, &rep, NULL), 0);
+    assert_true(rep.band);
+    assert_true(is_valid(out));
+    double hd;
+    assert_int_equal(geo_hausdorff(out, m, &hd, NULL), 0);
+    if (!(hd < 1e-6))
+        fail_msg("Hausdorff %.4f mm", hd);
+    assert_int_equal(rep.method, GEO_STITCH_PLANES);
+    geo_stitch_report_clear(&rep);
+    geo_poly_free(a), geo_poly_free(b), geo_poly_free(out), geo_poly_free(m);
+}
+
 static void test_pipeline_form_needs_exactly_two_pieces(void **s)
 {
     (void)s;
@@ -549,6 +583,7 @@ int main(void)
         cmocka_unit_test(test_random_convex_halves_are_valid),
         cmocka_unit_test(test_non_convex_pair_is_joined_by_the_band),
         cmocka_unit_test(test_halves_on_one_polyline_sampled_differently_are_welded),
+        cmocka_unit_test(test_small_loop_off_axis_still_faces_across_the_gap),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
