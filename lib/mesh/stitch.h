@@ -24,7 +24,10 @@
  *    loop 1's axis by less than half the smaller mean loop radius (the
  *    offset taken between length-weighted centres, which crowded
  *    vertices do not pull aside) — are joined whole, as a closed band
- *    (every vertex connected).
+ *    (every vertex connected). So are loops within 45° of parallel that
+ *    are each planar and wholly beyond the other's plane (the walls of
+ *    step 5b), however far a small loop sits off-axis (a cut near a
+ *    culet).
  * 4. Orientation. Facing loops of consistently oriented meshes run in
  *    opposite directions (side by side: their Newell normals agree;
  *    across a gap: they point away from each other). When they do not,
