@@ -24,10 +24,12 @@
 json_t *proto_fill_report_to_json(const geo_mesh_fill_report *r);
 
 /* The stitching report (lib/mesh/stitch.h):
- *   {"loops": [l1, l2], "joined": [i1, i2], "loop_vertices": [n1, n2],
+ *   {"method": "planes" | "band" | "weld", "planes",
+ *    "loops": [l1, l2], "joined": [i1, i2], "loop_vertices": [n1, n2],
  *    "chosen": [c1, c2], "band", "flipped", "swapped", "twist",
  *    "meridians", "rows", "meridian_length", "segment",
- *    "band_vertices", "band_facets", "openings": the fill report}
+ *    "band_vertices", "band_facets", "welded", "welded_loops",
+ *    "inserted", "openings": the fill report}
  * NULL on out-of-memory. */
 json_t *proto_stitch_report_to_json(const geo_stitch_report *r);
 

@@ -22,8 +22,10 @@ static const char USAGE[] =
     "usage: facet stitch A B -o OUT [--report FILE] [--keep-invalid]\n"
     "\n"
     "Joins the open meshes A and B (Nesterenko): the free-edge loops of the\n"
-    "two with the closest centres are bridged by a mesh of meridians between\n"
-    "the vertices facing each other, divided to the meshes' edge length;\n"
+    "two with the closest centres are joined by the facet planes along them\n"
+    "extended across the gap and intersected (planar loops of a pair convex\n"
+    "about the gap), or else bridged by a mesh of meridians between the\n"
+    "vertices facing each other, divided to the meshes' edge length;\n"
     "B is turned over when its orientation disagrees with A's; openings left\n"
     "are closed by hole filling (see 'facet fill --help').\n"
     "\n"
@@ -32,7 +34,8 @@ static const char USAGE[] =
     "  --keep-invalid    write OUT even when the result is not valid (the\n"
     "                    exit status is still 1)\n"
     "\n"
-    "Prints one line of JSON: band (loops joined whole), flipped, meridians,\n"
+    "Prints one line of JSON: method (planes, band or weld), band (loops\n"
+    "joined whole), flipped, meridians,\n"
     "rows, band_vertices, band_facets, welded (loop vertices joined where\n"
     "the loops coincide), openings_filled, left_open, valid,\n"
     "vertices, facets, ms. exit status: 0 OUT written and valid, 1 bad\n"
@@ -126,11 +129,12 @@ int cmd_stitch(int argc, char **argv)
         rc = cli_input_error("stitch", "%s: cannot write the report: %s",
                              report, strerror(errno));
     } else {
-        printf("{\"band\":%s,\"flipped\":%s,\"meridians\":%u,\"rows\":%u,"
+        printf("{\"method\":\"%s\",\"band\":%s,\"flipped\":%s,\"meridians\":%u,\"rows\":%u,"
                "\"band_vertices\":%u,\"band_facets\":%u,\"welded\":%u,"
                "\"openings_filled\":%u,\"left_open\":%u,\"valid\":%s,"
                "\"vertices\":%u,\"facets\":%u,\"ms\":%.3f}\n",
-               rep.band ? "true" : "false", rep.flipped2 ? "true" : "false",
+               geo_stitch_method_name(rep.method), rep.band ? "true" : "false",
+               rep.flipped2 ? "true" : "false",
                rep.meridians, rep.rows, rep.band_vertices, rep.band_facets,
                rep.welded, rep.fill.nfilled, rep.fill.nopen, st.valid ? "true" : "false",
                out->nverts, out->nfacets, ms);

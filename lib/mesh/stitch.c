@@ -12,6 +12,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "halfspace.h"
+#include "predicates.h"
+#include "stats.h"
 #include "topo.h"
 #include "vec.h"
 
@@ -19,6 +22,12 @@ void geo_stitch_opts_default(geo_stitch_opts *o)
 {
     memset(o, 0, sizeof *o);
     geo_mesh_fill_opts_default(&o->fill);
+}
+
+const char *geo_stitch_method_name(enum geo_stitch_method m)
+{
+    return m == GEO_STITCH_PLANES ? "planes" : m == GEO_STITCH_WELD ? "weld"
+                                                                    : "band";
 }
 
 void geo_stitch_report_clear(geo_stitch_report *rep)
@@ -31,6 +40,7 @@ void geo_stitch_report_clear(geo_stitch_report *rep)
 
 typedef struct loop {
     uint32_t *v; /* vertex cycle, along the corners */
+    uint32_t *f; /* f[q]: the facet of edge v[q] → v[q + 1] */
     uint32_t n;
     double c[3];  /* centre: the vertex mean, (5) */
     double nw[3]; /* Newell normal (vector area) */
@@ -44,7 +54,7 @@ typedef struct loops {
 static void loops_free(loops *L)
 {
     for (uint32_t k = 0; k < L->n; k++)
-        free(L->l[k].v);
+        free(L->l[k].v), free(L->l[k].f);
     free(L->l);
     L->l = NULL;
     L->n = 0;
@@ -71,14 +81,17 @@ static int find_loops(const geo_poly *p, loops *ret, geo_err *err)
         if (!closed)
             continue;
         loop *L = &ret->l[ret->n];
-        if (!(L->v = malloc((size_t)n * sizeof *L->v)))
-            goto out;
+        L->v = malloc((size_t)n * sizeof *L->v);
+        L->f = malloc((size_t)n * sizeof *L->f);
         ret->n++;
+        if (!L->v || !L->f)
+            goto out;
         L->n = n;
         memset(L->c, 0, sizeof L->c);
         memset(L->nw, 0, sizeof L->nw);
         for (uint32_t q = 0; q < n; q++) {
             L->v[q] = p->fidx[c[q]];
+            L->f[q] = t->corner_facet[c[q]];
             geo_vadd(L->c, p->verts[L->v[q]], L->c);
         }
         geo_vscale(L->c, 1.0 / n, L->c);
@@ -330,6 +343,445 @@ static int weld(geo_poly *out, uint32_t f2, const uint32_t *wa,
     return 0;
 }
 
+/* Step 5b: the gap rebuilt from the facet planes along the loops. */
+
+/* A loop as merged into out: vertices, and the facet of each edge
+ * v[q] → v[q + 1] (that facet's own edge). */
+typedef struct rim {
+    uint32_t *v, *f;
+    uint32_t n;
+} rim;
+
+/* Planes of facets along the loops closer than this are one plane (with
+ * the edge's ends on it): pieces of one facet on both sides of a cut. */
+#define PLANE_MERGE_DEG 0.05
+
+/* The plane of the rn vertices rv of pr (Newell normal through their
+ * mean), signed so that the other loop (ov of po) lies on its negative
+ * side: the slab's wall at the first loop. False when that loop is off
+ * the plane by more than tol, or the other is not wholly
+ * on the negative side (exact signs) and farther than tol from it (no
+ * gap between the loops, or one too thin to close). */
+static bool cap_plane(const geo_poly *pr, const uint32_t *rv, uint32_t rn,
+                      const geo_poly *po, const uint32_t *ov, uint32_t on,
+                      double tol, double pl[4])
+{
+    double nw[3] = {0, 0, 0}, c[3] = {0, 0, 0}, oc[3] = {0, 0, 0};
+    for (uint32_t q = 0; q < rn; q++) {
+        const double *a = pr->verts[rv[q]], *b = pr->verts[rv[(q + 1) % rn]];
+        nw[0] += (a[1] - b[1]) * (a[2] + b[2]);
+        nw[1] += (a[2] - b[2]) * (a[0] + b[0]);
+        nw[2] += (a[0] - b[0]) * (a[1] + b[1]);
+        geo_vmadd(c, 1.0 / rn, a, c);
+    }
+    for (uint32_t q = 0; q < on; q++)
+        geo_vmadd(oc, 1.0 / on, po->verts[ov[q]], oc);
+    if (!(geo_vnormalize(nw) > 0))
+        return false;
+    memcpy(pl, nw, sizeof nw);
+    pl[3] = -geo_vdot(nw, c);
+    if (geo_plane_eval(pl, oc) > 0)
+        for (int k = 0; k < 4; k++)
+            pl[k] = -pl[k];
+    for (uint32_t q = 0; q < rn; q++)
+        if (fabs(geo_plane_eval(pl, pr->verts[rv[q]])) > tol)
+            return false;
+    for (uint32_t q = 0; q < on; q++) {
+        const double *x = po->verts[ov[q]];
+        if (geo_plane_sign(pl, x) >= 0 || !(fabs(geo_plane_eval(pl, x)) > tol))
+            return false;
+    }
+    return true;
+}
+
+/* Appends to pl (*n planes of 4) the plane of each of r's edge facets
+ * unless one there agrees (normals within PLANE_MERGE_DEG and the edge's
+ * ends within eps of it). False when an edge is off its own facet's
+ * plane by more than eps (a facet whose plane does not continue it). */
+static bool rim_planes(const geo_poly *out, const rim *r, double eps,
+                       double *pl, uint32_t *n)
+{
+    double cosmax = cos(PLANE_MERGE_DEG * M_PI / 180);
+    for (uint32_t q = 0; q < r->n; q++) {
+        const double *a = out->verts[r->v[q]], *b = out->verts[r->v[(q + 1) % r->n]];
+        const double *fp = out->planes[r->f[q]];
+        if (!(fabs(geo_plane_eval(fp, a)) <= eps && fabs(geo_plane_eval(fp, b)) <= eps))
+            return false;
+        bool have = false;
+        for (uint32_t k = 0; k < *n && !have; k++) {
+            const double *e = pl + 4 * (size_t)k;
+            have = geo_vdot(e, fp) >= cosmax &&
+                   fabs(geo_plane_eval(e, a)) <= eps &&
+                   fabs(geo_plane_eval(e, b)) <= eps;
+        }
+        if (!have)
+            memcpy(pl + 4 * (size_t)(*n)++, fp, 4 * sizeof *fp);
+    }
+    return true;
+}
+
+static double seg_dist(const double p[3], const double a[3], const double b[3])
+{
+    double ab[3], ap[3], x[3];
+    geo_vsub(b, a, ab);
+    geo_vsub(p, a, ap);
+    double l2 = geo_vdot(ab, ab), t = l2 > 0 ? geo_vdot(ap, ab) / l2 : 0;
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    geo_vmadd(a, t, ab, x);
+    return geo_vdist(p, x);
+}
+
+/* Matches the cap facet C of g to rim r: every corner within tol of a
+ * rim vertex (pos[corner] its position on r), each edge a → b of C the
+ * run of r forwards from a's vertex to b's (C, seen from outside g, runs
+ * like the half's facets along the loop), every vertex of the run within
+ * tol of the segment ab, the runs covering r exactly once. */
+static bool match_cap(const geo_poly *out, const geo_poly *g, uint32_t C,
+                      const rim *r, double tol, uint32_t *pos)
+{
+    const uint32_t *cv = geo_poly_facet(g, C);
+    uint32_t k = geo_poly_facet_size(g, C);
+    for (uint32_t i = 0; i < k; i++) {
+        double best = INFINITY;
+        for (uint32_t q = 0; q < r->n; q++) {
+            double d = geo_vdist(g->verts[cv[i]], out->verts[r->v[q]]);
+            if (d < best) {
+                best = d;
+                pos[cv[i]] = q;
+            }
+        }
+        if (!(best <= tol))
+            return false;
+    }
+    uint64_t covered = 0;
+    for (uint32_t i = 0; i < k; i++) {
+        uint32_t pa = pos[cv[i]], pb = pos[cv[(i + 1) % k]];
+        uint32_t steps = (pb + r->n - pa) % r->n;
+        if (steps == 0)
+            return false;
+        covered += steps;
+        for (uint32_t s = 1; s < steps; s++)
+            if (!(seg_dist(out->verts[r->v[(pa + s) % r->n]], g->verts[cv[i]],
+                           g->verts[cv[(i + 1) % k]]) <= tol))
+                return false;
+    }
+    return covered == r->n;
+}
+
+/* The gap between rims r[0] and r[1] as the intersection of the slab
+ * between them with the half-spaces of the facet planes along both, its
+ * walls dropped and its side facets joined to the loops (each wall
+ * corner replaced by its loop vertex, each wall edge by its run of loop
+ * vertices). Appended to p: new vertices and facets. Returns 1 when
+ * built, 0 when the construction does not apply (p unchanged: loops not
+ * planar, no gap, an edge off its facet's plane, walls that are not the
+ * loops — a pair not convex about the gap), -ENOMEM. */
+static int gap_from_planes(geo_poly *p, const rim r[2], uint32_t *ret_planes,
+                           uint32_t *ret_nv, uint32_t *ret_nf)
+{
+    double eps = geo_poly_eps(p), near = 1e3 * eps;
+    uint32_t np = 0, nmax = r[0].n + r[1].n + 2;
+    double *pl = malloc((size_t)nmax * 4 * sizeof *pl);
+    geo_poly *g = NULL;
+    uint32_t *src = NULL, *pos = NULL, *map = NULL, *fv = NULL;
+    uint8_t *wall = NULL; /* the rim a gap vertex lies on: 1, 2, or 0 */
+    int rc = -ENOMEM;
+    if (!pl)
+        goto out;
+    rc = 0;
+    if (!rim_planes(p, &r[0], eps, pl, &np) || !rim_planes(p, &r[1], eps, pl, &np))
+        goto out;
+    uint32_t nside = np;
+    if (!cap_plane(p, r[0].v, r[0].n, p, r[1].v, r[1].n, near, pl + 4 * (size_t)np++) ||
+        !cap_plane(p, r[1].v, r[1].n, p, r[0].v, r[0].n, near, pl + 4 * (size_t)np++))
+        goto out;
+    enum geo_halfspace_status st;
+    geo_err herr = {{0}};
+    int h = geo_halfspace_intersect(pl, np, 0.5 * eps, &g, &src, &st, &herr);
+    if (h == -ENOMEM)
+        rc = -ENOMEM;
+    if (h < 0)
+        goto out;
+    rc = -ENOMEM;
+    pos = malloc((size_t)g->nverts * sizeof *pos);
+    map = malloc((size_t)g->nverts * sizeof *map);
+    wall = calloc(g->nverts, 1);
+    if (!pos || !map || !wall)
+        goto out;
+    rc = 0;
+    uint32_t caps[2] = {GEO_NONE, GEO_NONE};
+    for (uint32_t f = 0; f < g->nfacets; f++)
+        if (src[f] >= nside)
+            caps[src[f] - nside] = f;
+    if (caps[0] == GEO_NONE || caps[1] == GEO_NONE)
+        goto out;
+    bool ok = true;
+    for (int w = 0; w < 2 && ok; w++) {
+        ok = match_cap(p, g, caps[w], &r[w], near, pos);
+        const uint32_t *cv = geo_poly_facet(g, caps[w]);
+        for (uint32_t i = 0; i < geo_poly_facet_size(g, caps[w]) && ok; i++) {
+            ok = wall[cv[i]] == 0; /* a corner on both walls: no gap */
+            wall[cv[i]] = (uint8_t)(w + 1);
+            map[cv[i]] = r[w].v[pos[cv[i]]];
+        }
+    }
+    if (!ok)
+        goto out;
+    /* fits: append the gap's own vertices, then its side facets */
+    rc = -ENOMEM;
+    size_t ncorner = geo_poly_ncorners(g) + r[0].n + r[1].n;
+    if (!(fv = malloc(ncorner * sizeof *fv)) ||
+        geo_poly_reserve(p, (size_t)p->nverts + g->nverts,
+                         (size_t)p->nfacets + g->nfacets,
+                         geo_poly_ncorners(p) + ncorner) < 0)
+        goto out;
+    uint32_t nv = 0, nf = 0;
+    for (uint32_t v = 0; v < g->nverts; v++)
+        if (!wall[v]) {
+            map[v] = (uint32_t)geo_poly_add_vertex(p, g->verts[v]);
+            nv++;
+        }
+    for (uint32_t f = 0; f < g->nfacets; f++) {
+        if (f == caps[0] || f == caps[1])
+            continue;
+        const uint32_t *gv = geo_poly_facet(g, f);
+        uint32_t k = geo_poly_facet_size(g, f), m = 0;
+        for (uint32_t i = 0; i < k; i++) {
+            uint32_t a = gv[i], b = gv[(i + 1) % k];
+            fv[m++] = map[a];
+            if (wall[a] && wall[a] == wall[b]) {
+                /* the wall's edge b → a runs forwards along the loop:
+                 * this facet takes the run backwards */
+                const rim *w = &r[wall[a] - 1];
+                uint32_t steps = (pos[a] + w->n - pos[b]) % w->n;
+                for (uint32_t s = 1; s < steps; s++)
+                    fv[m++] = w->v[(pos[a] + w->n - s) % w->n];
+            }
+        }
+        int64_t nfi = geo_poly_add_facet(p, fv, m);
+        memcpy(p->planes[nfi], g->planes[f], sizeof p->planes[0]);
+        nf++;
+    }
+    *ret_planes = nside;
+    *ret_nv = nv;
+    *ret_nf = nf;
+    rc = 1;
+out:
+    free(pl), free(src), free(pos), free(map), free(fv), free(wall);
+    geo_poly_free(g);
+    return rc;
+}
+
+/* Step 5a for loops on one polyline sampled differently. */
+
+typedef struct insert {
+    uint32_t facet, after; /* the facet, and its corner before the edge */
+    double t;              /* position along the edge, 0 to 1 */
+    uint32_t v;            /* the vertex put there */
+} insert;
+
+static int insert_cmp(const void *a, const void *b)
+{
+    const insert *x = a, *y = b;
+    if (x->facet != y->facet)
+        return x->facet < y->facet ? -1 : 1;
+    if (x->after != y->after)
+        return x->after < y->after ? -1 : 1;
+    return (x->t > y->t) - (x->t < y->t);
+}
+
+/* Each vertex of rim a either within tol of a vertex of rim b (paired:
+ * appended to pa, pb when a is mesh 2's rim, as pb → pa) or within tol
+ * of the inside of one of b's edges (an insert into that edge's facet).
+ * False when a vertex is off b's polyline. */
+static bool seam_side(const geo_poly *out, const rim *a, const rim *b,
+                      bool a_is_2, double tol, uint32_t *wa, uint32_t *wb,
+                      uint32_t *nw, uint8_t *paired, insert *ins, uint32_t *nins)
+{
+    for (uint32_t i = 0; i < a->n; i++) {
+        const double *x = out->verts[a->v[i]];
+        uint32_t near_v = GEO_NONE, near_e = GEO_NONE;
+        for (uint32_t j = 0; j < b->n && near_v == GEO_NONE; j++)
+            if (geo_vdist(x, out->verts[b->v[j]]) <= tol)
+                near_v = j;
+        if (near_v != GEO_NONE) {
+            /* mesh 1's vertex stays; each pair once */
+            uint32_t v1 = a_is_2 ? b->v[near_v] : a->v[i],
+                     v2 = a_is_2 ? a->v[i] : b->v[near_v];
+            if (!paired[a_is_2 ? near_v : i]) {
+                paired[a_is_2 ? near_v : i] = 1;
+                wa[*nw] = v1;
+                wb[*nw] = v2;
+                ++*nw;
+            }
+            continue;
+        }
+        for (uint32_t j = 0; j < b->n && near_e == GEO_NONE; j++)
+            if (seg_dist(x, out->verts[b->v[j]], out->verts[b->v[(j + 1) % b->n]]) <= tol)
+                near_e = j;
+        if (near_e == GEO_NONE)
+            return false;
+        const double *p = out->verts[b->v[near_e]],
+                     *q = out->verts[b->v[(near_e + 1) % b->n]];
+        uint32_t f = b->f[near_e], k = geo_poly_facet_size(out, f);
+        const uint32_t *fv = geo_poly_facet(out, f);
+        uint32_t after = GEO_NONE;
+        for (uint32_t c = 0; c < k; c++)
+            if (fv[c] == b->v[near_e] && fv[(c + 1) % k] == b->v[(near_e + 1) % b->n])
+                after = c;
+        if (after == GEO_NONE)
+            return false;
+        double pq[3], px[3];
+        geo_vsub(q, p, pq);
+        geo_vsub(x, p, px);
+        ins[*nins] = (insert){f, after, geo_vdot(px, pq) / geo_vdot(pq, pq), a->v[i]};
+        ++*nins;
+    }
+    return true;
+}
+
+/* Loops facing with no gap, every vertex of each on the other's polyline
+ * (within tol) but not vertex for vertex — one cut, its halves sampled
+ * differently: each loop's vertices are put into the other's edges (the
+ * edges' facets take them), the vertices that coincide are welded, and
+ * the seam is closed with no band. Appends the pairs to (wa, wb, *nw),
+ * rewrites out's facets and returns 1 (*ret_inserted the vertices put
+ * into edges), 0 when the loops are not on one polyline (out and the
+ * pairs unchanged), -ENOMEM. */
+static int seam_insert(geo_poly *out, const rim r[2], double tol,
+                       uint32_t *wa, uint32_t *wb, uint32_t *nw,
+                       uint32_t *ret_inserted)
+{
+    uint32_t n = r[0].n + r[1].n, nw0 = *nw, nins = 0;
+    insert *ins = malloc((size_t)n * sizeof *ins);
+    uint8_t *paired = calloc(n, 1);
+    geo_poly *q = geo_poly_new();
+    int rc = -ENOMEM;
+    if (!ins || !paired || !q)
+        goto out;
+    rc = 0;
+    if (!seam_side(out, &r[0], &r[1], false, tol, wa, wb, nw, paired, ins, &nins) ||
+        !seam_side(out, &r[1], &r[0], true, tol, wa, wb, nw, paired, ins, &nins) ||
+        nins == 0) {
+        *nw = nw0;
+        goto out;
+    }
+    qsort(ins, nins, sizeof *ins, insert_cmp);
+    rc = -ENOMEM;
+    if (geo_poly_reserve(q, out->nverts, out->nfacets,
+                         (size_t)geo_poly_ncorners(out) + nins) < 0)
+        goto out;
+    for (uint32_t v = 0; v < out->nverts; v++)
+        geo_poly_add_vertex(q, out->verts[v]);
+    uint32_t *fv = malloc(((size_t)geo_poly_ncorners(out) + nins) * sizeof *fv);
+    if (!fv)
+        goto out;
+    uint32_t s = 0;
+    for (uint32_t f = 0; f < out->nfacets; f++) {
+        const uint32_t *src = geo_poly_facet(out, f);
+        uint32_t k = geo_poly_facet_size(out, f), m = 0;
+        for (uint32_t c = 0; c < k; c++) {
+            fv[m++] = src[c];
+            while (s < nins && ins[s].facet == f && ins[s].after == c)
+                fv[m++] = ins[s++].v;
+        }
+        int64_t nf = geo_poly_add_facet(q, fv, m);
+        memcpy(q->planes[nf], out->planes[f], sizeof q->planes[0]);
+    }
+    free(fv);
+    rc = geo_poly_assign(out, q);
+    if (rc == 0) {
+        *ret_inserted = nins;
+        rc = 1;
+    }
+out:
+    free(ins), free(paired);
+    geo_poly_free(q);
+    return rc;
+}
+
+/* Step 5b for loops l1, l2 facing across a gap: out (mesh 1, mesh 2 as
+ * merged) with the gap rebuilt from the facet planes, the other
+ * coinciding loops welded (wa, wb, nw), the openings left filled, and
+ * kept only when geo_inspect finds the whole valid. 1 when out holds
+ * that, 0 when the construction did not apply or gave no valid solid
+ * (out unchanged), -ENOMEM or -ECANCELED. */
+static int stitch_by_planes(geo_poly *out, const geo_poly *m1, const rim r[2],
+                            const uint32_t *wa, const uint32_t *wb, uint32_t nw,
+                            const geo_stitch_opts *o, const geo_ctx *ctx,
+                            geo_stitch_report *R, geo_err *err)
+{
+    geo_poly *cand = geo_poly_copy(out);
+    geo_mesh_fill_report fr = {0};
+    int rc = -ENOMEM;
+    if (!cand)
+        goto out;
+    uint32_t planes = 0, nv = 0, nf = 0;
+    if ((rc = gap_from_planes(cand, r, &planes, &nv, &nf)) <= 0)
+        goto out;
+    rc = -ENOMEM;
+    if (nw && weld(cand, m1->nfacets, wa, wb, nw) < 0)
+        goto out;
+    geo_err ferr = {{0}};
+    rc = geo_fill(cand, &o->fill, NULL, &fr, &ferr);
+    if (rc == -ENOMEM || rc == -ECANCELED) {
+        *err = ferr;
+        goto out;
+    }
+    if (rc < 0) {
+        rc = 0;
+        goto out;
+    }
+    geo_stats st;
+    if ((rc = geo_inspect(cand, NULL, ctx, &st, err)) < 0)
+        goto out;
+    bool valid = st.valid;
+    geo_stats_clear(&st);
+    rc = 0;
+    if (!valid)
+        goto out;
+    if ((rc = geo_poly_assign(out, cand)) < 0)
+        goto out;
+    R->method = GEO_STITCH_PLANES;
+    R->planes = planes;
+    R->band_vertices = nv;
+    R->band_facets = nf;
+    R->welded = nw;
+    R->meridians = R->rows = R->twist = 0;
+    R->meridian_length = 0;
+    R->fill = fr;
+    memset(&fr, 0, sizeof fr);
+    rc = 1;
+out:
+    if (rc == -ENOMEM)
+        geo_err_set(err, rc, "out of memory stitching");
+    geo_mesh_fill_report_clear(&fr);
+    geo_poly_free(cand);
+    return rc;
+}
+
+/* The chosen loops as merged into out (mesh 2 after mesh 1, turned over
+ * when flipped2): r[1]'s arrays are malloc'd. 0 or -ENOMEM. */
+static int make_rims(const geo_poly *m1, const loop *l1, const loop *l2,
+                     bool flipped2, rim r[2])
+{
+    uint32_t n = l2->n, off2 = m1->nverts;
+    r[0] = (rim){l1->v, l1->f, l1->n};
+    r[1] = (rim){malloc((size_t)n * sizeof *r[1].v),
+                 malloc((size_t)n * sizeof *r[1].f), n};
+    if (!r[1].v || !r[1].f) {
+        free(r[1].v), free(r[1].f);
+        r[1].v = r[1].f = NULL;
+        return -ENOMEM;
+    }
+    for (uint32_t k = 0; k < n; k++) {
+        /* turned over, edge v[k] → v[k + 1] is mesh 2's v[n−2−k] → v[n−1−k] */
+        r[1].v[k] = off2 + (flipped2 ? l2->v[n - 1 - k] : l2->v[k]);
+        r[1].f[k] = m1->nfacets + (flipped2 ? l2->f[(2 * n - 2 - k) % n] : l2->f[k]);
+    }
+    return 0;
+}
+
 int geo_stitch(const geo_poly *m1, const geo_poly *m2,
                const geo_stitch_opts *opts, const geo_ctx *ctx, geo_poly *out,
                geo_stitch_report *rep, geo_err *err)
@@ -355,6 +807,7 @@ int geo_stitch(const geo_poly *m1, const geo_poly *m2,
     uint32_t *X = NULL, *Y = NULL, *jof = NULL, *P = NULL;
     uint32_t *wa = NULL, *wb = NULL, *lb2 = NULL, nw = 0;
     uint8_t *keep = NULL, *used2 = NULL;
+    rim rims[2] = {{0}, {0}};
     geo_poly_clear(out);
     if ((rc = find_loops(m1, &L1, err)) < 0 ||
         (rc = find_loops(m2, &L2, err)) < 0)
@@ -399,9 +852,16 @@ int geo_stitch(const geo_poly *m1, const geo_poly *m2,
     double lat[3], ax[3];
     geo_vscale(l1->nw, n1 > 0 ? 1.0 / n1 : 0.0, ax);
     geo_vmadd(a1g, -geo_vdot(a1g, ax), ax, lat);
-    R.band = n1 > 0 && n2 > 0 &&
-             fabs(geo_vdot(l1->nw, l2->nw)) >= sqrt(0.5) * n1 * n2 &&
-             geo_vlen(lat) < 0.5 * fmin(r1, r2);
+    bool parallel = n1 > 0 && n2 > 0 &&
+                    fabs(geo_vdot(l1->nw, l2->nw)) >= sqrt(0.5) * n1 * n2;
+    R.band = parallel && geo_vlen(lat) < 0.5 * fmin(r1, r2);
+    /* or: planar loops, each wholly beyond the other's plane — the walls
+     * of a slab (step 5b), however far off-axis a small loop sits */
+    double wall[4], wtol = 1e3 * geo_eps_of_size(geo_poly_size(m1) +
+                                                 geo_poly_size(m2));
+    if (!R.band && parallel)
+        R.band = cap_plane(m1, l1->v, l1->n, m2, l2->v, l2->n, wtol, wall) &&
+                 cap_plane(m2, l2->v, l2->n, m1, l1->v, l1->n, wtol, wall);
     /* facing loops of consistently oriented meshes run opposite ways */
     double agree = geo_vdot(l1->nw, l2->nw);
     R.flipped2 = R.band ? agree > 0 : agree < 0;
@@ -568,8 +1028,33 @@ int geo_stitch(const geo_poly *m1, const geo_poly *m2,
     }
     if (welded) {
         R.rows = 1;
+        R.method = GEO_STITCH_WELD;
         goto openings;
     }
+    if (R.band) {
+        if (make_rims(m1, l1, l2, R.flipped2, rims) < 0)
+            goto oom;
+        rc = seam_insert(out, rims, tol, wa, wb, &nw, &R.inserted);
+        if (rc < 0)
+            goto oom;
+        if (rc == 1) {
+            R.rows = 1;
+            R.method = GEO_STITCH_WELD;
+            goto openings;
+        }
+        rc = stitch_by_planes(out, m1, rims, wa, wb, nw, &o, ctx, &R, err);
+        if (rc < 0)
+            goto fail;
+        if (rc == 1) {
+            rc = geo_ctx_progress(ctx, 1.0);
+            if (rc < 0) {
+                geo_err_set(err, rc, "canceled");
+                goto fail;
+            }
+            goto done;
+        }
+    }
+    R.method = GEO_STITCH_BAND;
     uint64_t e1, e2;
     double s1 = mean_edge(m1, &e1), s2 = mean_edge(m2, &e2);
     R.segment = o.segment > 0 ? o.segment
@@ -674,6 +1159,7 @@ done:
     loops_free(&L2);
     free(X), free(Y), free(jof), free(P), free(keep);
     free(wa), free(wb), free(lb2), free(used2);
+    free(rims[1].v), free(rims[1].f);
     if (rep)
         *rep = R;
     else

@@ -24,7 +24,10 @@
  *    loop 1's axis by less than half the smaller mean loop radius (the
  *    offset taken between length-weighted centres, which crowded
  *    vertices do not pull aside) — are joined whole, as a closed band
- *    (every vertex connected).
+ *    (every vertex connected). So are loops within 45° of parallel that
+ *    are each planar and wholly beyond the other's plane (the walls of
+ *    step 5b), however far a small loop sits off-axis (a cut near a
+ *    culet).
  * 4. Orientation. Facing loops of consistently oriented meshes run in
  *    opposite directions (side by side: their Newell normals agree;
  *    across a gap: they point away from each other). When they do not,
@@ -52,7 +55,28 @@
  *    1's and dropped (the vertices after them move down in order); no
  *    band is made. Any other pair of loops (one per mesh) that coincides
  *    — a torus cut across its hole has two on each half — is welded the
- *    same way, whatever was done with the chosen pair.
+ *    same way, whatever was done with the chosen pair. Facing loops on
+ *    one polyline but sampled differently (each vertex within
+ *    geo_poly_eps of a vertex or an edge of the other loop: halves of
+ *    one cut, one of them with its rim facets split) are welded too:
+ *    each loop's vertices are put into the other's edges (those edges'
+ *    facets take them, in order along the edge), then the vertices that
+ *    coincide are welded (report: inserted).
+ * 5b. Loops facing across a gap that are planar, each edge on its facet's
+ *    plane, are first joined by the facet planes extended into the gap:
+ *    the planes along both loops (those within 0.05° and through the
+ *    same edge ends, as the pieces of one facet on both sides of a cut,
+ *    taken once) and the two loops' planes, as walls of the slab
+ *    between them, are intersected exactly (lib/core/halfspace.h). When
+ *    each wall of that convex gap is its loop — every wall corner a loop
+ *    vertex, every loop vertex on the wall's border — the walls are
+ *    dropped, the gap's side facets take the loops' vertices, and a
+ *    facet cut on both sides comes back whole between its pieces,
+ *    neighbouring planes meeting in the true edges (a girdle). The
+ *    result, with the openings left filled, is kept only if geo_inspect
+ *    finds it valid; otherwise (loops not planar, a pair not convex
+ *    about the gap, no valid solid) steps 6–8 build the band
+ *    (report: method).
  * 6. The vertex matrix P: row 0 the A ends, the last row the B ends
  *    (B_j repeated where several meridians meet it), between them K rows
  *    of points dividing each meridian evenly, K + 1 = round(mean meridian
@@ -93,7 +117,18 @@ typedef struct geo_stitch_opts {
 /* Fills the defaults above. */
 void geo_stitch_opts_default(geo_stitch_opts *o);
 
+/* How the chosen pair of loops was closed. */
+enum geo_stitch_method {
+    GEO_STITCH_BAND = 0, /* the band of meridians, steps 6–7 */
+    GEO_STITCH_PLANES,   /* the facet planes extended into the gap, 5b */
+    GEO_STITCH_WELD,     /* the loops coincide and were welded, 5a */
+};
+
+/* "band", "planes", "weld". */
+const char *geo_stitch_method_name(enum geo_stitch_method m);
+
 typedef struct geo_stitch_report {
+    enum geo_stitch_method method;
     uint32_t loops1, loops2;   /* free-edge loops of each mesh */
     uint32_t loop1, loop2;     /* the pair joined (index among each) */
     uint32_t nloop1, nloop2;   /* their vertices */
@@ -106,10 +141,15 @@ typedef struct geo_stitch_report {
     uint32_t rows;             /* rows of P, both lines included */
     double meridian_length;    /* total length of the meridians, mm */
     double segment;            /* segment length used, mm */
-    uint32_t band_vertices, band_facets;
+    uint32_t planes;           /* distinct facet planes extended (5b) */
+    uint32_t band_vertices, band_facets; /* added between the loops (by
+                                  either method) */
     uint32_t welded;           /* loop vertex pairs welded (loops that
                                   coincide, see step 5a) */
     uint32_t welded_loops;     /* other loop pairs welded (step 5a) */
+    uint32_t inserted;         /* loop vertices put into the other loop's
+                                  edges (one polyline sampled differently,
+                                  step 5a) */
     geo_mesh_fill_report fill; /* the openings closed afterwards */
 } geo_stitch_report;
 

@@ -2,7 +2,9 @@
 # fill_stitch.sh — open meshes end to end: `facet fill` puts the
 # brilliant's two missing facets back (121 facets, valid, the true
 # volume), `facet stitch` joins the stone's crown and pavilion (a band of
-# facets removed between them) into one valid solid, and facetd runs
+# facets removed between them) into one valid solid by the band, the
+# halves of the stone cut by two planes back into the stone by the
+# facet planes, and refuses overlapping halves; facetd runs
 # fill_holes on a model and stitch on a job with "meshes": [m1, m2],
 # refusing meshes it cannot stitch with 422.
 . "$(dirname "$0")/lib.sh" "$@"
@@ -76,6 +78,44 @@ check "facet stitch succeeds" test $? -eq 0
 check "the halves are joined whole as a band" grep -q '"band":true' <<<"$out"
 check "the stitched stone is valid" grep -q '"left_open":0,"valid":true' <<<"$out"
 check "the stitch report lists the meridians" grep -q '"meridians":' "$T/stitch.rep"
+check "whole facets removed leave loops off any plane: the band joins them" grep -q '"method":"band"' <<<"$out"
+
+# the stone cut by two parallel planes 0.4 mm apart (tilted 3.4°, across
+# the crown), the cuts' caps dropped: the facet planes extended across
+# the gap give the stone back
+open_half() { # $1 plane $2 out
+    "$F" cut "$MODELS/brilliant.truth.json" --plane "$1" -o "$T/cut.json" >/dev/null || return 1
+    python3 - "$T/cut.json" "$1" "$2" <<'PY'
+import json, math, sys
+m = json.load(open(sys.argv[1])); p = [float(x) for x in sys.argv[2].split(",")]
+l = math.sqrt(sum(x * x for x in p[:3])); p = [x / l for x in p]
+fs = [f for f in m["facets"] if max(abs(a - b) for a, b in zip(f["plane"], p)) > 1e-9]
+used = sorted({i for f in fs for i in f["vertices"]}); ren = {o: n for n, o in enumerate(used)}
+m["vertices"] = [m["vertices"][i] for i in used]
+m["facets"] = [dict(f, vertices=[ren[i] for i in f["vertices"]]) for f in fs]
+json.dump(m, open(sys.argv[3], "w"))
+PY
+}
+s=$(python3 -c 'import math; print(math.sin(math.radians(3.4)))')
+c=$(python3 -c 'import math; print(math.cos(math.radians(3.4)))')
+open_half "-$s,0,-$c,0.565" "$T/crown.json" && open_half "$s,0,$c,-0.165" "$T/pav.json"
+check "the two halves are cut and opened" test -s "$T/crown.json" -a -s "$T/pav.json"
+out=$("$F" stitch "$T/crown.json" "$T/pav.json" -o "$T/planes.json" --report "$T/planes.rep")
+check "facet stitch joins the halves of the cut stone" test $? -eq 0
+check "by the facet planes, validly" grep -q '"method":"planes".*"left_open":0,"valid":true' <<<"$out"
+check "the report says the method and the planes extended" grep -q '"method": "planes"' "$T/planes.rep"
+"$F" compare "$MODELS/brilliant.truth.json" "$T/planes.json" >"$T/cmp.json"
+python3 - "$T/cmp.json" <<'PY' && ok "the stitched stone is the stone (Hausdorff < 1 um)" || not_ok "the stitched stone is the stone (Hausdorff < 1 um)"
+import json, sys
+sys.exit(0 if json.load(open(sys.argv[1]))["hausdorff_mm"] < 1e-3 else 1)
+PY
+# halves that overlap by 0.4 mm cannot be joined into a valid solid:
+# exit 1 with the reasons, nothing written
+open_half "0,0,-1,-0.2" "$T/over-top.json" && open_half "0,0,1,-0.2" "$T/over-bot.json"
+"$F" stitch "$T/over-top.json" "$T/over-bot.json" -o "$T/over.json" 2>"$T/err" >/dev/null
+expect_eq "overlapping halves fail the stitch (exit 1)" 1 "$?"
+check "the error says the result is not valid" grep -q "not a valid closed solid, not written" "$T/err"
+check "no invalid result is written" test ! -e "$T/over.json"
 "$F" stitch "$MODELS/brilliant.truth.json" "$T/bot.json" -o "$T/x.json" 2>"$T/err"
 expect_eq "a closed mesh cannot be stitched (exit 1)" 1 "$?"
 check "the error says why" grep -q "no free-edge loop" "$T/err"
