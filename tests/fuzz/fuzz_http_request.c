@@ -4,11 +4,12 @@
  * libmicrohttpd daemon with facetd's routes, over a loopback socket, on a
  * SQLite store in a temporary directory, no workers.
  *
- * Property: no crash or sanitizer report anywhere in the server; every
- * connection ends (the server closes it or answers) within the deadline;
+ * Property: no crash or sanitizer report anywhere in the server, and
  * whatever is answered is an HTTP/1.x status line, never 500 (a 500 is a
- * defect of the server, not of the client). Requests that legitimately
- * stay open (an event stream) are cut by the client at the deadline. */
+ * defect of the server, not of the client). A connection the server
+ * keeps open (an event stream does, legitimately) is cut by the client
+ * at the deadline; the server's own limits on slow and held connections
+ * are tested in tests/integration/hostile_http.sh. */
 #include <errno.h>
 #include <ftw.h>
 #include <netinet/in.h>
