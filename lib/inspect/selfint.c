@@ -1098,6 +1098,9 @@ typedef struct search {
     const geo_poly *p;
     const geo_bvh *h;
     const geo_ctx *ctx;
+    /* per facet, or NULL when every facet is a triangle: then the few
+     * pairs that reach pair_test compute their two shapes and masks, and
+     * 28 bytes per facet are not held during the search */
     const geo_facet_shape *shapes;
     const uint64_t *masks; /* vertex_mask of each facet */
     const uint64_t *const *sorted; /* per facet: sorted keys or NULL;
@@ -1222,18 +1225,31 @@ static bool visit_pair(void *user, uint32_t a, uint32_t b)
         a = b;
         b = t;
     }
-    const geo_facet_shape *sa = &s->shapes[a], *sb = &s->shapes[b];
-    if (sa->degenerate || sb->degenerate)
+    /* the degenerate flag was set with the shape and never changes */
+    if ((atomic_load_explicit(&s->flags[a], memory_order_relaxed) |
+         atomic_load_explicit(&s->flags[b], memory_order_relaxed)) &
+        GEO_SI_DEGENERATE)
         return true;
     if (geo_poly_facet_size(s->p, a) == 3 &&
         geo_poly_facet_size(s->p, b) == 3 &&
         !triangles_need_test(s->p, geo_poly_facet(s->p, a),
                              geo_poly_facet(s->p, b)))
         return true;
-    facet_ref F = {a, geo_poly_facet_size(s->p, a), geo_poly_facet(s->p, a),
-                   sa, s->masks[a], s->sorted ? s->sorted[a] : NULL};
-    facet_ref G = {b, geo_poly_facet_size(s->p, b), geo_poly_facet(s->p, b),
-                   sb, s->masks[b], s->sorted ? s->sorted[b] : NULL};
+    geo_facet_shape sa, sb;
+    facet_ref F, G;
+    if (s->shapes) {
+        F = (facet_ref){a, geo_poly_facet_size(s->p, a),
+                        geo_poly_facet(s->p, a), &s->shapes[a], s->masks[a],
+                        s->sorted ? s->sorted[a] : NULL};
+        G = (facet_ref){b, geo_poly_facet_size(s->p, b),
+                        geo_poly_facet(s->p, b), &s->shapes[b], s->masks[b],
+                        s->sorted ? s->sorted[b] : NULL};
+    } else { /* triangles: no sorted keys */
+        geo_facet_shape_of(s->p, a, &sa);
+        geo_facet_shape_of(s->p, b, &sb);
+        F = facet_at(s->p, a, &sa);
+        G = facet_at(s->p, b, &sb);
+    }
     if (!pair_test(s->p, &F, &G, &vs->sc))
         return true;
     vs->out->count++;
@@ -1335,10 +1351,11 @@ static void run_shapes(void *arg, size_t i)
     if (hi > j->p->nfacets)
         hi = j->p->nfacets;
     for (uint32_t f = lo; f < hi; f++) {
-        geo_facet_shape *s = &j->shapes[f];
+        geo_facet_shape own, *s = j->shapes ? &j->shapes[f] : &own;
         geo_facet_shape_of(j->p, f, s);
-        j->masks[f] = vertex_mask(geo_poly_facet(j->p, f),
-                                  geo_poly_facet_size(j->p, f));
+        if (j->masks)
+            j->masks[f] = vertex_mask(geo_poly_facet(j->p, f),
+                                      geo_poly_facet_size(j->p, f));
         unsigned char fl = 0;
         if (s->degenerate)
             fl = GEO_SI_DEGENERATE;
@@ -1370,10 +1387,18 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
         return geo_err_set(err, -EINVAL,
                            "self-intersection: the BVH has %u items for %u "
                            "facets", bvh->nitems, nf);
+    uint32_t maxn = 3;
+    for (uint32_t f = 0; f < nf; f++)
+        if (geo_poly_facet_size(p, f) > maxn)
+            maxn = geo_poly_facet_size(p, f);
     search s = {0};
     geo_bvh *own = NULL;
-    geo_facet_shape *shapes = malloc(((size_t)nf + 1) * sizeof *shapes);
-    uint64_t *masks = malloc(((size_t)nf + 1) * sizeof *masks);
+    geo_facet_shape *shapes = NULL;
+    uint64_t *masks = NULL;
+    if (maxn > 3) {
+        shapes = malloc(((size_t)nf + 1) * sizeof *shapes);
+        masks = malloc(((size_t)nf + 1) * sizeof *masks);
+    }
     const uint64_t **sorted = NULL;
     uint64_t *keys = NULL;
     atomic_uchar *flags = malloc(((size_t)nf + 1) * sizeof *flags);
@@ -1383,13 +1408,9 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     task_out *out = NULL;
     uint32_t ntasks = 0;
     pair_list all = {0};
-    if (!shapes || !masks || !flags || !plain || !ta || !tb ||
-        sort_large_facets(p, &sorted, &keys) < 0)
+    if ((maxn > 3 && (!shapes || !masks)) || !flags || !plain || !ta ||
+        !tb || sort_large_facets(p, &sorted, &keys) < 0)
         goto oom;
-    uint32_t maxn = 3;
-    for (uint32_t f = 0; f < nf; f++)
-        if (geo_poly_facet_size(p, f) > maxn)
-            maxn = geo_poly_facet_size(p, f);
 
     shape_job sj = {p, shapes, masks, flags, 4096};
     geo_ctx_parallel_for(ctx, (nf + sj.block - 1) / sj.block, run_shapes, &sj);
