@@ -1,7 +1,8 @@
 /* bvh.h — a bounding-volume hierarchy of axis-aligned boxes, built in
  * O(n log n) by median splits on the longest axis (quickselect), leaves of
  * at most GEO_BVH_LEAF items. Used by point-in-polyhedron, the plane cut
- * and self-intersection. Items are identified by their index in the input
+ * and the replanar and fill checks (the self-intersection search has its
+ * own, smaller tree: fbvh.h). Items are identified by their index in the input
  * box array (for geo_bvh_build_facets: the facet index).
  *
  * Node layout: nodes[0] is the root; an internal node's children are
