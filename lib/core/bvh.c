@@ -74,16 +74,13 @@ geo_bvh *geo_bvh_free(geo_bvh *h)
     return NULL;
 }
 
-/* The state of one build. The median build takes its split from the
- * centroids and copies each item's box from in[] as its leaf is formed
- * (h->boxes then is in leaf order without a pass of its own); the Morton
- * build takes it from the sorted codes and has h->boxes in leaf order
- * before (in NULL). */
+/* The state of one build: the split comes from the centroids, and each
+ * item's box is copied from in[] as its leaf is formed (h->boxes then is
+ * in leaf order without a pass of its own). */
 typedef struct builder {
     geo_bvh *h;
-    const geo_bbox *in;       /* median: input boxes by item index */
-    const double (*cent)[3];  /* median: centroids by item index */
-    const uint32_t *code;     /* Morton: codes by item index, sorted */
+    const geo_bbox *in;       /* input boxes by item index */
+    const double (*cent)[3];  /* centroids by item index */
 } builder;
 
 /* Partially orders items[lo..hi) so that items[k] has the k-th smallest
@@ -140,27 +137,6 @@ static uint32_t median_split(const builder *b, uint32_t lo, uint32_t hi)
     return mid;
 }
 
-/* The Morton split of items[lo, hi): the first item whose code has the
- * highest differing bit set (codes are sorted, so a binary search), or
- * the middle when all codes are equal; lo < mid < hi. */
-static uint32_t morton_split(const builder *b, uint32_t lo, uint32_t hi)
-{
-    const geo_bvh *h = b->h;
-    uint32_t c0 = b->code[h->items[lo]], c1 = b->code[h->items[hi - 1]];
-    if (c0 == c1)
-        return lo + (hi - lo) / 2;
-    uint32_t bit = 31 - (uint32_t)__builtin_clz(c0 ^ c1);
-    uint32_t l = lo + 1, r = hi - 1;
-    while (l < r) {
-        uint32_t m = l + (r - l) / 2;
-        if (b->code[h->items[m]] >> bit & 1)
-            r = m;
-        else
-            l = m + 1;
-    }
-    return l;
-}
-
 /* A node's box is the union of its children's (a leaf's: of its items'),
  * formed after the children are built: the same box as the union of all
  * its items, taken in the same order, without a pass over them per
@@ -173,15 +149,14 @@ static void build_node(const builder *b, uint32_t node, uint32_t lo,
     geo_bbox_empty(&n->box);
     if (hi - lo <= GEO_BVH_LEAF) {
         for (uint32_t i = lo; i < hi; i++) {
-            if (b->in)
-                h->boxes[i] = b->in[h->items[i]];
+            h->boxes[i] = b->in[h->items[i]];
             geo_bbox_union(&n->box, &h->boxes[i]);
         }
         n->child = lo;
         n->count = hi - lo;
         return;
     }
-    uint32_t mid = b->code ? morton_split(b, lo, hi) : median_split(b, lo, hi);
+    uint32_t mid = median_split(b, lo, hi);
     uint32_t child = h->nnodes;
     h->nnodes += 2;
     n->child = child;
@@ -223,7 +198,7 @@ geo_bvh *geo_bvh_build(const geo_bbox *boxes, uint32_t n, geo_err *err)
             cent[i][k] = 0.5 * (boxes[i].lo[k] + boxes[i].hi[k]);
     }
     if (n > 0) {
-        builder b = {h, boxes, (const double (*)[3])cent, NULL};
+        builder b = {h, boxes, (const double (*)[3])cent};
         h->nnodes = 1;
         build_node(&b, 0, 0, n);
     }
@@ -253,121 +228,8 @@ geo_bvh *geo_bvh_build_facets(const geo_poly *p, geo_err *err)
     return build_over_facets(p, err, geo_bvh_build);
 }
 
-/* The 10 low bits of x spread to every third bit (bits 0, 3, ..., 27). */
-static uint32_t spread10(uint32_t x)
-{
-    x &= 1023;
-    x = (x | x << 16) & 0x030000FFu;
-    x = (x | x << 8) & 0x0300F00Fu;
-    x = (x | x << 4) & 0x030C30C3u;
-    x = (x | x << 2) & 0x09249249u;
-    return x;
-}
-
-/* Where a Morton build takes its items' boxes from: an array by item
- * index, or the facets of a polyhedron (computed where needed, from the
- * vertices, rather than kept in a second array of boxes: they are the
- * tree's largest part). */
-typedef struct box_source {
-    const geo_bbox *boxes;
-    const geo_poly *p;
-} box_source;
-
-static inline void source_box(const box_source *src, uint32_t i,
-                              geo_bbox *ret)
-{
-    if (src->boxes)
-        *ret = src->boxes[i];
-    else
-        geo_poly_facet_bbox(src->p, i, ret);
-}
-
-/* The Morton build of h (h->nitems items, arrays allocated) over the
- * boxes of src: codes from the box centres, a radix sort of the items,
- * the boxes written in leaf order (a gather: independent reads, unlike
- * a permutation in place), then the nodes. -ENOMEM. */
-static int morton_core(geo_bvh *h, const box_source *src)
-{
-    uint32_t n = h->nitems;
-    uint32_t *code = malloc(((size_t)n + 1) * sizeof *code);
-    uint32_t *tmp = malloc(((size_t)n + 1) * sizeof *tmp);
-    if (!code || !tmp) {
-        free(code);
-        free(tmp);
-        return -ENOMEM;
-    }
-    geo_bbox cb, b;
-    geo_bbox_empty(&cb);
-    for (uint32_t i = 0; i < n; i++) {
-        double c[3];
-        source_box(src, i, &b);
-        for (int k = 0; k < 3; k++)
-            c[k] = 0.5 * (b.lo[k] + b.hi[k]);
-        geo_bbox_add(&cb, c);
-    }
-    double scale[3];
-    for (int k = 0; k < 3; k++)
-        scale[k] = cb.hi[k] > cb.lo[k] ? 1024.0 / (cb.hi[k] - cb.lo[k]) : 0;
-    for (uint32_t i = 0; i < n; i++) {
-        uint32_t q[3];
-        source_box(src, i, &b);
-        for (int k = 0; k < 3; k++) {
-            double x = (0.5 * (b.lo[k] + b.hi[k]) - cb.lo[k]) * scale[k];
-            q[k] = x >= 0 ? (x < 1023 ? (uint32_t)x : 1023) : 0;
-        }
-        code[i] = spread10(q[0]) << 2 | spread10(q[1]) << 1 | spread10(q[2]);
-        h->items[i] = i;
-    }
-    /* least significant digit first, 10 bits a pass, stable */
-    for (int shift = 0; shift < 30; shift += 10) {
-        uint32_t count[1025] = {0};
-        for (uint32_t i = 0; i < n; i++)
-            count[(code[i] >> shift & 1023) + 1]++;
-        for (int d = 0; d < 1024; d++)
-            count[d + 1] += count[d];
-        for (uint32_t i = 0; i < n; i++) {
-            uint32_t it = h->items[i];
-            tmp[count[code[it] >> shift & 1023]++] = it;
-        }
-        memcpy(h->items, tmp, (size_t)n * sizeof *tmp);
-    }
-    free(tmp);
-    for (uint32_t k = 0; k < n; k++)
-        source_box(src, h->items[k], &h->boxes[k]);
-    if (n > 0) {
-        builder mb = {h, NULL, NULL, code};
-        h->nnodes = 1;
-        build_node(&mb, 0, 0, n);
-    }
-    free(code);
-    return 0;
-}
-
-/* The Morton build over n boxes of src. */
-static geo_bvh *morton_build(const box_source *src, uint32_t n, geo_err *err)
-{
-    geo_bvh *h = bvh_alloc(n);
-    if (!h || morton_core(h, src) < 0) {
-        geo_err_set(err, -ENOMEM, "out of memory building the BVH");
-        return geo_bvh_free(h);
-    }
-    return h;
-}
-
-geo_bvh *geo_bvh_build_morton(const geo_bbox *boxes, uint32_t n, geo_err *err)
-{
-    box_source src = {boxes, NULL};
-    return morton_build(&src, n, err);
-}
-
-geo_bvh *geo_bvh_build_facets_morton(const geo_poly *p, geo_err *err)
-{
-    box_source src = {NULL, p};
-    return morton_build(&src, p->nfacets, err);
-}
-
 /* An explicit stack: depth is bounded by the tree height (median splits:
- * ≤ 2·log2 n; Morton splits: ≤ 30 + log2 n) plus one. */
+ * ≤ 2·log2 n) plus one. */
 enum { STACK = 128 };
 
 /* Which boxes a query descends into and whose items it visits. */

@@ -1,7 +1,8 @@
 /* bvh.h — a bounding-volume hierarchy of axis-aligned boxes, built in
  * O(n log n) by median splits on the longest axis (quickselect), leaves of
  * at most GEO_BVH_LEAF items. Used by point-in-polyhedron, the plane cut
- * and self-intersection. Items are identified by their index in the input
+ * and the replanar and fill checks (the self-intersection search has its
+ * own, smaller tree: fbvh.h). Items are identified by their index in the input
  * box array (for geo_bvh_build_facets: the facet index).
  *
  * Node layout: nodes[0] is the root; an internal node's children are
@@ -67,23 +68,6 @@ geo_bvh *geo_bvh_build(const geo_bbox *boxes, uint32_t n, geo_err *err);
 
 /* Builds a hierarchy over the facets of p. NULL on out-of-memory. */
 geo_bvh *geo_bvh_build_facets(const geo_poly *p, geo_err *err);
-
-/* Builds a hierarchy over n boxes (copied, in leaf order) in O(n): the
- * boxes' centres are quantised to a 1024³ grid over their bounds and
- * ordered along its Morton (Z-order) curve by a radix sort; a node splits
- * its range where the curve leaves the half of the grid cell its codes
- * share (the highest bit in which its first and last codes differ), or
- * in the middle when they are all equal; leaves of at most GEO_BVH_LEAF
- * items. Its depth is at most 30 + log2 n. About four times faster to
- * build than geo_bvh_build and, on facet models, as fast to search for
- * pairs, but another tree: queries visit items in another order. A box
- * with a NaN centre goes to the grid's first cell. NULL on out-of-memory
- * (err set). */
-geo_bvh *geo_bvh_build_morton(const geo_bbox *boxes, uint32_t n,
-                              geo_err *err);
-
-/* geo_bvh_build_morton over the facets of p. NULL on out-of-memory. */
-geo_bvh *geo_bvh_build_facets_morton(const geo_poly *p, geo_err *err);
 
 /* Releases h; accepts NULL; returns NULL. */
 geo_bvh *geo_bvh_free(geo_bvh *h);

@@ -14,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "fbvh.h"
 #include "predicates.h"
 #include "vec.h"
 
@@ -1096,10 +1097,15 @@ typedef struct task_out {
 
 typedef struct search {
     const geo_poly *p;
-    const geo_bvh *h;
+    const geo_bvh *h;   /* the caller's tree, or NULL: */
+    const geo_fbvh *fh; /* the search's own */
     const geo_ctx *ctx;
+    /* per facet, or NULL when every facet is a triangle: then packed
+     * (one byte, tri_pack) and the masks taken from the vertices, for
+     * the few pairs that reach pair_test — not 28 bytes per facet */
     const geo_facet_shape *shapes;
     const uint64_t *masks; /* vertex_mask of each facet */
+    const uint8_t *tri;
     const uint64_t *const *sorted; /* per facet: sorted keys or NULL;
                                       NULL when no facet has them */
     atomic_uchar *flags;
@@ -1202,6 +1208,28 @@ static bool triangles_need_test(const geo_poly *p, const uint32_t *x,
     return !(free_edge_misses(p, x, y) && free_edge_misses(p, y, x));
 }
 
+/* The shape of a non-degenerate triangle in a byte: the positions of
+ * its first two reference vertices (the third is the other one), the
+ * axis and the turn; simple and convex it always is. */
+static uint8_t tri_pack(const uint32_t *v, const geo_facet_shape *s)
+{
+    int ia = s->ref[0] == v[0] ? 0 : s->ref[0] == v[1] ? 1 : 2;
+    int ib = s->ref[1] == v[0] ? 0 : s->ref[1] == v[1] ? 1 : 2;
+    return (uint8_t)(ia | ib << 2 | s->axis << 4 | (s->turn > 0) << 6);
+}
+
+static void tri_unpack(uint8_t t, const uint32_t *v, geo_facet_shape *ret)
+{
+    int ia = t & 3, ib = t >> 2 & 3;
+    memset(ret, 0, sizeof *ret);
+    ret->ref[0] = v[ia];
+    ret->ref[1] = v[ib];
+    ret->ref[2] = v[3 - ia - ib];
+    ret->axis = (int8_t)(t >> 4 & 3);
+    ret->turn = t >> 6 & 1 ? 1 : -1;
+    ret->simple = ret->convex = true;
+}
+
 static bool visit_pair(void *user, uint32_t a, uint32_t b)
 {
     visit_state *vs = user;
@@ -1222,18 +1250,31 @@ static bool visit_pair(void *user, uint32_t a, uint32_t b)
         a = b;
         b = t;
     }
-    const geo_facet_shape *sa = &s->shapes[a], *sb = &s->shapes[b];
-    if (sa->degenerate || sb->degenerate)
+    /* the degenerate flag was set with the shape and never changes */
+    if ((atomic_load_explicit(&s->flags[a], memory_order_relaxed) |
+         atomic_load_explicit(&s->flags[b], memory_order_relaxed)) &
+        GEO_SI_DEGENERATE)
         return true;
     if (geo_poly_facet_size(s->p, a) == 3 &&
         geo_poly_facet_size(s->p, b) == 3 &&
         !triangles_need_test(s->p, geo_poly_facet(s->p, a),
                              geo_poly_facet(s->p, b)))
         return true;
-    facet_ref F = {a, geo_poly_facet_size(s->p, a), geo_poly_facet(s->p, a),
-                   sa, s->masks[a], s->sorted ? s->sorted[a] : NULL};
-    facet_ref G = {b, geo_poly_facet_size(s->p, b), geo_poly_facet(s->p, b),
-                   sb, s->masks[b], s->sorted ? s->sorted[b] : NULL};
+    geo_facet_shape sa, sb;
+    facet_ref F, G;
+    if (s->shapes) {
+        F = (facet_ref){a, geo_poly_facet_size(s->p, a),
+                        geo_poly_facet(s->p, a), &s->shapes[a], s->masks[a],
+                        s->sorted ? s->sorted[a] : NULL};
+        G = (facet_ref){b, geo_poly_facet_size(s->p, b),
+                        geo_poly_facet(s->p, b), &s->shapes[b], s->masks[b],
+                        s->sorted ? s->sorted[b] : NULL};
+    } else { /* triangles: no sorted keys */
+        tri_unpack(s->tri[a], geo_poly_facet(s->p, a), &sa);
+        tri_unpack(s->tri[b], geo_poly_facet(s->p, b), &sb);
+        F = facet_at(s->p, a, &sa);
+        G = facet_at(s->p, b, &sb);
+    }
     if (!pair_test(s->p, &F, &G, &vs->sc))
         return true;
     vs->out->count++;
@@ -1315,7 +1356,10 @@ static void run_task(void *arg, size_t i)
         atomic_store(&s->stop, 1);
         return;
     }
-    geo_bvh_pairs(s->h, s->ta[t], s->tb[t], visit_pair, &vs);
+    if (s->fh)
+        geo_fbvh_pairs(s->fh, s->ta[t], s->tb[t], visit_pair, &vs);
+    else
+        geo_bvh_pairs(s->h, s->ta[t], s->tb[t], visit_pair, &vs);
     if (heap)
         scratch_free(&vs.sc);
 }
@@ -1324,6 +1368,7 @@ typedef struct shape_job {
     const geo_poly *p;
     geo_facet_shape *shapes;
     uint64_t *masks;
+    uint8_t *tri;
     atomic_uchar *flags;
     uint32_t block;
 } shape_job;
@@ -1335,10 +1380,13 @@ static void run_shapes(void *arg, size_t i)
     if (hi > j->p->nfacets)
         hi = j->p->nfacets;
     for (uint32_t f = lo; f < hi; f++) {
-        geo_facet_shape *s = &j->shapes[f];
+        geo_facet_shape own, *s = j->shapes ? &j->shapes[f] : &own;
         geo_facet_shape_of(j->p, f, s);
-        j->masks[f] = vertex_mask(geo_poly_facet(j->p, f),
-                                  geo_poly_facet_size(j->p, f));
+        if (j->masks)
+            j->masks[f] = vertex_mask(geo_poly_facet(j->p, f),
+                                      geo_poly_facet_size(j->p, f));
+        else if (!s->degenerate)
+            j->tri[f] = tri_pack(geo_poly_facet(j->p, f), s);
         unsigned char fl = 0;
         if (s->degenerate)
             fl = GEO_SI_DEGENERATE;
@@ -1370,10 +1418,21 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
         return geo_err_set(err, -EINVAL,
                            "self-intersection: the BVH has %u items for %u "
                            "facets", bvh->nitems, nf);
+    uint32_t maxn = 3;
+    for (uint32_t f = 0; f < nf; f++)
+        if (geo_poly_facet_size(p, f) > maxn)
+            maxn = geo_poly_facet_size(p, f);
     search s = {0};
-    geo_bvh *own = NULL;
-    geo_facet_shape *shapes = malloc(((size_t)nf + 1) * sizeof *shapes);
-    uint64_t *masks = malloc(((size_t)nf + 1) * sizeof *masks);
+    geo_fbvh *own = NULL;
+    geo_facet_shape *shapes = NULL;
+    uint64_t *masks = NULL;
+    uint8_t *tri = NULL;
+    if (maxn > 3) {
+        shapes = malloc(((size_t)nf + 1) * sizeof *shapes);
+        masks = malloc(((size_t)nf + 1) * sizeof *masks);
+    } else {
+        tri = malloc((size_t)nf + 1);
+    }
     const uint64_t **sorted = NULL;
     uint64_t *keys = NULL;
     atomic_uchar *flags = malloc(((size_t)nf + 1) * sizeof *flags);
@@ -1383,33 +1442,32 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     task_out *out = NULL;
     uint32_t ntasks = 0;
     pair_list all = {0};
-    if (!shapes || !masks || !flags || !plain || !ta || !tb ||
-        sort_large_facets(p, &sorted, &keys) < 0)
+    if ((maxn > 3 ? !shapes || !masks : !tri) || !flags || !plain || !ta ||
+        !tb || sort_large_facets(p, &sorted, &keys) < 0)
         goto oom;
-    uint32_t maxn = 3;
-    for (uint32_t f = 0; f < nf; f++)
-        if (geo_poly_facet_size(p, f) > maxn)
-            maxn = geo_poly_facet_size(p, f);
 
-    shape_job sj = {p, shapes, masks, flags, 4096};
+    shape_job sj = {p, shapes, masks, tri, flags, 4096};
     geo_ctx_parallel_for(ctx, (nf + sj.block - 1) / sj.block, run_shapes, &sj);
     if ((rc = geo_ctx_progress(ctx, 0.05)) < 0)
         goto fail;
     if (!bvh) {
-        /* the answer does not depend on the tree: the fastest to build */
-        own = geo_bvh_build_facets_morton(p, err);
+        /* the answer does not depend on the tree: the fastest to build,
+         * the smallest */
+        own = geo_fbvh_build_facets(p, err);
         if (!own)
             goto oom;
-        bvh = own;
     }
     if ((rc = geo_ctx_progress(ctx, 0.15)) < 0)
         goto fail;
 
-    ntasks = geo_bvh_pair_tasks(bvh, ta, tb, o.max_tasks);
+    ntasks = own ? geo_fbvh_pair_tasks(own, ta, tb, o.max_tasks)
+                 : geo_bvh_pair_tasks(bvh, ta, tb, o.max_tasks);
     out = calloc((size_t)ntasks + 1, sizeof *out);
     if (!out)
         goto oom;
-    s.p = p, s.h = bvh, s.ctx = ctx, s.shapes = shapes, s.masks = masks;
+    s.p = p, s.h = bvh, s.fh = own, s.ctx = ctx;
+    s.shapes = shapes, s.masks = masks;
+    s.tri = tri;
     s.flags = flags;
     s.sorted = sorted;
     s.keep = o.max_pairs, s.maxn = maxn, s.ta = ta, s.tb = tb, s.out = out;
@@ -1491,9 +1549,10 @@ done:
         free(out[t].list.v);
     free(out);
     free(all.v);
-    geo_bvh_free(own);
+    geo_fbvh_free(own);
     free(shapes);
     free(masks);
+    free(tri);
     free(sorted);
     free(keys);
     free(flags);

@@ -123,15 +123,23 @@ static bool surely_wider(double yy, double c, double tan_max)
     return c < 0 || yy > lim * lim * (1 + 1e-8);
 }
 
+/* The unit Newell normal of facet f, and its length. */
+static double unit_normal(const geo_poly *p, uint32_t f, double ret[3])
+{
+    geo_poly_facet_area_vector(p, f, ret);
+    return geo_vnormalize(ret);
+}
+
 /* Adjacent facet pairs (each once) whose normals are within each
  * threshold; facets winding against their plane; the total area.
  * Each facet's neighbours above it are gathered through its corners with
  * a stamp per facet, so a pair sharing several edges counts once (as
- * agreeing when any of its edges agrees). */
+ * agreeing when any of its edges agrees). A neighbour's normal is
+ * computed again where it is needed (the same bits) rather than kept for
+ * every facet: 24 bytes per facet. */
 static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
 {
     uint32_t nf = p->nfacets;
-    double (*nrm)[3] = malloc(((size_t)nf + 1) * sizeof *nrm);
     uint32_t *stamp = malloc(((size_t)nf + 1) * sizeof *stamp);
     uint8_t *agree = malloc((size_t)nf + 1);
     uint32_t maxn = 1;
@@ -139,21 +147,15 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
         if (geo_poly_facet_size(p, f) > maxn)
             maxn = geo_poly_facet_size(p, f);
     uint32_t *list = malloc((size_t)maxn * sizeof *list);
-    if (!nrm || !stamp || !agree || !list) {
-        free(nrm), free(stamp), free(agree), free(list);
+    if (!stamp || !agree || !list) {
+        free(stamp), free(agree), free(list);
         return -ENOMEM;
     }
+    for (uint32_t f = 0; f < nf; f++)
+        stamp[f] = GEO_NONE;
     /* the total area from the same Newell vectors, summed in facet order
      * as geo_poly_area does */
     s->area = 0;
-    for (uint32_t f = 0; f < nf; f++) {
-        geo_poly_facet_area_vector(p, f, nrm[f]);
-        s->area += 0.5 * geo_vlen(nrm[f]);
-        geo_vnormalize(nrm[f]);
-        if (geo_vdot(nrm[f], p->planes[f]) < 0)
-            s->inverted_facets++;
-        stamp[f] = GEO_NONE;
-    }
     double tmax = s->coplanar_deg[0];
     for (int k = 1; k < GEO_STATS_NCOPLANAR; k++)
         if (s->coplanar_deg[k] > tmax)
@@ -161,6 +163,10 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
     double tan_max = tmax >= 1e-6 && tmax <= 89 ? tan(tmax * M_PI / 180.0)
                                                 : 0;
     for (uint32_t f = 0; f < nf; f++) {
+        double nrm[3];
+        s->area += 0.5 * unit_normal(p, f, nrm);
+        if (geo_vdot(nrm, p->planes[f]) < 0)
+            s->inverted_facets++;
         uint32_t nl = 0;
         for (uint32_t c = p->fstart[f]; c < p->fstart[f + 1]; c++) {
             uint32_t m = t->mate[c];
@@ -181,9 +187,10 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
         for (uint32_t i = 0; i < nl; i++) {
             uint32_t g = list[i];
             double n2[3], x[3];
-            geo_vscale(nrm[g], agree[g] ? 1.0 : -1.0, n2);
-            geo_vcross(nrm[f], n2, x);
-            double yy = geo_vdot(x, x), dot = geo_vdot(nrm[f], n2);
+            unit_normal(p, g, n2);
+            geo_vscale(n2, agree[g] ? 1.0 : -1.0, n2);
+            geo_vcross(nrm, n2, x);
+            double yy = geo_vdot(x, x), dot = geo_vdot(nrm, n2);
             if (surely_wider(yy, dot, tan_max))
                 continue;
             double ang = atan2(sqrt(yy), dot) * 180.0 / M_PI;
@@ -192,7 +199,7 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
                     s->near_coplanar[k]++;
         }
     }
-    free(nrm), free(stamp), free(agree), free(list);
+    free(stamp), free(agree), free(list);
     return 0;
 }
 

@@ -1,8 +1,10 @@
 /* test_bvh.c — every BVH query returns exactly what a brute-force scan of
  * the boxes returns (random boxes, many duplicates), and the pair tasks
- * partition the self-pairs; the same for the Morton-ordered build, whose
- * tree is also checked for shape (each item once, boxes the unions of
- * their items, bounded depth) on identical and NaN-centred boxes. */
+ * partition the self-pairs; the float tree's pairs are those of its
+ * stored boxes, a superset of the exact ones, and the tree is checked for
+ * shape (each item once, boxes the unions of their items and the tightest
+ * float boxes around the exact ones, bounded depth) on random, identical,
+ * NaN-centred and out-of-range boxes. */
 #include "testutil.h"
 
 #include <math.h>
@@ -10,6 +12,7 @@
 #include <string.h>
 
 #include "bvh.h"
+#include "fbvh.h"
 
 enum { N = 3000 };
 
@@ -161,26 +164,45 @@ static void test_pair_tasks_report_each_overlap_once(void **state)
     free(b);
 }
 
-/* Depth of the subtree at node; checks that each node's box is the union
- * of its items' boxes and marks the items seen. */
-static uint32_t check_node(const geo_bvh *h, uint32_t node,
-                           unsigned char *seen, geo_bbox *ret_box)
+/* The float tree: each node's box the union of its items' stored boxes,
+ * each item once, and each stored box the tightest float box holding the
+ * exact one. Returns the depth. */
+static uint32_t check_fnode(const geo_fbvh *h, uint32_t node,
+                            const geo_bbox *in, unsigned char *seen,
+                            geo_fbox *ret_box)
 {
-    const geo_bvh_node *n = &h->nodes[node];
-    geo_bbox box;
-    geo_bbox_empty(&box);
+    const geo_fbvh_node *n = &h->nodes[node];
+    geo_fbox box;
+    for (int k = 0; k < 3; k++) {
+        box.lo[k] = INFINITY;
+        box.hi[k] = -INFINITY;
+    }
     uint32_t depth = 1;
     if (n->count) {
         for (uint32_t i = n->child; i < n->child + n->count; i++) {
+            const geo_fbox *b = &h->boxes[i];
+            const geo_bbox *x = &in[h->items[i]];
             seen[h->items[i]]++;
-            geo_bbox_union(&box, &h->boxes[i]);
+            for (int k = 0; k < 3; k++) {
+                if (isnan(x->lo[k]))
+                    assert_true(isnan(b->lo[k]));
+                else
+                    assert_true(b->lo[k] <= x->lo[k] &&
+                                nextafterf(b->lo[k], INFINITY) > x->lo[k]);
+                assert_true(b->hi[k] >= x->hi[k] &&
+                            nextafterf(b->hi[k], -INFINITY) < x->hi[k]);
+                box.lo[k] = b->lo[k] < box.lo[k] ? b->lo[k] : box.lo[k];
+                box.hi[k] = b->hi[k] > box.hi[k] ? b->hi[k] : box.hi[k];
+            }
         }
     } else {
-        geo_bbox l, r;
-        uint32_t dl = check_node(h, n->child, seen, &l);
-        uint32_t dr = check_node(h, n->child + 1, seen, &r);
-        geo_bbox_union(&box, &l);
-        geo_bbox_union(&box, &r);
+        geo_fbox l, r;
+        uint32_t dl = check_fnode(h, n->child, in, seen, &l);
+        uint32_t dr = check_fnode(h, n->child + 1, in, seen, &r);
+        for (int k = 0; k < 3; k++) {
+            box.lo[k] = l.lo[k] < r.lo[k] ? l.lo[k] : r.lo[k];
+            box.hi[k] = l.hi[k] > r.hi[k] ? l.hi[k] : r.hi[k];
+        }
         depth += dl > dr ? dl : dr;
     }
     assert_memory_equal(&box, &n->box, sizeof box);
@@ -188,52 +210,54 @@ static uint32_t check_node(const geo_bvh *h, uint32_t node,
     return depth;
 }
 
-static void test_morton_tree_matches_brute_force(void **state)
+static bool fbox_overlap(const geo_fbox *a, const geo_fbox *b)
+{
+    for (int k = 0; k < 3; k++)
+        if (!(a->lo[k] <= b->hi[k] && b->lo[k] <= a->hi[k]))
+            return false;
+    return true;
+}
+
+static void test_float_tree_pairs(void **state)
 {
     (void)state;
-    geo_bbox *b = random_boxes(N, 1);
-    geo_bvh *h = geo_bvh_build_morton(b, N, NULL);
-    assert_non_null(h);
-    unsigned char seen[N] = {0};
-    geo_bbox all;
-    uint32_t depth = check_node(h, 0, seen, &all);
-    for (uint32_t i = 0; i < N; i++)
-        assert_int_equal(seen[i], 1);
-    assert_true(depth <= 30 + 12 + 1);
-    uint64_t rng = 99;
-    for (int q = 0; q < 200; q++) {
-        geo_bbox qb;
-        for (int k = 0; k < 3; k++) {
-            double c = geo_rand_unit(&rng) * 10, e = geo_rand_unit(&rng);
-            qb.lo[k] = c - e;
-            qb.hi[k] = c + e;
-        }
-        memset(seen, 0, sizeof seen);
-        geo_bvh_query_box(h, &qb, collect, seen);
-        for (uint32_t i = 0; i < N; i++)
-            assert_int_equal(seen[i], geo_bbox_overlap(&b[i], &qb) ? 1 : 0);
-    }
-    geo_bvh_free(h);
-    free(b);
-
     const uint32_t n = 800;
-    b = random_boxes(n, 4);
-    h = geo_bvh_build_morton(b, n, NULL);
-    uint32_t ta[64], tb[64];
-    uint32_t nt = geo_bvh_pair_tasks(h, ta, tb, 64);
-    pairs p = {n, calloc((size_t)n * n, 1)};
-    for (uint32_t t = 0; t < nt; t++)
-        geo_bvh_pairs(h, ta[t], tb[t], count_pair, &p);
+    geo_bbox *b = random_boxes(n, 4);
+    geo_fbvh *h = geo_fbvh_build(b, n, NULL);
+    assert_non_null(h);
+    unsigned char seen[800] = {0};
+    geo_fbox all;
+    uint32_t depth = check_fnode(h, 0, b, seen, &all);
     for (uint32_t i = 0; i < n; i++)
-        for (uint32_t j = i + 1; j < n; j++)
-            assert_int_equal(p.count[(size_t)i * n + j],
-                             geo_bbox_overlap(&b[i], &b[j]) ? 1 : 0);
-    free(p.count);
-    geo_bvh_free(h);
+        assert_int_equal(seen[i], 1);
+    assert_true(depth <= 30 + 10 + 1);
+    uint32_t *slot = malloc(n * sizeof *slot);
+    for (uint32_t k = 0; k < n; k++)
+        slot[h->items[k]] = k;
+    /* every pair whose stored boxes overlap once, so every exactly
+     * overlapping pair; whatever the number of tasks */
+    for (uint32_t cap = 1; cap <= 512; cap *= 8) {
+        uint32_t ta[512], tb[512];
+        uint32_t nt = geo_fbvh_pair_tasks(h, ta, tb, cap);
+        assert_true(nt >= 1 && nt <= cap);
+        pairs p = {n, calloc((size_t)n * n, 1)};
+        for (uint32_t t = 0; t < nt; t++)
+            geo_fbvh_pairs(h, ta[t], tb[t], count_pair, &p);
+        for (uint32_t i = 0; i < n; i++)
+            for (uint32_t j = i + 1; j < n; j++) {
+                bool f = fbox_overlap(&h->boxes[slot[i]], &h->boxes[slot[j]]);
+                assert_int_equal(p.count[(size_t)i * n + j], f ? 1 : 0);
+                if (geo_bbox_overlap(&b[i], &b[j]))
+                    assert_true(f);
+            }
+        free(p.count);
+    }
+    free(slot);
+    geo_fbvh_free(h);
     free(b);
 }
 
-static void test_morton_tree_of_equal_and_nan_boxes(void **state)
+static void test_float_tree_of_equal_and_nan_boxes(void **state)
 {
     (void)state;
     /* all centres in one grid cell, a few NaN: median splits, every item
@@ -245,21 +269,37 @@ static void test_morton_tree_of_equal_and_nan_boxes(void **state)
             b[i].lo[k] = i % 7 == 3 ? NAN : 1.0;
             b[i].hi[k] = 2.0;
         }
-    geo_bvh *h = geo_bvh_build_morton(b, M, NULL);
+    geo_fbvh *h = geo_fbvh_build(b, M, NULL);
     assert_non_null(h);
     unsigned char seen[M] = {0};
-    geo_bbox all;
-    uint32_t depth = check_node(h, 0, seen, &all);
+    geo_fbox all;
+    uint32_t depth = check_fnode(h, 0, b, seen, &all);
     for (uint32_t i = 0; i < M; i++)
         assert_int_equal(seen[i], 1);
     assert_true(depth <= 10);
-    geo_bvh_free(h);
+    geo_fbvh_free(h);
     free(b);
-    h = geo_bvh_build_morton(NULL, 0, NULL);
+    h = geo_fbvh_build(NULL, 0, NULL);
     assert_non_null(h);
     uint32_t ta[4], tb[4];
-    assert_int_equal(geo_bvh_pair_tasks(h, ta, tb, 4), 0);
-    geo_bvh_free(h);
+    assert_int_equal(geo_fbvh_pair_tasks(h, ta, tb, 4), 0);
+    geo_fbvh_free(h);
+}
+
+/* Bounds beyond a float's range and between two floats. */
+static void test_float_tree_rounds_outward(void **state)
+{
+    (void)state;
+    geo_bbox b[3] = {{{-1e300, 0.1, 1.0 / 3}, {1e300, 0.1, 1.0 / 3}},
+                     {{3.4028235677973366e38, -0.1, -1.0 / 3},
+                      {3.4028235677973366e38, -0.1, -1.0 / 3}},
+                     {{0, 0, 0}, {0, 0, 0}}};
+    geo_fbvh *h = geo_fbvh_build(b, 3, NULL);
+    assert_non_null(h);
+    unsigned char seen[3] = {0};
+    geo_fbox all;
+    check_fnode(h, 0, b, seen, &all);
+    geo_fbvh_free(h);
 }
 
 static void test_empty_and_single(void **state)
@@ -287,8 +327,9 @@ int main(void)
         cmocka_unit_test(test_query_ray_finds_every_hit_box),
         cmocka_unit_test(test_pair_tasks_report_each_overlap_once),
         cmocka_unit_test(test_empty_and_single),
-        cmocka_unit_test(test_morton_tree_matches_brute_force),
-        cmocka_unit_test(test_morton_tree_of_equal_and_nan_boxes),
+        cmocka_unit_test(test_float_tree_pairs),
+        cmocka_unit_test(test_float_tree_of_equal_and_nan_boxes),
+        cmocka_unit_test(test_float_tree_rounds_outward),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,0 +1,347 @@
+/* fbvh.c — the Morton-ordered hierarchy of single-precision boxes and its
+ * pair search. */
+#include "fbvh.h"
+
+#include <errno.h>
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* The largest float ≤ x, and the smallest ≥ x (NaN stays NaN). */
+static float round_down(double x)
+{
+    if (x >= FLT_MAX)
+        return FLT_MAX;
+    if (x < -FLT_MAX)
+        return -INFINITY;
+    float f = (float)x;
+    return (double)f > x ? nextafterf(f, -INFINITY) : f;
+}
+
+static float round_up(double x)
+{
+    if (x <= -FLT_MAX)
+        return -FLT_MAX;
+    if (x > FLT_MAX)
+        return INFINITY;
+    float f = (float)x;
+    return (double)f < x ? nextafterf(f, INFINITY) : f;
+}
+
+static void fbox_of(const geo_bbox *b, geo_fbox *ret)
+{
+    for (int k = 0; k < 3; k++) {
+        ret->lo[k] = round_down(b->lo[k]);
+        ret->hi[k] = round_up(b->hi[k]);
+    }
+}
+
+static void fbox_empty(geo_fbox *b)
+{
+    for (int k = 0; k < 3; k++) {
+        b->lo[k] = INFINITY;
+        b->hi[k] = -INFINITY;
+    }
+}
+
+/* As geo_bbox_union: selections (min/max instructions); a NaN never
+ * replaces a bound. */
+static void fbox_union(geo_fbox *b, const geo_fbox *o)
+{
+    for (int k = 0; k < 3; k++) {
+        b->lo[k] = o->lo[k] < b->lo[k] ? o->lo[k] : b->lo[k];
+        b->hi[k] = o->hi[k] > b->hi[k] ? o->hi[k] : b->hi[k];
+    }
+}
+
+static inline bool fbox_overlap(const geo_fbox *a, const geo_fbox *b)
+{
+    return a->lo[0] <= b->hi[0] && b->lo[0] <= a->hi[0] &&
+           a->lo[1] <= b->hi[1] && b->lo[1] <= a->hi[1] &&
+           a->lo[2] <= b->hi[2] && b->lo[2] <= a->hi[2];
+}
+
+static double fbox_extent(const geo_fbox *b)
+{
+    return ((double)b->hi[0] - b->lo[0]) + ((double)b->hi[1] - b->lo[1]) +
+           ((double)b->hi[2] - b->lo[2]);
+}
+
+geo_fbvh *geo_fbvh_free(geo_fbvh *h)
+{
+    if (!h)
+        return NULL;
+    free(h->nodes);
+    free(h->items);
+    free(h->boxes);
+    free(h);
+    return NULL;
+}
+
+/* The 10 low bits of x spread to every third bit (bits 0, 3, ..., 27). */
+static uint32_t spread10(uint32_t x)
+{
+    x &= 1023;
+    x = (x | x << 16) & 0x030000FFu;
+    x = (x | x << 8) & 0x0300F00Fu;
+    x = (x | x << 4) & 0x030C30C3u;
+    x = (x | x << 2) & 0x09249249u;
+    return x;
+}
+
+/* Where a build takes its items' boxes from: an array by item index, or
+ * the facets of a polyhedron (computed where needed, from the vertices,
+ * rather than kept in a second array of boxes). */
+typedef struct box_source {
+    const geo_bbox *boxes;
+    const geo_poly *p;
+} box_source;
+
+static inline void source_box(const box_source *src, uint32_t i,
+                              geo_bbox *ret)
+{
+    if (src->boxes)
+        *ret = src->boxes[i];
+    else
+        geo_poly_facet_bbox(src->p, i, ret);
+}
+
+/* The state of one build: the items' Morton codes by item index, the
+ * items sorted by them. */
+typedef struct builder {
+    geo_fbvh *h;
+    const uint32_t *code;
+} builder;
+
+/* The split of items[lo, hi): the first item whose code has the highest
+ * differing bit set (codes are sorted, so a binary search), or the
+ * middle when all codes are equal; lo < mid < hi. */
+static uint32_t morton_split(const builder *b, uint32_t lo, uint32_t hi)
+{
+    const uint32_t *items = b->h->items;
+    uint32_t c0 = b->code[items[lo]], c1 = b->code[items[hi - 1]];
+    if (c0 == c1)
+        return lo + (hi - lo) / 2;
+    uint32_t bit = 31 - (uint32_t)__builtin_clz(c0 ^ c1);
+    uint32_t l = lo + 1, r = hi - 1;
+    while (l < r) {
+        uint32_t m = l + (r - l) / 2;
+        if (b->code[items[m]] >> bit & 1)
+            r = m;
+        else
+            l = m + 1;
+    }
+    return l;
+}
+
+/* A node's box is the union of its children's (a leaf's: of its
+ * items'), formed after the children are built. */
+static void build_node(const builder *b, uint32_t node, uint32_t lo,
+                       uint32_t hi)
+{
+    geo_fbvh *h = b->h;
+    geo_fbvh_node *n = &h->nodes[node];
+    fbox_empty(&n->box);
+    if (hi - lo <= GEO_FBVH_LEAF) {
+        for (uint32_t i = lo; i < hi; i++)
+            fbox_union(&n->box, &h->boxes[i]);
+        n->child = lo;
+        n->count = hi - lo;
+        return;
+    }
+    uint32_t mid = morton_split(b, lo, hi);
+    uint32_t child = h->nnodes;
+    h->nnodes += 2;
+    n->child = child;
+    n->count = 0;
+    build_node(b, child, lo, mid);
+    build_node(b, child + 1, mid, hi);
+    n = &h->nodes[node];
+    fbox_union(&n->box, &h->nodes[child].box);
+    fbox_union(&n->box, &h->nodes[child + 1].box);
+}
+
+/* Codes from the box centres, a radix sort of the items, the boxes
+ * written in leaf order (a gather: independent reads), then the nodes,
+ * whose array is cut to the nodes used (about 0.7 per item, of the 2 per
+ * item a tree may need). -ENOMEM. */
+static int build(geo_fbvh *h, const box_source *src)
+{
+    uint32_t n = h->nitems;
+    uint32_t *code = malloc(((size_t)n + 1) * sizeof *code);
+    uint32_t *tmp = malloc(((size_t)n + 1) * sizeof *tmp);
+    if (!code || !tmp) {
+        free(code);
+        free(tmp);
+        return -ENOMEM;
+    }
+    geo_bbox cb, b;
+    geo_bbox_empty(&cb);
+    for (uint32_t i = 0; i < n; i++) {
+        double c[3];
+        source_box(src, i, &b);
+        for (int k = 0; k < 3; k++)
+            c[k] = 0.5 * (b.lo[k] + b.hi[k]);
+        geo_bbox_add(&cb, c);
+    }
+    double scale[3];
+    for (int k = 0; k < 3; k++)
+        scale[k] = cb.hi[k] > cb.lo[k] ? 1024.0 / (cb.hi[k] - cb.lo[k]) : 0;
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t q[3];
+        source_box(src, i, &b);
+        for (int k = 0; k < 3; k++) {
+            double x = (0.5 * (b.lo[k] + b.hi[k]) - cb.lo[k]) * scale[k];
+            q[k] = x >= 0 ? (x < 1023 ? (uint32_t)x : 1023) : 0;
+        }
+        code[i] = spread10(q[0]) << 2 | spread10(q[1]) << 1 | spread10(q[2]);
+        h->items[i] = i;
+    }
+    /* least significant digit first, 10 bits a pass, stable */
+    for (int shift = 0; shift < 30; shift += 10) {
+        uint32_t count[1025] = {0};
+        for (uint32_t i = 0; i < n; i++)
+            count[(code[i] >> shift & 1023) + 1]++;
+        for (int d = 0; d < 1024; d++)
+            count[d + 1] += count[d];
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t it = h->items[i];
+            tmp[count[code[it] >> shift & 1023]++] = it;
+        }
+        memcpy(h->items, tmp, (size_t)n * sizeof *tmp);
+    }
+    free(tmp);
+    for (uint32_t k = 0; k < n; k++) {
+        source_box(src, h->items[k], &b);
+        fbox_of(&b, &h->boxes[k]);
+    }
+    if (n > 0) {
+        builder mb = {h, code};
+        h->nnodes = 1;
+        build_node(&mb, 0, 0, n);
+        geo_fbvh_node *cut =
+            realloc(h->nodes, (size_t)h->nnodes * sizeof *h->nodes);
+        if (cut)
+            h->nodes = cut;
+    }
+    free(code);
+    return 0;
+}
+
+static geo_fbvh *build_over(const box_source *src, uint32_t n, geo_err *err)
+{
+    geo_fbvh *h = calloc(1, sizeof *h);
+    if (h) {
+        h->nitems = n;
+        h->nodes = malloc((2 * (size_t)n + 1) * sizeof *h->nodes);
+        h->items = malloc(((size_t)n + 1) * sizeof *h->items);
+        h->boxes = malloc(((size_t)n + 1) * sizeof *h->boxes);
+    }
+    if (!h || !h->nodes || !h->items || !h->boxes || build(h, src) < 0) {
+        geo_err_set(err, -ENOMEM, "out of memory building the BVH");
+        return geo_fbvh_free(h);
+    }
+    return h;
+}
+
+geo_fbvh *geo_fbvh_build(const geo_bbox *boxes, uint32_t n, geo_err *err)
+{
+    box_source src = {boxes, NULL};
+    return build_over(&src, n, err);
+}
+
+geo_fbvh *geo_fbvh_build_facets(const geo_poly *p, geo_err *err)
+{
+    box_source src = {NULL, p};
+    return build_over(&src, p->nfacets, err);
+}
+
+bool geo_fbvh_pairs(const geo_fbvh *h, uint32_t na, uint32_t nb,
+                    geo_bvh_pair_fn visit, void *user)
+{
+    const geo_fbvh_node *a = &h->nodes[na], *b = &h->nodes[nb];
+    if (na == nb) {
+        if (a->count) {
+            for (uint32_t i = a->child; i < a->child + a->count; i++)
+                for (uint32_t j = i + 1; j < a->child + a->count; j++)
+                    if (fbox_overlap(&h->boxes[i], &h->boxes[j]) &&
+                        !visit(user, h->items[i], h->items[j]))
+                        return false;
+            return true;
+        }
+        return geo_fbvh_pairs(h, a->child, a->child, visit, user) &&
+               geo_fbvh_pairs(h, a->child + 1, a->child + 1, visit, user) &&
+               geo_fbvh_pairs(h, a->child, a->child + 1, visit, user);
+    }
+    if (!fbox_overlap(&a->box, &b->box))
+        return true;
+    if (a->count && b->count) {
+        for (uint32_t i = a->child; i < a->child + a->count; i++) {
+            if (!fbox_overlap(&h->boxes[i], &b->box))
+                continue;
+            for (uint32_t j = b->child; j < b->child + b->count; j++)
+                if (fbox_overlap(&h->boxes[i], &h->boxes[j]) &&
+                    !visit(user, h->items[i], h->items[j]))
+                    return false;
+        }
+        return true;
+    }
+    bool split_a = !a->count &&
+                   (b->count || fbox_extent(&a->box) >= fbox_extent(&b->box));
+    if (split_a)
+        return geo_fbvh_pairs(h, a->child, nb, visit, user) &&
+               geo_fbvh_pairs(h, a->child + 1, nb, visit, user);
+    return geo_fbvh_pairs(h, na, b->child, visit, user) &&
+           geo_fbvh_pairs(h, na, b->child + 1, visit, user);
+}
+
+uint32_t geo_fbvh_pair_tasks(const geo_fbvh *h, uint32_t *ret_a,
+                             uint32_t *ret_b, uint32_t cap)
+{
+    if (h->nitems == 0 || cap == 0)
+        return 0;
+    uint32_t n = 0;
+    ret_a[n] = 0;
+    ret_b[n] = 0;
+    n++;
+    /* expand tasks breadth-first while the list has room for the largest
+     * expansion (a self task of an internal node becomes three tasks, a
+     * cross task of two internal nodes up to four) */
+    for (uint32_t i = 0; i < n && n + 4 <= cap;) {
+        const geo_fbvh_node *a = &h->nodes[ret_a[i]],
+                            *b = &h->nodes[ret_b[i]];
+        if (a->count || b->count) {
+            i++;
+            continue;
+        }
+        uint32_t na = ret_a[i], nb = ret_b[i];
+        /* replace task i by its first sub-task, append the rest */
+        if (na == nb) {
+            uint32_t l = a->child, r = a->child + 1;
+            ret_a[i] = l, ret_b[i] = l;
+            ret_a[n] = r, ret_b[n] = r, n++;
+            ret_a[n] = l, ret_b[n] = r, n++;
+        } else {
+            uint32_t sub[4][2] = {{a->child, b->child},
+                                  {a->child, b->child + 1},
+                                  {a->child + 1, b->child},
+                                  {a->child + 1, b->child + 1}};
+            uint32_t kept = 0;
+            for (int k = 0; k < 4; k++) {
+                if (!fbox_overlap(&h->nodes[sub[k][0]].box,
+                                  &h->nodes[sub[k][1]].box))
+                    continue;
+                uint32_t slot = kept++ == 0 ? i : n++;
+                ret_a[slot] = sub[k][0];
+                ret_b[slot] = sub[k][1];
+            }
+            if (kept == 0) { /* drop task i: move the last one here */
+                n--;
+                ret_a[i] = ret_a[n];
+                ret_b[i] = ret_b[n];
+            }
+        }
+    }
+    return n;
+}

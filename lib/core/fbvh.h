@@ -1,0 +1,74 @@
+/* fbvh.h — a bounding-volume hierarchy for the pair search over many
+ * boxes (the self-intersection search over a model's facets), in half
+ * the memory of a geo_bvh: its boxes are single precision.
+ *
+ * Build in O(n): the boxes' centres are quantised to a 1024³ grid over
+ * their bounds and ordered along its Morton (Z-order) curve by a radix
+ * sort; a node splits its range where the curve leaves the half of the
+ * grid cell its codes share (the highest bit in which its first and last
+ * codes differ), or in the middle when they are all equal; leaves of at
+ * most GEO_FBVH_LEAF items. Its depth is at most 30 + log2 n. A box with
+ * a NaN centre goes to the grid's first cell.
+ *
+ * Boxes: each bound of an item's box is rounded outward to a float (lo
+ * down, hi up), so two items whose exact boxes overlap overlap here too;
+ * two may overlap here and not exactly (within the rounding, about 6e-8
+ * relative). Boxes only prune; the caller's exact test decides. A NaN
+ * bound stays NaN (its box overlaps nothing, as in a geo_bvh).
+ *
+ * Node layout as geo_bvh's: nodes[0] is the root; an internal node's
+ * children are nodes[child] and nodes[child + 1]; a leaf (count > 0)
+ * holds items[child .. child + count − 1], boxes[k] the box of items[k].
+ *
+ * Ownership: build allocates, geo_fbvh_free releases. Queries are
+ * read-only and thread-safe on a finished hierarchy. */
+#ifndef GEO_FBVH_H
+#define GEO_FBVH_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "bvh.h"
+
+#define GEO_FBVH_LEAF 4
+
+typedef struct geo_fbox {
+    float lo[3], hi[3];
+} geo_fbox;
+
+typedef struct geo_fbvh_node {
+    geo_fbox box;
+    uint32_t child; /* first child (internal) or first item slot (leaf) */
+    uint32_t count; /* 0 for internal nodes, else the leaf's item count */
+} geo_fbvh_node;
+
+typedef struct geo_fbvh {
+    uint32_t nnodes, nitems;
+    geo_fbvh_node *nodes; /* nnodes; nodes[0] is the root (if nitems > 0) */
+    uint32_t *items;      /* nitems item indices in leaf order */
+    geo_fbox *boxes;      /* nitems: boxes[k] is the box of items[k] */
+} geo_fbvh;
+
+/* Builds the hierarchy over n boxes (rounded outward, in leaf order).
+ * NULL on out-of-memory (err set). */
+geo_fbvh *geo_fbvh_build(const geo_bbox *boxes, uint32_t n, geo_err *err);
+
+/* geo_fbvh_build over the facets of p (their boxes computed where
+ * needed, never all at once in double precision). */
+geo_fbvh *geo_fbvh_build_facets(const geo_poly *p, geo_err *err);
+
+/* Releases h; accepts NULL; returns NULL. */
+geo_fbvh *geo_fbvh_free(geo_fbvh *h);
+
+/* Visits every unordered pair (a, b), a ≠ b, of items whose stored boxes
+ * overlap, below node pair (na, nb); na == nb enumerates the pairs within
+ * one subtree. Each pair is reported once. As geo_bvh_pairs. */
+bool geo_fbvh_pairs(const geo_fbvh *h, uint32_t na, uint32_t nb,
+                    geo_bvh_pair_fn visit, void *user);
+
+/* Splits the self-pair search of the whole tree into up to cap
+ * independent node pairs, as geo_bvh_pair_tasks. */
+uint32_t geo_fbvh_pair_tasks(const geo_fbvh *h, uint32_t *ret_a,
+                             uint32_t *ret_b, uint32_t cap);
+
+#endif
