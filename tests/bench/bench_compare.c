@@ -18,6 +18,7 @@
 #include "correct.h"
 #include "hausdorff.h"
 #include "model_io.h"
+#include "rigid.h"
 #include "testutil.h"
 #include "tu_load.h"
 
@@ -28,33 +29,6 @@ static double now(void)
     struct timespec t;
     clock_gettime(CLOCK_MONOTONIC, &t);
     return (double)t.tv_sec + (double)t.tv_nsec * 1e-9;
-}
-
-/* p turned by angle about unit k, then shifted by t. */
-static void move(geo_poly *p, const double k[3], double angle,
-                 const double t[3])
-{
-    double s = sin(angle), c = cos(angle), v = 1 - c, R[3][3] = {
-        {c + k[0] * k[0] * v, k[0] * k[1] * v - k[2] * s,
-         k[0] * k[2] * v + k[1] * s},
-        {k[1] * k[0] * v + k[2] * s, c + k[1] * k[1] * v,
-         k[1] * k[2] * v - k[0] * s},
-        {k[2] * k[0] * v - k[1] * s, k[2] * k[1] * v + k[0] * s,
-         c + k[2] * k[2] * v}};
-    for (uint32_t i = 0; i < p->nverts; i++) {
-        double x[3];
-        for (int r = 0; r < 3; r++)
-            x[r] = R[r][0] * p->verts[i][0] + R[r][1] * p->verts[i][1] +
-                   R[r][2] * p->verts[i][2] + t[r];
-        memcpy(p->verts[i], x, sizeof x);
-    }
-    for (uint32_t f = 0; f < p->nfacets; f++) {
-        double n[3], *q = p->planes[f];
-        for (int r = 0; r < 3; r++)
-            n[r] = R[r][0] * q[0] + R[r][1] * q[1] + R[r][2] * q[2];
-        q[3] -= n[0] * t[0] + n[1] * t[1] + n[2] * t[2];
-        memcpy(q, n, sizeof n);
-    }
 }
 
 static int run(const char *facet, char *const argv[])
@@ -125,16 +99,13 @@ int main(void)
         return 1;
     }
     geo_correct_report_clear(&crep);
-    double k[3] = {1, 0.2, 0.07}; /* tilted */
-    double kl = sqrt(k[0] * k[0] + k[1] * k[1] + k[2] * k[2]);
-    for (int i = 0; i < 3; i++)
-        k[i] /= kl;
+    const double k[3] = {1, 0.2, 0.07}; /* tilted */
     const double t[3] = {3, 1, -2};
     geo_poly *scan_r = geo_poly_copy(scan), *fixed_r = geo_poly_copy(fixed);
     if (!scan_r || !fixed_r)
         return 1;
-    move(scan_r, k, 123 * M_PI / 180, t);
-    move(fixed_r, k, 123 * M_PI / 180, t);
+    tu_rigid_move(scan_r, k, 123, t);
+    tu_rigid_move(fixed_r, k, 123, t);
 
     geo_compare_result res;
     double dt = best_compare(scan, scan_r, 10, &res);

@@ -18,39 +18,9 @@
 #include "halfspace.h"
 #include "hausdorff.h"
 #include "model_io.h"
+#include "rigid.h"
 #include "stone_sim.h"
 #include "tu_load.h"
-
-#define DEG (M_PI / 180.0)
-
-/* p turned by angle (degrees) about axis k (any length), then shifted. */
-static void move(geo_poly *p, const double axis[3], double deg,
-                 const double t[3])
-{
-    double l = sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
-    double k[3] = {axis[0] / l, axis[1] / l, axis[2] / l};
-    double s = sin(deg * DEG), c = cos(deg * DEG), v = 1 - c, R[3][3] = {
-        {c + k[0] * k[0] * v, k[0] * k[1] * v - k[2] * s,
-         k[0] * k[2] * v + k[1] * s},
-        {k[1] * k[0] * v + k[2] * s, c + k[1] * k[1] * v,
-         k[1] * k[2] * v - k[0] * s},
-        {k[2] * k[0] * v - k[1] * s, k[2] * k[1] * v + k[0] * s,
-         c + k[2] * k[2] * v}};
-    for (uint32_t i = 0; i < p->nverts; i++) {
-        double x[3];
-        for (int r = 0; r < 3; r++)
-            x[r] = R[r][0] * p->verts[i][0] + R[r][1] * p->verts[i][1] +
-                   R[r][2] * p->verts[i][2] + t[r];
-        memcpy(p->verts[i], x, sizeof x);
-    }
-    for (uint32_t f = 0; f < p->nfacets; f++) {
-        double n[3], *q = p->planes[f];
-        for (int r = 0; r < 3; r++)
-            n[r] = R[r][0] * q[0] + R[r][1] * q[1] + R[r][2] * q[2];
-        q[3] -= n[0] * t[0] + n[1] * t[1] + n[2] * t[2];
-        memcpy(q, n, sizeof n);
-    }
-}
 
 static geo_poly *design(void)
 {
@@ -76,7 +46,7 @@ static void test_turned_copy_comes_back(void **state)
     (void)state;
     geo_poly *a = design(), *b = geo_poly_copy(a);
     const double k[3] = {0.3, -0.7, 0.5}, t[3] = {1.5, -2, 0.7};
-    move(b, k, 17, t);
+    tu_rigid_move(b, k, 17, t);
     geo_compare_result r;
     compare_ok(a, b, NULL, &r);
     print_message("# 17 deg copy: rotation %.12f deg, hausdorff %.3g mm, "
@@ -148,7 +118,7 @@ static void test_moved_plane_shows_in_its_offset(void **state)
         fail_msg("%s", err.msg);
     assert_int_equal(b->nfacets, n);
     const double k[3] = {-0.2, 0.9, 0.4}, t[3] = {0.3, 0.2, -4};
-    move(b, k, 17, t);
+    tu_rigid_move(b, k, 17, t);
     geo_compare_result r;
     compare_ok(a, b, NULL, &r);
     assert_true(r.aligned);
@@ -181,7 +151,7 @@ static void test_symmetric_stone_takes_the_smallest_turn(void **state)
     (void)state;
     geo_poly *a = design(), *b = geo_poly_copy(a);
     const double z[3] = {0, 0, 1}, t[3] = {0.5, 0, 0};
-    move(b, z, 45 * 3, t);
+    tu_rigid_move(b, z, 45 * 3, t);
     geo_compare_result r;
     compare_ok(a, b, NULL, &r);
     assert_true(r.aligned);
@@ -203,7 +173,7 @@ static void check_scan(const geo_poly *truth, const geo_poly *scan,
     assert_int_equal(geo_hausdorff(truth, scan, &h0, NULL), 0);
     geo_poly *b = geo_poly_copy(scan);
     const double k[3] = {1, 0.2, 0.07}, t[3] = {3, 1, -2};
-    move(b, k, 123, t);
+    tu_rigid_move(b, k, 123, t);
     geo_compare_result r;
     compare_ok(truth, b, NULL, &r);
     print_message("# %s: hausdorff %.4f mm as placed, %.4f mm after "
