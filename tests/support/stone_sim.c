@@ -333,6 +333,7 @@ geo_poly *sim_stone(enum sim_cut cut, uint64_t seed)
 
 typedef struct pt2 {
     double x, y;
+    uint32_t id; /* the stone's vertex it is the projection of */
 } pt2;
 
 static int cmp_pt2(const void *a, const void *b)
@@ -372,10 +373,10 @@ static double gauss(uint64_t *rng)
     return sqrt(-2 * log(u)) * cos(2 * M_PI * v);
 }
 
-/* Adds the half-spaces of the silhouette seen along direction d, with the
- * projection basis (e1, e2) so that (e1, e2, d) is right-handed. */
+/* Adds the half-spaces of the silhouette seen along e1 × e2, projected
+ * onto (e1, e2). */
 static void add_silhouette(plane_list *l, const geo_poly *stone,
-                           const double d[3], const double e1[3],
+                           const double e1[3],
                            const double e2[3], double noise, uint64_t *rng)
 {
     uint32_t n = stone->nverts;
@@ -383,6 +384,7 @@ static void add_silhouette(plane_list *l, const geo_poly *stone,
     for (uint32_t i = 0; i < n; i++) {
         p[i].x = geo_vdot(stone->verts[i], e1) + noise * gauss(rng);
         p[i].y = geo_vdot(stone->verts[i], e2) + noise * gauss(rng);
+        p[i].id = i;
     }
     uint32_t k = hull2(p, n, h);
     for (uint32_t i = 0; i < k; i++) {
@@ -396,9 +398,27 @@ static void add_silhouette(plane_list *l, const geo_poly *stone,
         }
         add_plane(l, nrm, p0);
     }
-    (void)d;
     free(p);
     free(h);
+}
+
+uint32_t sim_silhouette(const geo_poly *stone, const double e1[3],
+                        const double e2[3], uint32_t *ids)
+{
+    uint32_t n = stone->nverts;
+    pt2 *p = malloc((n + 1) * sizeof *p), *h = malloc((2 * n + 2) * sizeof *h);
+    uint32_t k = 0;
+    if (p && h) {
+        for (uint32_t i = 0; i < n; i++)
+            p[i] = (pt2){geo_vdot(stone->verts[i], e1),
+                         geo_vdot(stone->verts[i], e2), i};
+        k = hull2(p, n, h);
+        for (uint32_t i = 0; i < k; i++)
+            ids[i] = h[i].id;
+    }
+    free(p);
+    free(h);
+    return k;
 }
 
 geo_poly *sim_scan(const geo_poly *stone, uint32_t k, double noise,
@@ -422,19 +442,29 @@ void sim_rotate_z(geo_poly *p, double angle)
     }
 }
 
+void sim_view_basis(uint32_t k, double phase, uint32_t i, double e1[3],
+                    double e2[3])
+{
+    if (i >= k) { /* the top view, along z */
+        memcpy(e1, (double[3]){1, 0, 0}, 3 * sizeof *e1);
+        memcpy(e2, (double[3]){0, 1, 0}, 3 * sizeof *e2);
+        return;
+    }
+    double th = phase + M_PI * i / k;
+    memcpy(e1, (double[3]){-sin(th), cos(th), 0}, 3 * sizeof *e1);
+    memcpy(e2, (double[3]){0, 0, 1}, 3 * sizeof *e2);
+}
+
 geo_poly *sim_scan_phase(const geo_poly *stone, uint32_t k, double noise,
                          double phase, uint64_t seed)
 {
     uint64_t rng = seed * 0xd1b54a32d192ed03ULL + 7;
     plane_list l = {0};
-    for (uint32_t i = 0; i < k; i++) {
-        double th = phase + M_PI * i / k;
-        double d[3] = {cos(th), sin(th), 0};
-        double e1[3] = {-sin(th), cos(th), 0}, e2[3] = {0, 0, 1};
-        add_silhouette(&l, stone, d, e1, e2, noise, &rng);
+    for (uint32_t i = 0; i <= k; i++) {
+        double e1[3], e2[3];
+        sim_view_basis(k, phase, i, e1, e2);
+        add_silhouette(&l, stone, e1, e2, noise, &rng);
     }
-    double d[3] = {0, 0, 1}, e1[3] = {1, 0, 0}, e2[3] = {0, 1, 0};
-    add_silhouette(&l, stone, d, e1, e2, noise, &rng);
     geo_poly *p = sim_halfspace_intersection(l.v, l.n, 10.0);
     free(l.v);
     return p;

@@ -57,6 +57,19 @@ geo_poly *sim_scan(const geo_poly *stone, uint32_t k, double noise,
 geo_poly *sim_scan_phase(const geo_poly *stone, uint32_t k, double noise,
                          double phase, uint64_t seed);
 
+/* The projection basis of view i of sim_scan_phase's k + 1: for i < k
+ * the view along azimuth phase + 180° · i / k (e1 horizontal, e2 = z),
+ * for i = k the top view (e1 = x, e2 = y). */
+void sim_view_basis(uint32_t k, double phase, uint32_t i, double e1[3],
+                    double e2[3]);
+
+/* The stone's vertices on the noise-free silhouette seen along e1 × e2
+ * (projected onto (e1, e2)), counter-clockwise, into ids (room for
+ * stone->nverts); returns how many (0 on out-of-memory). Vertices in the
+ * middle of a silhouette edge are not on it. */
+uint32_t sim_silhouette(const geo_poly *stone, const double e1[3],
+                        const double e2[3], uint32_t *ids);
+
 /* Turns p about z by angle (radians), vertices and planes. */
 void sim_rotate_z(geo_poly *p, double angle);
 
