@@ -36,6 +36,7 @@
 #include "convex.h"
 #include "correct.h"
 #include "fidelity.h"
+#include "halfspace.h"
 #include "model_io.h"
 #include "scan_bound.h"
 #include "stone_sim.h"
@@ -121,6 +122,20 @@ static geo_poly *correct(const geo_poly *scan, enum method m, bool *valid,
             geo_convex_planes_find(scan, views, noise, fit, &cp, &err) < 0) {
             snprintf(msg, len, "%s", err.msg);
             return geo_poly_free(p);
+        }
+        if (fit == GEO_CONVEX_FIT_SILHOUETTE) {
+            /* the adjustment needs the planes' intersection and which
+             * plane bounds each of its facets */
+            geo_poly *est = NULL;
+            uint32_t *src = NULL;
+            enum geo_halfspace_status st;
+            double sc;
+            if (geo_halfspace_intersect(&cp.planes[0][0], cp.nplanes,
+                                        GEO_HALFSPACE_MERGE * geo_poly_size(scan),
+                                        &est, &src, &st, &err) == 0)
+                geo_convex_refine(scan, est, src, cp.planes, cp.nplanes, &sc);
+            geo_poly_free(est);
+            free(src);
         }
         geo_poly_free(p);
         p = sim_halfspace_intersection(&cp.planes[0][0], cp.nplanes, 10.0);
