@@ -16,12 +16,15 @@
  * auto = geo_correct with the convex path on (default), merge =
  * its defaults (the convex path off: the Palachev 2012 merge only), planes = geo_convex_planes_find
  * intersected by the simulator (the planes alone, no checks); --fit
- * the convex path's plane fit (convex.h).
+ * the convex path's plane fit (convex.h; with --method planes the
+ * silhouette fit adjusts the planes, still without the checks).
  *
  * One Markdown row per scan (--rows; always without --suite): cut, seed,
  * K, noise, facets truth / scan / corrected, recovered % (normal within
  * 0.1° for K ≥ 400, 0.25° below, within 5 µm of the true centroid, one to
- * one), angle error median and p95 (°), Hausdorff to the truth of the
+ * one), attainable % (the Cramér–Rao bound of the simulated
+ * silhouettes, scan_bound.h; "—" for a scan read from a file), angle
+ * error median and p95 (°), Hausdorff to the truth of the
  * scan and of the result (µm) and their ratio, facet count error,
  * validity, ms. Then the totals per cut and K, the worst scans, and a
  * last line: scans, recovered %, scans meeting the issue's four
