@@ -60,7 +60,7 @@ static const char *const op_keys[PROTO_OP_COUNT][8] = {
                                   "schedule"},
     [PROTO_OP_TRIANGULATE] = {"op", "quad_levels", "binary_levels", "fill",
                               "refine", "fair", "sharpen"},
-    [PROTO_OP_FILL] = {"op", "weight", "refine", "fair"},
+    [PROTO_OP_FILL] = {"op", "weight", "refine", "fair", "parts_overlap"},
     [PROTO_OP_STITCH] = {"op"},
     [PROTO_OP_REPORT] = {"op", "gear", "axis", "scan"},
     [PROTO_OP_COMPARE] = {"op", "reference", "axis"},
@@ -521,6 +521,9 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
             r = get_bool(o, "refine", pl, &op->u.fill.refine, err);
         if (r == 0)
             r = get_bool(o, "fair", pl, &op->u.fill.fair, err);
+        if (r == 0)
+            r = get_bool(o, "parts_overlap", pl, &op->u.fill.parts_overlap,
+                         err);
         return r;
     }
     }
@@ -794,6 +797,8 @@ static json_t *op_to_json(const proto_op *op)
         e |= json_object_set_new(o, "refine",
                                  json_boolean(op->u.fill.refine));
         e |= json_object_set_new(o, "fair", json_boolean(op->u.fill.fair));
+        e |= json_object_set_new(o, "parts_overlap",
+                                 json_boolean(op->u.fill.parts_overlap));
         break;
     default:
         break;

@@ -35,7 +35,8 @@
  *                 sharpen [true]} — an F-rep input (lib/frep/triangulate.h)
  *                 to a mesh; only as the first op of a job whose input is
  *                 a frep-object/1
- *   fill {weight "area"|"length" ["area"], refine [true], fair [true]}
+ *   fill {weight "area"|"length" ["area"], refine [true], fair [true],
+ *         parts_overlap [false]}
  *   stitch
  *   report {gear 1..100000 [96], axis?: [x, y, z], scan [false]} — the
  *                 stone's tiers, proportions and facet table
@@ -161,6 +162,7 @@ typedef struct proto_op {
         struct {
             bool weight_length;  /* weight by edge length (else area) */
             bool refine, fair;
+            bool parts_overlap;  /* geo_mesh_fill_opts.parts_overlap */
         } fill;
     } u;
 } proto_op;

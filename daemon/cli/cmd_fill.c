@@ -1,5 +1,6 @@
 /* cmd_fill.c — `facet fill MODEL -o OUT [--weight area|edges|angle]
- * [--no-refine] [--no-fair] [--report FILE] [--keep-invalid]`: closes
+ * [--no-refine] [--no-fair] [--parts-overlap] [--report FILE]
+ * [--keep-invalid]`: closes
  * the holes of a mesh (lib/mesh/fill.h), writes it, prints a one-line
  * JSON summary and, with --report, the whole report (every hole with the
  * strategy that closed it or why it is open, the validity of the result
@@ -21,7 +22,8 @@
 
 static const char USAGE[] =
     "usage: facet fill MODEL -o OUT [--weight area|edges|angle] [--no-refine]\n"
-    "                  [--no-fair] [--report FILE] [--keep-invalid]\n"
+    "                  [--no-fair] [--parts-overlap] [--report FILE]\n"
+    "                  [--keep-invalid]\n"
     "\n"
     "Closes every hole (boundary loop) of MODEL and writes OUT. A planar hole\n"
     "(a missing facet) gets one planar facet; any other is triangulated with\n"
@@ -37,6 +39,10 @@ static const char USAGE[] =
     "                    length) or angle (least dihedral angle, then area)\n"
     "  --no-refine       keep the bare triangulation\n"
     "  --no-fair         do not fair the refined patches\n"
+    "  --parts-overlap   MODEL is an assembly of overlapping parts: a patch\n"
+    "                    may cross another shell that its own shell\n"
+    "                    already crosses (no two parts come to cross that\n"
+    "                    did not); never its own shell\n"
     "  --report FILE     write the full JSON report to FILE\n"
     "  --keep-invalid    write OUT even when the result is not valid (the\n"
     "                    exit status is still 1)\n"
@@ -59,12 +65,13 @@ int cmd_fill(int argc, char **argv)
     geo_mesh_fill_opts o;
     geo_mesh_fill_opts_default(&o);
     enum { O_OUT, O_REPORT, O_WEIGHT, O_NO_REFINE, O_NO_FAIR,
-           O_KEEP_INVALID };
+           O_PARTS_OVERLAP, O_KEEP_INVALID };
     static const cli_opt opts[] = {
         {"-o", O_OUT, true},              {"--output", O_OUT, true},
         {"--report", O_REPORT, true},     {"--weight", O_WEIGHT, true},
         {"--no-refine", O_NO_REFINE, false},
         {"--no-fair", O_NO_FAIR, false},
+        {"--parts-overlap", O_PARTS_OVERLAP, false},
         {"--keep-invalid", O_KEEP_INVALID, false},
         {NULL, 0, false},
     };
@@ -89,6 +96,7 @@ int cmd_fill(int argc, char **argv)
             break;
         case O_NO_REFINE: o.fill.refine = false; break;
         case O_NO_FAIR: o.fill.fair = GEO_FAIR_NONE; break;
+        case O_PARTS_OVERLAP: o.parts_overlap = true; break;
         case O_KEEP_INVALID: keep_invalid = true; break;
         default: r = CLI_ARGS_ERROR;
         }

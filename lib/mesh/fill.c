@@ -81,11 +81,41 @@ typedef struct mfill {
     kept_patch *kept;
     size_t nkept, cap_kept;
     const geo_ctx *ctx;
+    /* parts_overlap only (else shell is NULL): the shell of every facet
+     * of out (a kept patch's is its hole's), the shell of the hole being
+     * filled (GEO_NONE when its loop borders several), and the sorted
+     * shell pairs (lo << 32 | hi) that cross each other in p */
+    uint32_t *shell;
+    size_t cap_shell;
+    uint32_t hole_shell;
+    uint64_t *crossed;
+    size_t ncrossed;
 } mfill;
 
 /* ---- the check ---- */
 
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* Whether the hole's patch may cross facet g of out: only with
+ * parts_overlap, when g lies on another shell that the hole's own shell
+ * already crossed in p (the overlap of two parts, not a new one). */
+static bool crossing_allowed(const mfill *M, uint32_t g)
+{
+    if (!M->shell || M->hole_shell == GEO_NONE)
+        return false;
+    uint32_t a = M->hole_shell, b = M->shell[g];
+    if (a == b)
+        return false;
+    uint64_t key = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+    return bsearch(&key, M->crossed, M->ncrossed, sizeof key, cmp_u64);
+}
+
 typedef struct pair_probe {
+    const mfill *M;
     const geo_poly *out;
     uint32_t f;             /* the patch facet being tested */
     const geo_facet_shape *sf;
@@ -95,6 +125,8 @@ typedef struct pair_probe {
 static bool probe_facet(void *user, uint32_t g)
 {
     pair_probe *pp = user;
+    if (crossing_allowed(pp->M, g))
+        return true;
     geo_facet_shape sg;
     geo_facet_shape_of(pp->out, g, &sg);
     int r = geo_facets_intersect(pp->out, pp->f, g, pp->sf, &sg);
@@ -162,7 +194,7 @@ static int patch_intersects(mfill *M, uint32_t f0, uint32_t f1, uint8_t *bad)
     for (uint32_t k = 0; k < n && (!hit || bad); k++) {
         if (bad && bad[k])
             continue;
-        pair_probe pp = {M->out, f0 + k, &sh[k], 0};
+        pair_probe pp = {M, M->out, f0 + k, &sh[k], 0};
         if (M->bvh)
             geo_bvh_query_box(M->bvh, &boxes[k], probe_facet, &pp);
         for (size_t q = 0; q < M->nkept && pp.hit == 0; q++) {
@@ -208,6 +240,13 @@ static int keep_patch(mfill *M, uint32_t f0, uint32_t f1)
     if (geo_grow((void **)&M->kept, &M->cap_kept, M->nkept + 1,
                  sizeof *M->kept) < 0)
         return -ENOMEM;
+    if (M->shell) {
+        if (geo_grow((void **)&M->shell, &M->cap_shell, f1,
+                     sizeof *M->shell) < 0)
+            return -ENOMEM;
+        for (uint32_t f = f0; f < f1; f++)
+            M->shell[f] = M->hole_shell;
+    }
     kept_patch *kp = &M->kept[M->nkept++];
     kp->f0 = f0;
     kp->f1 = f1;
@@ -984,6 +1023,72 @@ kept:
     return 0;
 }
 
+/* parts_overlap: the shells of p (components across two-corner edges,
+ * as lib/inspect/orient.h counts them) and the pairs of shells that
+ * cross each other (every intersecting facet pair of p, exact). */
+static int find_overlaps(mfill *M, const geo_ctx *ctx, geo_err *err)
+{
+    const geo_poly *p = M->p;
+    const geo_topo *t = M->t;
+    uint32_t n = p->nfacets;
+    M->cap_shell = n ? n : 1;
+    if (!(M->shell = malloc(M->cap_shell * sizeof *M->shell)))
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    for (uint32_t f = 0; f < n; f++)
+        M->shell[f] = f;
+    uint32_t *u = M->shell; /* union-find, roots the smallest facet */
+    for (uint32_t c = 0; c < t->ncorners; c++) {
+        if (t->mate[c] == GEO_NONE)
+            continue;
+        uint32_t a = t->corner_facet[c], b = t->corner_facet[t->mate[c]];
+        while (u[a] != a)
+            a = u[a] = u[u[a]];
+        while (u[b] != b)
+            b = u[b] = u[u[b]];
+        if (a != b)
+            u[a > b ? a : b] = a < b ? a : b;
+    }
+    for (uint32_t f = 0; f < n; f++)
+        u[f] = u[u[f]]; /* roots are smaller: one pass flattens */
+    geo_selfint_opts so;
+    geo_selfint_opts_default(&so);
+    so.max_pairs = UINT32_MAX;
+    geo_selfint si;
+    int rc = geo_selfint_find(p, M->bvh, &so, ctx, &si, err);
+    if (rc < 0)
+        return rc;
+    M->crossed = malloc(((size_t)si.npairs + 1) * sizeof *M->crossed);
+    if (!M->crossed) {
+        geo_selfint_clear(&si);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    size_t m = 0;
+    for (uint32_t k = 0; k < si.npairs; k++) {
+        uint32_t a = u[si.pairs[k][0]], b = u[si.pairs[k][1]];
+        if (a != b)
+            M->crossed[m++] = a < b ? (uint64_t)a << 32 | b
+                                    : (uint64_t)b << 32 | a;
+    }
+    geo_selfint_clear(&si);
+    qsort(M->crossed, m, sizeof *M->crossed, cmp_u64);
+    size_t k = 0;
+    for (size_t i = 0; i < m; i++)
+        if (k == 0 || M->crossed[i] != M->crossed[k - 1])
+            M->crossed[k++] = M->crossed[i];
+    M->ncrossed = k;
+    return 0;
+}
+
+/* The shell every edge of the loop borders, or GEO_NONE. */
+static uint32_t loop_shell(const mfill *M, const uint32_t *lc, uint32_t n)
+{
+    uint32_t s = M->shell[M->t->corner_facet[lc[0]]];
+    for (uint32_t k = 1; k < n; k++)
+        if (M->shell[M->t->corner_facet[lc[k]]] != s)
+            return GEO_NONE;
+    return s;
+}
+
 /* An open mesh has no inside: once every hole is closed, a shell that
  * came out turned inside out (consistent, negative volume) has all its
  * facets reversed. A shell with inconsistent facets is left as it is
@@ -1045,6 +1150,10 @@ int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
     if (nloops > 0 && mo.check && p->nfacets > 0 &&
         !(M.bvh = geo_bvh_build_facets(p, err)))
         goto fail;
+    if (nloops > 0 && mo.check && mo.parts_overlap && p->nfacets > 0 &&
+        (rc = find_overlaps(&M, ctx, err)) < 0)
+        goto fail;
+    rc = -ENOMEM;
     for (uint32_t l = 0; l < nloops; l++) {
         geo_mesh_hole *h = &R.holes[l];
         uint32_t n = lstart[l + 1] - lstart[l];
@@ -1066,6 +1175,7 @@ int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
             for (uint32_t k = 0; k < n; k++)
                 w[k] = p->fidx[lc[n - 1 - k]];
             loop_ref L = {w, lc, n};
+            M.hole_shell = M.shell ? loop_shell(&M, lc, n) : GEO_NONE;
             if ((rc = fill_one(&M, &mo, &L, h, &R, err)) < 0)
                 goto fail;
         }
@@ -1099,6 +1209,7 @@ done:
     geo_bvh_free(M.bvh);
     geo_topo_free(t);
     free(M.kept);
+    free(M.shell), free(M.crossed);
     free(lstart), free(lcorn), free(w);
     if (rc < 0 || !rep)
         geo_mesh_fill_report_clear(&R);

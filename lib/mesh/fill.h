@@ -97,6 +97,12 @@ typedef struct geo_mesh_fill_opts {
     bool planar;        /* [true] planar simple loops get one facet */
     bool check;         /* [true] reject patches that intersect */
     bool fallback;      /* [true] retry rejected patches (see above) */
+    bool parts_overlap; /* [false] the mesh is an assembly of parts that
+                           overlap: a patch may cross a facet of another
+                           shell when its own shell already crossed that
+                           shell in p (no pair of parts comes to cross
+                           that did not); it may still cross nothing of
+                           its own shell, of other shells, or itself */
 } geo_mesh_fill_opts;
 
 /* Fills the defaults above (fill: geo_fill_opts_default). */

@@ -3,7 +3,8 @@
  * exactly), holes touching at a vertex are separate loops, a large hole
  * of a curved mesh is filled validly at the density around it, and a
  * hole whose every patch would intersect the mesh stays open with its
- * reason and nothing added. */
+ * reason and nothing added, unless the mesh is an assembly whose parts
+ * already cross there (parts_overlap). */
 #include "testutil.h"
 
 #include <errno.h>
@@ -223,16 +224,18 @@ static void test_large_curved_hole_filled_validly_at_mesh_density(void **s)
     geo_poly_free(p);
 }
 
-static void test_unfillable_hole_stays_open_with_reason(void **s)
+/* A unit box without its top and a closed column 0.2 wide standing in the
+ * opening from z = zlo to 50, far taller than any dome the lift tries:
+ * every disc spanning the rim crosses the column. From zlo < 0 the column
+ * goes through the floor too (the two parts already cross); from zlo in
+ * (0, 1) it stands free inside the box (they do not). */
+static geo_poly *open_box_with_column(double zlo)
 {
-    (void)s;
     const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
     geo_poly *p = tu_box(lo, hi);
     bool keep[6] = {true, false, true, true, true, true}; /* no top */
     assert_int_equal(geo_poly_compact(p, keep, NULL, NULL), 0);
-    /* a closed column through the opening and the floor, far taller than
-     * any dome the lift tries: every disc spanning the rim crosses it */
-    const double blo[3] = {0.4, 0.4, -1}, bhi[3] = {0.6, 0.6, 50};
+    const double blo[3] = {0.4, 0.4, zlo}, bhi[3] = {0.6, 0.6, 50};
     geo_poly *b = tu_box(blo, bhi);
     uint32_t off = p->nverts;
     for (uint32_t v = 0; v < b->nverts; v++)
@@ -245,6 +248,13 @@ static void test_unfillable_hole_stays_open_with_reason(void **s)
         memcpy(p->planes[nf], b->planes[f], sizeof p->planes[0]);
     }
     geo_poly_free(b);
+    return p;
+}
+
+static void test_unfillable_hole_stays_open_with_reason(void **s)
+{
+    (void)s;
+    geo_poly *p = open_box_with_column(-1);
     uint32_t nv = p->nverts, nf = p->nfacets;
     geo_mesh_fill_report rep;
     assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
@@ -255,6 +265,53 @@ static void test_unfillable_hole_stays_open_with_reason(void **s)
     assert_int_equal(rep.holes[0].facets_added, 0);
     assert_true(rep.nrejected >= 1);
     assert_int_equal(p->nverts, nv);
+    assert_int_equal(p->nfacets, nf);
+    geo_mesh_fill_report_clear(&rep);
+    geo_poly_free(p);
+}
+
+/* parts_overlap: the box's lid may cross the column only where the two
+ * parts crossed already. Through the floor: the hole is filled, and every
+ * crossing of the result is between a box facet (the patch's included)
+ * and a column facet, none inside one part. Standing free inside: the
+ * lid would make two parts cross that did not, so the hole stays open. */
+static void test_parts_overlap_crosses_only_parts_that_crossed(void **s)
+{
+    (void)s;
+    geo_mesh_fill_opts o;
+    geo_mesh_fill_opts_default(&o);
+    o.parts_overlap = true;
+    geo_poly *p = open_box_with_column(-1);
+    const uint32_t column0 = 5, column1 = 10; /* after the 5 box facets */
+    uint32_t nf = p->nfacets;
+    geo_mesh_fill_report rep;
+    assert_int_equal(geo_fill(p, &o, NULL, &rep, NULL), 0);
+    assert_int_equal(rep.nfilled, 1);
+    assert_true(rep.holes[0].status == GEO_HOLE_FILLED_PLANAR ||
+                rep.holes[0].status == GEO_HOLE_FILLED);
+    assert_true(p->nfacets > nf);
+    geo_stats st;
+    geo_inspect_opts io;
+    geo_inspect_opts_default(&io);
+    io.selfint.max_pairs = 100000;
+    assert_int_equal(geo_inspect(p, &io, NULL, &st, NULL), 0);
+    assert_true(st.selfint.npairs > 0);
+    assert_int_equal(st.selfint.npairs, st.selfint.count);
+    for (uint32_t k = 0; k < st.selfint.npairs; k++) {
+        uint32_t a = st.selfint.pairs[k][0], b = st.selfint.pairs[k][1];
+        bool a_col = a >= column0 && a <= column1;
+        bool b_col = b >= column0 && b <= column1;
+        assert_true(a_col != b_col);
+    }
+    geo_stats_clear(&st);
+    geo_mesh_fill_report_clear(&rep);
+    geo_poly_free(p);
+
+    p = open_box_with_column(0.2);
+    nf = p->nfacets;
+    assert_int_equal(geo_fill(p, &o, NULL, &rep, NULL), 0);
+    assert_int_equal(rep.nfilled, 0);
+    assert_int_equal(rep.holes[0].status, GEO_HOLE_INTERSECTS);
     assert_int_equal(p->nfacets, nf);
     geo_mesh_fill_report_clear(&rep);
     geo_poly_free(p);
@@ -405,6 +462,7 @@ int main(void)
         cmocka_unit_test(test_holes_touching_at_a_vertex_are_two_loops),
         cmocka_unit_test(test_large_curved_hole_filled_validly_at_mesh_density),
         cmocka_unit_test(test_unfillable_hole_stays_open_with_reason),
+        cmocka_unit_test(test_parts_overlap_crosses_only_parts_that_crossed),
         cmocka_unit_test(test_open_sheet_is_closed_by_a_dome),
         cmocka_unit_test(test_rim_whose_chords_are_mesh_edges_gets_a_dome),
         cmocka_unit_test(test_every_weight_fills_a_nonplanar_hole_validly),
