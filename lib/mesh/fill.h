@@ -40,8 +40,11 @@
  *    radius, scaled by their distance in edges from the loop over the
  *    largest), which clears an open sheet or a thin wall a flat lid
  *    would lie on. A hole that no attempt
- *    fills validly stays open with status GEO_HOLE_INTERSECTS. No hole is ever reported filled with
- *    nothing added.
+ *    fills validly stays open with status GEO_HOLE_INTERSECTS. No hole
+ *    is ever reported filled with nothing added. With parts_overlap the
+ *    check lets a patch cross a facet of another shell (component across
+ *    two-corner edges) that its own shell already crossed in p — the
+ *    exact self-intersection pairs of p, found once — and nothing else.
  *
  * 5. When every hole is closed, a shell that is consistent but turned
  *    inside out (an open mesh had no inside to face) has all its facets

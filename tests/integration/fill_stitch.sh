@@ -55,6 +55,12 @@ check "no invalid result is written" test ! -e "$T/linked.out.off"
 "$F" fill "$T/linked.off" -o "$T/linked.out.off" --keep-invalid >/dev/null 2>&1
 expect_eq "--keep-invalid still exits 1" 1 "$?"
 check "--keep-invalid writes the result for inspection" test -s "$T/linked.out.off"
+# the box and the column are two parts that already cross (the column
+# goes through the floor): --parts-overlap lets the lid cross the column
+"$F" fill "$T/linked.off" -o "$T/po.off" --parts-overlap --keep-invalid \
+    >"$T/po.line" 2>/dev/null
+expect_eq "--parts-overlap: still exit 1 (the parts cross: not a valid solid)" 1 "$?"
+check "--parts-overlap fills the hole the column goes through" grep -q '"filled":1,.*"left_open":0' "$T/po.line"
 
 # the crown and the pavilion of the true stone, the facets between
 # -0.3 < z < 0.3 (the girdle band) removed
@@ -136,6 +142,10 @@ ID=$(jstr id)
 wait_job "$ID"
 expect_eq "the fill job fails instead of passing an open model on" failed "$STATE_OF"
 check "the job says why" grep -q "not a valid closed solid.*holes left open.*intersects_mesh" "$BODY"
+printf '{"pipeline":[{"op":"fill","parts_overlap":1}],"model":%s}' "$(cat "$T/linked.json")" >"$T/po.body"
+post_json /v1/jobs "$T/po.body"
+expect_eq "parts_overlap must be a boolean (422)" 422 "$CODE"
+check "the 422 names parts_overlap" grep -q "parts_overlap" "$BODY"
 
 mk_meshes() { # $1 pipeline member (may be empty) $2.. mesh files
     local f; f=$(mktemp "$T/body.XXXXXX"); local pl=$1; shift
