@@ -118,7 +118,7 @@ json_t *proto_stitch_report_to_json(const geo_stitch_report *r)
         return NULL;
     return json_pack(
         "{s:s, s:I, s:[I,I], s:[I,I], s:[I,I], s:[I,I], s:b, s:b, s:b, s:I,"
-        " s:I, s:I, s:f, s:f, s:I, s:I, s:I, s:I, s:I, s:o}",
+        " s:I, s:I, s:f, s:f, s:I, s:I, s:I, s:I, s:I, s:b, s:o}",
         "method", geo_stitch_method_name(r->method), "planes",
         (json_int_t)r->planes, "loops", (json_int_t)r->loops1, (json_int_t)r->loops2, "joined",
         (json_int_t)r->loop1, (json_int_t)r->loop2, "loop_vertices",
@@ -130,6 +130,6 @@ json_t *proto_stitch_report_to_json(const geo_stitch_report *r)
         r->segment, "band_vertices", (json_int_t)r->band_vertices,
         "band_facets", (json_int_t)r->band_facets, "welded",
         (json_int_t)r->welded, "welded_loops", (json_int_t)r->welded_loops,
-        "inserted", (json_int_t)r->inserted,
+        "inserted", (json_int_t)r->inserted, "trimmed", r->trimmed,
         "openings", fill);
 }

@@ -15,6 +15,7 @@
 #include "halfspace.h"
 #include "predicates.h"
 #include "stats.h"
+#include "stitch_trim.h"
 #include "topo.h"
 #include "vec.h"
 
@@ -782,9 +783,10 @@ static int make_rims(const geo_poly *m1, const loop *l1, const loop *l2,
     return 0;
 }
 
-int geo_stitch(const geo_poly *m1, const geo_poly *m2,
-               const geo_stitch_opts *opts, const geo_ctx *ctx, geo_poly *out,
-               geo_stitch_report *rep, geo_err *err)
+static int stitch_pair(const geo_poly *m1, const geo_poly *m2,
+                       const geo_stitch_opts *opts, const geo_ctx *ctx,
+                       geo_poly *out, geo_stitch_report *rep, geo_err *err,
+                       bool may_trim)
 {
     geo_stitch_opts o;
     if (opts)
@@ -833,6 +835,32 @@ int geo_stitch(const geo_poly *m1, const geo_poly *m2,
     const loop *l1 = &L1.l[R.loop1], *l2 = &L2.l[R.loop2];
     R.nloop1 = l1->n;
     R.nloop2 = l2->n;
+    double wtol = 1e3 * geo_eps_of_size(geo_poly_size(m1) +
+                                        geo_poly_size(m2));
+    if (may_trim) {
+        /* step 5c: halves that overlap are cut back to one plane first */
+        geo_poly *t1, *t2;
+        double mid[4];
+        rc = geo_stitch_trim(m1, l1->v, l1->n, m2, l2->v, l2->n, wtol, &t1,
+                             &t2, mid);
+        if (rc < 0)
+            goto oom;
+        if (rc == 1) {
+            geo_stitch_report T;
+            rc = stitch_pair(t1, t2, &o, ctx, out, &T, err, false);
+            geo_poly_free(t1);
+            geo_poly_free(t2);
+            if (rc < 0)
+                goto fail;
+            T.trimmed = true;
+            T.loops1 = R.loops1;
+            T.loops2 = R.loops2;
+            T.nloop1 = R.nloop1;
+            T.nloop2 = R.nloop2;
+            R = T;
+            goto done;
+        }
+    }
     double a1[3], g1[3], g2[3];
     geo_vsub(l2->c, l1->c, a1);
     /* the offset test uses the loops' length-weighted centres: a cut
@@ -857,8 +885,7 @@ int geo_stitch(const geo_poly *m1, const geo_poly *m2,
     R.band = parallel && geo_vlen(lat) < 0.5 * fmin(r1, r2);
     /* or: planar loops, each wholly beyond the other's plane — the walls
      * of a slab (step 5b), however far off-axis a small loop sits */
-    double wall[4], wtol = 1e3 * geo_eps_of_size(geo_poly_size(m1) +
-                                                 geo_poly_size(m2));
+    double wall[4];
     if (!R.band && parallel)
         R.band = cap_plane(m1, l1->v, l1->n, m2, l2->v, l2->n, wtol, wall) &&
                  cap_plane(m2, l2->v, l2->n, m1, l1->v, l1->n, wtol, wall);
@@ -1165,6 +1192,13 @@ done:
     else
         geo_stitch_report_clear(&R);
     return rc;
+}
+
+int geo_stitch(const geo_poly *m1, const geo_poly *m2,
+               const geo_stitch_opts *opts, const geo_ctx *ctx, geo_poly *out,
+               geo_stitch_report *rep, geo_err *err)
+{
+    return stitch_pair(m1, m2, opts, ctx, out, rep, err, true);
 }
 
 /* Union-find root with path halving. */

@@ -77,6 +77,10 @@
  *    finds it valid; otherwise (loops not planar, a pair not convex
  *    about the gap, no valid solid) steps 6–8 build the band
  *    (report: method).
+ * 5c. Halves that overlap — planar loops, each wholly inside the other's
+ *    body — are first cut back to the plane midway between the loops
+ *    (lib/mesh/stitch_trim.h), then stitched as halves that meet there
+ *    (report: trimmed).
  * 6. The vertex matrix P: row 0 the A ends, the last row the B ends
  *    (B_j repeated where several meridians meet it), between them K rows
  *    of points dividing each meridian evenly, K + 1 = round(mean meridian
@@ -150,6 +154,10 @@ typedef struct geo_stitch_report {
     uint32_t inserted;         /* loop vertices put into the other loop's
                                   edges (one polyline sampled differently,
                                   step 5a) */
+    bool trimmed;              /* the halves overlapped and were cut back
+                                  to the plane midway between their loops
+                                  first (step 5c, lib/mesh/stitch_trim.h);
+                                  the other fields are of the trimmed pair */
     geo_mesh_fill_report fill; /* the openings closed afterwards */
 } geo_stitch_report;
 

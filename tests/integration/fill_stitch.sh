@@ -4,7 +4,7 @@
 # volume), `facet stitch` joins the stone's crown and pavilion (a band of
 # facets removed between them) into one valid solid by the band, the
 # halves of the stone cut by two planes back into the stone by the
-# facet planes, and refuses overlapping halves; facetd runs
+# facet planes, and overlapping halves trimmed and welded; facetd runs
 # fill_holes on a model and stitch on a job with "meshes": [m1, m2],
 # refusing meshes it cannot stitch with 422.
 . "$(dirname "$0")/lib.sh" "$@"
@@ -115,13 +115,19 @@ python3 - "$T/cmp.json" <<'PY' && ok "the stitched stone is the stone (Hausdorff
 import json, sys
 sys.exit(0 if json.load(open(sys.argv[1]))["hausdorff_mm"] < 1e-3 else 1)
 PY
-# halves that overlap by 0.4 mm cannot be joined into a valid solid:
-# exit 1 with the reasons, nothing written
+# halves that overlap by 0.4 mm: both are cut back to the plane midway
+# between their rims, then welded there
 open_half "0,0,-1,-0.2" "$T/over-top.json" && open_half "0,0,1,-0.2" "$T/over-bot.json"
-"$F" stitch "$T/over-top.json" "$T/over-bot.json" -o "$T/over.json" 2>"$T/err" >/dev/null
-expect_eq "overlapping halves fail the stitch (exit 1)" 1 "$?"
-check "the error says the result is not valid" grep -q "not a valid closed solid, not written" "$T/err"
-check "no invalid result is written" test ! -e "$T/over.json"
+out=$("$F" stitch "$T/over-top.json" "$T/over-bot.json" -o "$T/over.json" \
+    --report "$T/over.rep" 2>"$T/err")
+expect_eq "overlapping halves are stitched (exit 0)" 0 "$?"
+check "trimmed, then welded, validly" grep -q '"method":"weld".*"left_open":0,"valid":true' <<<"$out"
+check "the report says the halves were trimmed" grep -q '"trimmed": true' "$T/over.rep"
+"$F" compare "$MODELS/brilliant.truth.json" "$T/over.json" >"$T/cmp.json"
+python3 - "$T/cmp.json" <<'PY' && ok "the trimmed stitch is the stone (Hausdorff < 1 um)" || not_ok "the trimmed stitch is the stone (Hausdorff < 1 um)"
+import json, sys
+sys.exit(0 if json.load(open(sys.argv[1]))["hausdorff_mm"] < 1e-3 else 1)
+PY
 "$F" stitch "$MODELS/brilliant.truth.json" "$T/bot.json" -o "$T/x.json" 2>"$T/err"
 expect_eq "a closed mesh cannot be stitched (exit 1)" 1 "$?"
 check "the error says why" grep -q "no free-edge loop" "$T/err"

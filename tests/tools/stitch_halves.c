@@ -150,11 +150,12 @@ int main(int argc, char **argv)
         printf("{\"case\":%d,\"tilt_deg\":%.1f,\"z\":%.3f,\"band_mm\":%.3f,"
                "\"lost_facets\":%u,\"stitched\":%s,\"valid\":%s,\"hausdorff_um\":%.1f,"
                "\"method\":\"%s\",\"planes\":%u,\"band\":%s,\"welded\":%u,"
-               "\"inserted\":%u,"
+               "\"inserted\":%u,\"trimmed\":%s,"
                "\"left_open\":%u,\"ms\":%.2f}\n",
                i, tilt * 180 / M_PI, z, band, lost, r == 0 ? "true" : "false",
                valid ? "true" : "false", hd * 1000,
-               geo_stitch_method_name(rep.method), rep.planes, rep.band ? "true" : "false", rep.welded, rep.inserted, rep.fill.nopen, ms);
+               geo_stitch_method_name(rep.method), rep.planes, rep.band ? "true" : "false", rep.welded, rep.inserted,
+               rep.trimmed ? "true" : "false", rep.fill.nopen, ms);
         geo_stitch_report_clear(&rep);
         geo_poly_free(top);
         geo_poly_free(bot);

@@ -6,8 +6,9 @@
  * each other (algorithm 2) and the openings closed; a gem cut unevenly
  * near its girdle is joined as a band; halves of convex stones come back
  * from their facet planes extended across the gap, a non-convex pair by
- * the band, halves on one polyline sampled differently are welded; the
- * pipeline form
+ * the band, halves on one polyline sampled differently are welded,
+ * overlapping halves trimmed back to one plane and welded; the pipeline
+ * form
  * takes a model of two pieces and refuses any other. */
 #include "testutil.h"
 
@@ -420,6 +421,50 @@ static void test_random_convex_halves_are_valid(void **s)
     assert_true(planes >= 10);
 }
 
+/* Halves that overlap (a band of −0.05…−0.5 mm: each reaches past the
+ * cut) are cut back to the plane midway between their loops and welded
+ * there: the body itself comes back (its volume to 1e-9), on random
+ * convex bodies and on the brilliant; halves apart by a gap are not
+ * trimmed. */
+static void test_overlapping_halves_are_trimmed_back_to_the_body(void **s)
+{
+    (void)s;
+    uint64_t seed = 11;
+    geo_err err = {{0}};
+    for (int i = 0; i < 13; i++) {
+        double c[3] = {0, 0, 0};
+        geo_poly *m = i < 12 ? gen_convex_polyhedron(200 + i, 24, c, 3.0)
+                             : proto_model_read_file(
+                                   tu_model_path("brilliant.truth.json"),
+                                   PROTO_FMT_UNKNOWN, NULL, &err);
+        assert_non_null(m);
+        double th = geo_rand_unit(&seed) * 0.3, az = geo_rand_unit(&seed) * 6.28;
+        double n[3] = {sin(th) * cos(az), sin(th) * sin(az), cos(th)};
+        double d = (geo_rand_unit(&seed) - 0.5) * (i < 12 ? 1.5 : 0.4),
+               band = 0.05 + geo_rand_unit(&seed) * 0.45;
+        for (int gap = 0; gap < 2; gap++) {
+            geo_poly *a, *b;
+            halves(m, n, d, gap ? band : -band, &a, &b);
+            geo_poly *out = geo_poly_new();
+            geo_stitch_report rep;
+            assert_int_equal(geo_stitch(a, b, NULL, NULL, out, &rep, NULL), 0);
+            if (!is_valid(out))
+                fail_msg("case %d (%s) not valid", i, gap ? "gap" : "overlap");
+            assert_int_equal(rep.trimmed, !gap);
+            if (!gap) {
+                assert_int_equal(rep.method, GEO_STITCH_WELD);
+                double v = geo_poly_volume(out), vm = geo_poly_volume(m);
+                if (!(fabs(v - vm) <= 1e-9 * vm))
+                    fail_msg("case %d: volume %.12f, the body's %.12f", i, v,
+                             vm);
+            }
+            geo_stitch_report_clear(&rep);
+            geo_poly_free(a), geo_poly_free(b), geo_poly_free(out);
+        }
+        geo_poly_free(m);
+    }
+}
+
 /* A five-pointed star prism cut across: the planes of its sides meet
  * inside it (not convex about the gap), so their intersection is not the
  * loops and the band of meridians joins the halves, validly and on the
@@ -579,6 +624,7 @@ int main(void)
         cmocka_unit_test(test_halves_whose_loops_coincide_are_welded),
         cmocka_unit_test(test_every_pair_of_coinciding_loops_is_welded),
         cmocka_unit_test(test_gem_halves_cut_unevenly_are_joined_as_a_band),
+        cmocka_unit_test(test_overlapping_halves_are_trimmed_back_to_the_body),
         cmocka_unit_test(test_convex_stone_comes_back_from_its_facet_planes),
         cmocka_unit_test(test_random_convex_halves_are_valid),
         cmocka_unit_test(test_non_convex_pair_is_joined_by_the_band),
