@@ -1052,7 +1052,9 @@ static int find_overlaps(mfill *M, const geo_ctx *ctx, geo_err *err)
         u[f] = u[u[f]]; /* roots are smaller: one pass flattens */
     geo_selfint_opts so;
     geo_selfint_opts_default(&so);
-    so.max_pairs = UINT32_MAX;
+    /* a pair of shells missed past the cap only allows less (32 MB of
+     * pairs at most, whatever a hostile mesh holds) */
+    so.max_pairs = 1u << 22;
     geo_selfint si;
     int rc = geo_selfint_find(p, M->bvh, &so, ctx, &si, err);
     if (rc < 0)

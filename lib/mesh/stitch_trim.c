@@ -96,7 +96,7 @@ static geo_poly *trim_half(const geo_poly *p, const uint32_t *v, uint32_t n,
     if (rc < 0 || rep.empty || rep.unchanged || rep.new_facets == 0 ||
         rep.first_new_facet == GEO_NONE)
         goto done;
-    if (!(keep = malloc(out->nfacets * sizeof *keep))) {
+    if (!(keep = malloc(((size_t)out->nfacets + 1) * sizeof *keep))) {
         *oom = true;
         goto done;
     }
