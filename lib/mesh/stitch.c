@@ -367,20 +367,11 @@ static bool cap_plane(const geo_poly *pr, const uint32_t *rv, uint32_t rn,
                       const geo_poly *po, const uint32_t *ov, uint32_t on,
                       double tol, double pl[4])
 {
-    double nw[3] = {0, 0, 0}, c[3] = {0, 0, 0}, oc[3] = {0, 0, 0};
-    for (uint32_t q = 0; q < rn; q++) {
-        const double *a = pr->verts[rv[q]], *b = pr->verts[rv[(q + 1) % rn]];
-        nw[0] += (a[1] - b[1]) * (a[2] + b[2]);
-        nw[1] += (a[2] - b[2]) * (a[0] + b[0]);
-        nw[2] += (a[0] - b[0]) * (a[1] + b[1]);
-        geo_vmadd(c, 1.0 / rn, a, c);
-    }
+    double oc[3] = {0, 0, 0};
     for (uint32_t q = 0; q < on; q++)
         geo_vmadd(oc, 1.0 / on, po->verts[ov[q]], oc);
-    if (!(geo_vnormalize(nw) > 0))
+    if (!geo_loop_plane(pr, rv, rn, pl))
         return false;
-    memcpy(pl, nw, sizeof nw);
-    pl[3] = -geo_vdot(nw, c);
     if (geo_plane_eval(pl, oc) > 0)
         for (int k = 0; k < 4; k++)
             pl[k] = -pl[k];
