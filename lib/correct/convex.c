@@ -203,6 +203,23 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
                     "(bound %.2g mm)", out, allow);
         goto done;
     }
+    /* each scan vertex's distance outside the result (the largest of its
+     * planes' values), once per vertex: its facets only differ in the
+     * allowance */
+    double *outside = malloc(((size_t)p->nverts + 1) * sizeof *outside);
+    if (!outside) {
+        r = geo_err_set(err, -ENOMEM, "out of memory");
+        goto done;
+    }
+    for (uint32_t v = 0; v < p->nverts; v++) {
+        double d = -INFINITY;
+        for (uint32_t g = 0; g < q->nfacets; g++) {
+            double e = geo_plane_eval(q->planes[g], p->verts[v]);
+            if (e > d)
+                d = e;
+        }
+        outside[v] = d;
+    }
     double worst = 0, worst_allow = 0;
     for (uint32_t f = 0; f < p->nfacets; f++) {
         uint32_t k = cp.kept[cp.group[f]];
@@ -210,16 +227,14 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
         uint32_t n = geo_poly_facet_size(p, f);
         const uint32_t *fv = geo_poly_facet(p, f);
         for (uint32_t i = 0; i < n; i++) {
-            const double *x = p->verts[fv[i]];
-            double d = -INFINITY;
-            for (uint32_t g = 0; g < q->nfacets; g++)
-                d = fmax(d, geo_plane_eval(q->planes[g], x));
+            double d = outside[fv[i]];
             if (d - ROOF_FACTOR * a > worst - worst_allow) {
                 worst = d;
                 worst_allow = ROOF_FACTOR * a;
             }
         }
     }
+    free(outside);
     if (worst > worst_allow) {
         r = decline(rep, "the scan lies %.2g mm outside the result (bound "
                     "%.2g mm)", worst, worst_allow);
