@@ -37,6 +37,29 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+/* How many of the n sorted values lie in [lo, hi]. */
+static uint32_t count_within(const double *v, uint32_t n, double lo,
+                             double hi)
+{
+    uint32_t a = 0, b = n; /* first ≥ lo */
+    while (a < b) {
+        uint32_t m = a + (b - a) / 2;
+        if (v[m] < lo)
+            a = m + 1;
+        else
+            b = m;
+    }
+    uint32_t c = a, d = n; /* first > hi */
+    while (c < d) {
+        uint32_t m = c + (d - c) / 2;
+        if (v[m] <= hi)
+            c = m + 1;
+        else
+            d = m;
+    }
+    return c - a;
+}
+
 /* Azimuths closer than this (radians) are one grid value: far above the
  * rounding of unit normals (1e-16 / their horizontal length, which is at
  * least 1e-3 here) and far below any view step (π/100000). */
@@ -89,15 +112,24 @@ int geo_merge_view_grid(const geo_poly *p, uint32_t *ret_views,
         if (k >= 2 && k <= 1e5 && fabs(M_PI / k - s) <= 4 * AZ_TOL) {
             double step = M_PI / k;
             /* the facets on the grid, its offset tried at the residues
-             * of up to 64 facets (the grid need not start at 0) */
+             * of up to 64 facets (the grid need not start at 0): a facet
+             * is on it when its residue is within AZ_TOL of the offset,
+             * round the step — counted in the sorted residues (gap's
+             * storage, no longer needed), not by a remainder per pair */
+            double *res = gap;
+            for (uint32_t j = 0; j < n; j++)
+                res[j] = fmod(az[j], step);
+            double *sorted = az; /* the azimuths are not read again */
+            memcpy(sorted, res, (size_t)n * sizeof *sorted);
+            qsort(sorted, n, sizeof *sorted, cmp_double);
             uint32_t bon = 0;
             for (uint32_t i = 0; i < n; i += 1 + n / 64) {
-                double o = fmod(az[i], step);
-                uint32_t on = 0;
-                for (uint32_t j = 0; j < n; j++) {
-                    double d = fmod(az[j] - o + 2 * M_PI, step);
-                    on += d <= AZ_TOL || step - d <= AZ_TOL;
-                }
+                double o = res[i];
+                uint32_t on = count_within(sorted, n, o - AZ_TOL, o + AZ_TOL);
+                if (o - AZ_TOL < 0)
+                    on += count_within(sorted, n, o - AZ_TOL + step, step);
+                if (o + AZ_TOL >= step)
+                    on += count_within(sorted, n, 0, o + AZ_TOL - step);
                 if (on > bon)
                     bon = on;
             }
