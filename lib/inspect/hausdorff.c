@@ -10,6 +10,15 @@
 #include "surface.h"
 #include "vec.h"
 
+/* The larger of worst and p's distance² to s (compared, not fmax: a
+ * libm call per sample). */
+static double above(const geo_surface *s, const double p[3], double worst,
+                    uint32_t *hint)
+{
+    double d = geo_surface_dist2_above(s, p, worst, hint);
+    return d > worst ? d : worst;
+}
+
 static int directed(const geo_poly *a, const geo_poly *b, const geo_ctx *ctx,
                     double *ret, geo_err *err)
 {
@@ -43,14 +52,13 @@ static int directed(const geo_poly *a, const geo_poly *b, const geo_ctx *ctx,
             geo_vscale(m, 0.5, m);
             if (!seen[vs[i]]) {
                 seen[vs[i]] = 1;
-                worst = fmax(worst, geo_surface_dist2_above(
-                                        s, a->verts[vs[i]], worst, &hint));
+                worst = above(s, a->verts[vs[i]], worst, &hint);
             }
-            worst = fmax(worst, geo_surface_dist2_above(s, m, worst, &hint));
+            worst = above(s, m, worst, &hint);
         }
         if (n) {
             geo_vscale(c, 1.0 / n, c);
-            worst = fmax(worst, geo_surface_dist2_above(s, c, worst, &hint));
+            worst = above(s, c, worst, &hint);
         }
     }
     free(seen);

@@ -153,9 +153,12 @@ static double facet_dist2(const geo_poly *g, uint32_t f, const double p[3],
     }
     if (wn != 0)
         return h * h;
-    double best = INFINITY;
-    for (uint32_t i = 0; i < n; i++)
-        best = fmin(best, seg_dist2(p, g->verts[vs[i]], g->verts[vs[(i + 1) % n]]));
+    double best = INFINITY; /* compared, not fmin: a libm call here */
+    for (uint32_t i = 0; i < n; i++) {
+        double d = seg_dist2(p, g->verts[vs[i]], g->verts[vs[(i + 1) % n]]);
+        if (d < best)
+            best = d;
+    }
     return best;
 }
 
