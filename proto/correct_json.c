@@ -177,6 +177,32 @@ json_t *proto_collapse_report_to_json(const geo_collapse_report *r)
     return finish(o, ok);
 }
 
+/* The convex path: null when not asked for, else whether it gave the
+ * result, and why not when it did not. */
+static json_t *convex_to_json(const geo_correct_report *r)
+{
+    if (!r->convex_tried)
+        return json_null();
+    const geo_convex_report *c = &r->convex_report;
+    json_t *o = json_object();
+    bool ok = o != NULL;
+    if (!ok)
+        return NULL;
+    put(o, "used", json_boolean(r->convex), &ok);
+    put(o, "reason", r->convex || !c->reason[0] ? json_null()
+                                                : json_string(c->reason),
+        &ok);
+    put(o, "groups", json_integer(c->groups), &ok);
+    put(o, "planes", json_integer(c->planes), &ok);
+    put(o, "dropped", json_integer(c->dropped), &ok);
+    put(o, "redundant", json_integer(c->redundant), &ok);
+    put(o, "narrow", json_integer(c->narrow), &ok);
+    put(o, "concavity", num(c->concavity), &ok);
+    put(o, "deviation", num(c->deviation), &ok);
+    put(o, "bound", num(c->bound), &ok);
+    return finish(o, ok);
+}
+
 json_t *proto_correct_report_to_json(const geo_correct_report *r)
 {
     json_t *o = json_object();
@@ -201,6 +227,7 @@ json_t *proto_correct_report_to_json(const geo_correct_report *r)
                            "max_displacement", r->cluster_max_displacement);
     put(o, "clusters", cl, &ok);
     put(o, "merge", proto_merge_report_to_json(&r->merge), &ok);
+    put(o, "convex", convex_to_json(r), &ok);
     put(o, "moved_vertices", moved_to_json(r->moved, r->nmoved), &ok);
     put(o, "valid", json_boolean(r->after.valid), &ok);
     put(o, "before", proto_stats_to_json(&r->before), &ok);

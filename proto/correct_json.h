@@ -25,7 +25,10 @@
  *              "reoriented_facets", "clusters": {"found", "collapsed",
  *              "rolled_back", "max_displacement"}, "merge": merge (its
  *              group ids numbered per pass, see lib/correct/correct.h; "facet" of
- *              a group is its index after that pass), "moved_vertices":
+ *              a group is its index after that pass), "convex": null
+ *              (not asked for) or {"used", "reason" (why not, or null),
+ *              "groups", "planes", "dropped", "redundant", "narrow",
+ *              "concavity", "deviation", "bound"}, "moved_vertices":
  *              [...], "valid": after.valid, "before": stats, "after":
  *              stats (proto/stats_json.h)}
  *

@@ -65,7 +65,7 @@ static const char *const op_keys[PROTO_OP_COUNT][8] = {
     [PROTO_OP_REPORT] = {"op", "gear", "axis", "scan"},
     [PROTO_OP_COMPARE] = {"op", "reference", "axis"},
     [PROTO_OP_CORRECT] = {"op", "radius", "max_angle_deg", "max_deviation",
-                       "views"},
+                       "views", "convex"},
 };
 
 static const char *const sched_names[] = {"local-exp", "scaled",
@@ -408,6 +408,8 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
         if (r == 0)
             r = get_u32(o, "views", pl, 0, PROTO_MAX_VIEWS,
                         &op->u.correct.views, err);
+        if (r == 0)
+            r = get_bool(o, "convex", pl, &op->u.correct.convex, err);
         return r;
     case PROTO_OP_MERGE: {
         r = get_number(o, "max_angle_deg", pl, 0, 90, true,
@@ -741,6 +743,8 @@ static json_t *op_to_json(const proto_op *op)
                                  json_real(op->u.correct.max_deviation));
         e |= json_object_set_new(o, "views",
                                  json_integer(op->u.correct.views));
+        e |= json_object_set_new(o, "convex",
+                                 json_boolean(op->u.correct.convex));
         break;
     case PROTO_OP_MOVE:
         e |= json_object_set_new(o, "vertex", json_integer(op->u.move.vertex));

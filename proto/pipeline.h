@@ -17,7 +17,8 @@
  *                 [0: 5e-4 × the model's size], views ≥ 0 (the scanner's
  *                 contours over 180°) [0: read off the model], groups?:
  *                 [[facet, facet, ...], ...]}
- *   correct {radius, max_angle_deg, max_deviation, views: as above} — the
+ *   correct {radius, max_angle_deg, max_deviation, views: as above,
+ *                 convex [false]} — the
  *                 whole post-scan correction of lib/correct/correct.h
  *   cut {plane: [a, b, c, d]} — keeps plane(p) ≤ 0; (a,b,c) non-zero,
  *                 normalised to unit length (d scaled with it) unless
@@ -127,6 +128,7 @@ typedef struct proto_op {
         struct {
             double radius, max_angle_deg, max_deviation;
             uint32_t views;      /* scanner views over 180°, 0: read off */
+            bool convex;         /* geo_correct_opts.convex */
         } correct;
         struct {
             uint32_t vertex;

@@ -304,6 +304,7 @@ static int run_correct(const proto_op *op, geo_poly **model, const geo_ctx *ctx,
     o.merge.max_angle_deg = op->u.correct.max_angle_deg;
     o.merge.max_deviation = op->u.correct.max_deviation;
     o.merge.views = op->u.correct.views;
+    o.convex = op->u.correct.convex;
     geo_correct_report rep;
     int r = geo_correct(*model, &o, ctx, &rep, err);
     if (r < 0)

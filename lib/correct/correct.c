@@ -147,6 +147,7 @@ int geo_correct(geo_poly *p, const geo_correct_opts *opts,
     rep->noise = o.merge.noise > 0 ? o.merge.noise : 0;
     uint32_t rounds = o.max_rounds ? o.max_rounds : 1;
     if (o.convex) {
+        rep->convex_tried = true;
         geo_poly *c = NULL;
         r = geo_correct_convex(q, o.merge.views, rep->noise,
                                geo_merge_max_deviation(&o.merge, q),

@@ -65,6 +65,7 @@ typedef struct geo_correct_report {
     double noise;               /* the scan's surface noise they used, mm
                                    (0: no noise test) */
     uint32_t rounds;
+    bool convex_tried;          /* the convex path was asked for */
     bool convex;                /* the convex path gave the result */
     geo_convex_report convex_report; /* what it did, or why not */
     uint32_t vertices_before, facets_before, vertices_after, facets_after;
