@@ -60,7 +60,8 @@ static const char *const op_keys[PROTO_OP_COUNT][8] = {
                                   "schedule"},
     [PROTO_OP_TRIANGULATE] = {"op", "quad_levels", "binary_levels", "fill",
                               "refine", "fair", "sharpen"},
-    [PROTO_OP_FILL] = {"op", "weight", "refine", "fair", "parts_overlap"},
+    [PROTO_OP_FILL] = {"op", "weight", "refine", "fair", "parts_overlap",
+                       "remove_crossing"},
     [PROTO_OP_STITCH] = {"op"},
     [PROTO_OP_REPORT] = {"op", "gear", "axis", "scan"},
     [PROTO_OP_COMPARE] = {"op", "reference", "axis"},
@@ -526,6 +527,9 @@ static int parse_params(const json_t *o, const place *pl, proto_op *op,
         if (r == 0)
             r = get_bool(o, "parts_overlap", pl, &op->u.fill.parts_overlap,
                          err);
+        if (r == 0)
+            r = get_bool(o, "remove_crossing", pl,
+                         &op->u.fill.remove_crossing, err);
         return r;
     }
     }
@@ -803,6 +807,8 @@ static json_t *op_to_json(const proto_op *op)
         e |= json_object_set_new(o, "fair", json_boolean(op->u.fill.fair));
         e |= json_object_set_new(o, "parts_overlap",
                                  json_boolean(op->u.fill.parts_overlap));
+        e |= json_object_set_new(o, "remove_crossing",
+                                 json_boolean(op->u.fill.remove_crossing));
         break;
     default:
         break;

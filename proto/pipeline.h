@@ -37,7 +37,7 @@
  *                 to a mesh; only as the first op of a job whose input is
  *                 a frep-object/1
  *   fill {weight "area"|"length" ["area"], refine [true], fair [true],
- *         parts_overlap [false]}
+ *         parts_overlap [false], remove_crossing [false]}
  *   stitch
  *   report {gear 1..100000 [96], axis?: [x, y, z], scan [false]} — the
  *                 stone's tiers, proportions and facet table
@@ -165,6 +165,7 @@ typedef struct proto_op {
             bool weight_length;  /* weight by edge length (else area) */
             bool refine, fair;
             bool parts_overlap;  /* geo_mesh_fill_opts.parts_overlap */
+            bool remove_crossing; /* geo_mesh_fill_opts.remove_crossing */
         } fill;
     } u;
 } proto_op;

@@ -363,6 +363,7 @@ static int run_fill(const proto_op *op, geo_poly **model,
     o.fill.refine = op->u.fill.refine;
     o.fill.fair = op->u.fill.fair ? GEO_FAIR_UNIFORM : GEO_FAIR_NONE;
     o.parts_overlap = op->u.fill.parts_overlap;
+    o.remove_crossing = op->u.fill.remove_crossing;
     geo_mesh_fill_report rep;
     int r = geo_fill(*model, &o, ctx, &rep, err);
     if (r < 0)

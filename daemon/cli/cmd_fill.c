@@ -1,6 +1,6 @@
 /* cmd_fill.c — `facet fill MODEL -o OUT [--weight area|edges|angle]
- * [--no-refine] [--no-fair] [--parts-overlap] [--report FILE]
- * [--keep-invalid]`: closes
+ * [--no-refine] [--no-fair] [--parts-overlap] [--remove-crossing]
+ * [--report FILE] [--keep-invalid]`: closes
  * the holes of a mesh (lib/mesh/fill.h), writes it, prints a one-line
  * JSON summary and, with --report, the whole report (every hole with the
  * strategy that closed it or why it is open, the validity of the result
@@ -22,8 +22,8 @@
 
 static const char USAGE[] =
     "usage: facet fill MODEL -o OUT [--weight area|edges|angle] [--no-refine]\n"
-    "                  [--no-fair] [--parts-overlap] [--report FILE]\n"
-    "                  [--keep-invalid]\n"
+    "                  [--no-fair] [--parts-overlap] [--remove-crossing]\n"
+    "                  [--report FILE] [--keep-invalid]\n"
     "\n"
     "Closes every hole (boundary loop) of MODEL and writes OUT. A planar hole\n"
     "(a missing facet) gets one planar facet; any other is triangulated with\n"
@@ -43,6 +43,11 @@ static const char USAGE[] =
     "                    may cross another shell that its own shell\n"
     "                    already crosses (no two parts come to cross that\n"
     "                    did not); never its own shell\n"
+    "  --remove-crossing first remove every facet that crosses another and\n"
+    "                    touches a hole (a flap folded over the opening),\n"
+    "                    so that hole grows by it; kept only when every\n"
+    "                    hole then closes and at most 5% of the facets go\n"
+    "                    (the report's facets_removed)\n"
     "  --report FILE     write the full JSON report to FILE\n"
     "  --keep-invalid    write OUT even when the result is not valid (the\n"
     "                    exit status is still 1)\n"
@@ -65,13 +70,14 @@ int cmd_fill(int argc, char **argv)
     geo_mesh_fill_opts o;
     geo_mesh_fill_opts_default(&o);
     enum { O_OUT, O_REPORT, O_WEIGHT, O_NO_REFINE, O_NO_FAIR,
-           O_PARTS_OVERLAP, O_KEEP_INVALID };
+           O_PARTS_OVERLAP, O_REMOVE_CROSSING, O_KEEP_INVALID };
     static const cli_opt opts[] = {
         {"-o", O_OUT, true},              {"--output", O_OUT, true},
         {"--report", O_REPORT, true},     {"--weight", O_WEIGHT, true},
         {"--no-refine", O_NO_REFINE, false},
         {"--no-fair", O_NO_FAIR, false},
         {"--parts-overlap", O_PARTS_OVERLAP, false},
+        {"--remove-crossing", O_REMOVE_CROSSING, false},
         {"--keep-invalid", O_KEEP_INVALID, false},
         {NULL, 0, false},
     };
@@ -97,6 +103,7 @@ int cmd_fill(int argc, char **argv)
         case O_NO_REFINE: o.fill.refine = false; break;
         case O_NO_FAIR: o.fill.fair = GEO_FAIR_NONE; break;
         case O_PARTS_OVERLAP: o.parts_overlap = true; break;
+        case O_REMOVE_CROSSING: o.remove_crossing = true; break;
         case O_KEEP_INVALID: keep_invalid = true; break;
         default: r = CLI_ARGS_ERROR;
         }

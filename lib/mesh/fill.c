@@ -1117,6 +1117,169 @@ static int turn_outward(geo_poly *p, geo_mesh_fill_report *R, geo_err *err)
     return rc;
 }
 
+/* remove_crossing: which facets go. Of the intersecting pairs with a
+ * facet on a rim (a vertex on a hole's border), enough facets that touch
+ * a rim to leave none of those pairs whole: greedily, the facet in the
+ * most such pairs first (ties: the smaller area, then the lower index) —
+ * a flap folded over an opening crosses what it lies across, so it goes
+ * and the wall it pierces stays. keep[f] false for each; the count. */
+#define REMOVE_MAX_FRACTION 0.05
+
+typedef struct cand {
+    uint32_t f, pairs;
+    double area;
+} cand;
+
+static int cmp_cand(const void *a, const void *b)
+{
+    const cand *x = a, *y = b;
+    if (x->pairs != y->pairs)
+        return x->pairs > y->pairs ? -1 : 1;
+    if (x->area != y->area)
+        return x->area < y->area ? -1 : 1;
+    return (x->f > y->f) - (x->f < y->f);
+}
+
+static int choose_removed(const geo_poly *p, const uint8_t *rim,
+                          const geo_selfint *si, bool *keep,
+                          uint32_t *ret_n)
+{
+    uint32_t nf = p->nfacets, *deg = calloc((size_t)nf + 1, sizeof *deg);
+    uint8_t *onrim = calloc((size_t)nf + 1, 1);
+    uint32_t *start = NULL, *adj = NULL;
+    cand *c = NULL;
+    int rc = -ENOMEM;
+    *ret_n = 0;
+    if (!deg || !onrim)
+        goto done;
+    for (uint32_t f = 0; f < nf; f++) {
+        keep[f] = true;
+        const uint32_t *fv = geo_poly_facet(p, f);
+        for (uint32_t i = 0; i < geo_poly_facet_size(p, f) && !onrim[f]; i++)
+            onrim[f] = rim[fv[i]];
+    }
+    /* the pairs that matter: a distinct pair with a facet on a rim */
+#define COUNTS(a, b) ((a) != (b) && (onrim[a] || onrim[b]))
+    for (uint32_t k = 0; k < si->npairs; k++) {
+        uint32_t a = si->pairs[k][0], b = si->pairs[k][1];
+        if (COUNTS(a, b))
+            deg[a]++, deg[b]++;
+    }
+    start = malloc(((size_t)nf + 1) * sizeof *start);
+    if (!start)
+        goto done;
+    start[0] = 0;
+    for (uint32_t f = 0; f < nf; f++)
+        start[f + 1] = start[f] + deg[f];
+    adj = malloc(((size_t)start[nf] + 1) * sizeof *adj);
+    c = malloc(((size_t)nf + 1) * sizeof *c);
+    if (!adj || !c)
+        goto done;
+    memset(deg, 0, (size_t)nf * sizeof *deg);
+    for (uint32_t k = 0; k < si->npairs; k++) {
+        uint32_t a = si->pairs[k][0], b = si->pairs[k][1];
+        if (COUNTS(a, b)) {
+            adj[start[a] + deg[a]++] = b;
+            adj[start[b] + deg[b]++] = a;
+        }
+    }
+#undef COUNTS
+    uint32_t nc = 0;
+    for (uint32_t f = 0; f < nf; f++)
+        if (onrim[f] && deg[f] > 0) {
+            double av[3];
+            geo_poly_facet_area_vector(p, f, av);
+            c[nc++] = (cand){f, deg[f], geo_vlen(av)};
+        }
+    qsort(c, nc, sizeof *c, cmp_cand);
+    for (uint32_t i = 0; i < nc; i++) {
+        uint32_t f = c[i].f;
+        bool whole = false; /* a pair of f with both facets still kept */
+        for (uint32_t k = start[f]; k < start[f + 1] && !whole; k++)
+            whole = keep[adj[k]];
+        if (whole) {
+            keep[f] = false;
+            ++*ret_n;
+        }
+    }
+    rc = 0;
+done:
+    free(deg), free(onrim), free(start), free(adj), free(c);
+    return rc;
+}
+
+/* remove_crossing: the facets choose_removed picks removed from a copy
+ * of p, which is filled; kept (swapped into p) when every hole closes.
+ * 1 kept, 0 not (nothing to remove, more crossings than are listed, or a
+ * hole left open: p unchanged), or a negative errno. */
+static int fill_removing(geo_poly *p, const geo_mesh_fill_opts *mo,
+                         const geo_ctx *ctx, geo_mesh_fill_report *rep,
+                         geo_err *err)
+{
+    geo_topo *t = geo_topo_build(p, err);
+    if (!t)
+        return -ENOMEM;
+    geo_selfint_opts so;
+    geo_selfint_opts_default(&so);
+    so.max_pairs = 1u << 22; /* 32 MB of pairs at most; past it, no removal */
+    geo_selfint si;
+    int rc = geo_selfint_find(p, NULL, &so, ctx, &si, err);
+    if (rc < 0) {
+        geo_topo_free(t);
+        return rc;
+    }
+    uint8_t *rim = calloc((size_t)p->nverts + 1, 1);
+    bool *keep = malloc(((size_t)p->nfacets + 1) * sizeof *keep);
+    geo_poly *q = NULL;
+    uint32_t nrem = 0;
+    rc = -ENOMEM;
+    if (!rim || !keep)
+        goto done;
+    rc = 0;
+    if (si.count > si.npairs)
+        goto done;
+    for (uint32_t c = 0; c < t->ncorners; c++)
+        if (t->edge_kind[c] == GEO_EDGE_BOUNDARY) {
+            rim[p->fidx[c]] = 1;
+            rim[p->fidx[geo_topo_next(p, t, c)]] = 1;
+        }
+    if ((rc = choose_removed(p, rim, &si, keep, &nrem)) < 0)
+        goto done;
+    /* a flap is a local defect: a choice past REMOVE_MAX_FRACTION of the
+     * facets would remesh the model rather than repair it (an assembly
+     * of crossing parts would lose most of itself: parts_overlap is the
+     * rule there) */
+    if (nrem == 0 || nrem > REMOVE_MAX_FRACTION * p->nfacets)
+        goto done;
+    if (!(q = geo_poly_copy(p)) || geo_poly_compact(q, keep, NULL, NULL) < 0) {
+        rc = -ENOMEM;
+        goto done;
+    }
+    geo_mesh_fill_opts m2 = *mo;
+    m2.remove_crossing = false;
+    geo_mesh_fill_report r2 = {0};
+    if ((rc = geo_fill(q, &m2, ctx, &r2, err)) < 0)
+        goto done;
+    if (r2.nopen == 0) {
+        geo_poly tmp = *p;
+        *p = *q;
+        *q = tmp;
+        r2.nremoved = nrem;
+        *rep = r2;
+        rc = 1;
+    } else {
+        geo_mesh_fill_report_clear(&r2);
+    }
+done:
+    if (rc == -ENOMEM)
+        geo_err_set(err, rc, "out of memory");
+    geo_poly_free(q);
+    free(rim), free(keep);
+    geo_selfint_clear(&si);
+    geo_topo_free(t);
+    return rc;
+}
+
 int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
                   const geo_ctx *ctx, geo_mesh_fill_report *rep, geo_err *err)
 {
@@ -1133,6 +1296,20 @@ int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
     int rc = geo_poly_validate_indices(p, err);
     if (rc < 0)
         return rc;
+    if (mo.remove_crossing) {
+        geo_mesh_fill_report RR = {0};
+        rc = fill_removing(p, &mo, ctx, &RR, err);
+        if (rc < 0)
+            return rc;
+        if (rc == 1) {
+            if (rep)
+                *rep = RR;
+            else
+                geo_mesh_fill_report_clear(&RR);
+            return 0;
+        }
+        mo.remove_crossing = false;
+    }
     geo_mesh_fill_report R = {0};
     mfill M = {.p = p, .ctx = ctx};
     uint32_t *lstart = NULL, *lcorn = NULL, nloops = 0, *w = NULL;

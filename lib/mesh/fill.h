@@ -50,8 +50,9 @@
  *    inside out (an open mesh had no inside to face) has all its facets
  *    reversed (rep->nreversed).
  *
- * Output: vertices and facets of p keep their indices; new vertices and
- * facets are appended, hole after hole. Ownership: p is modified in
+ * Output: vertices and facets of p keep their indices (unless
+ * remove_crossing removed some); new vertices and facets are appended,
+ * hole after hole. Ownership: p is modified in
  * place (left unchanged on error); rep->holes is malloc'd (release with
  * geo_mesh_fill_report_clear). Errors: -EINVAL (invalid indices or
  * options), -ENOMEM, -ECANCELED. Not thread-safe for one p. */
@@ -106,6 +107,15 @@ typedef struct geo_mesh_fill_opts {
                            shell in p (no pair of parts comes to cross
                            that did not); it may still cross nothing of
                            its own shell, of other shells, or itself */
+    bool remove_crossing; /* [false] first remove every facet that crosses
+                           another (exact, lib/inspect/selfint.h) and has
+                           a vertex on a hole's rim — a flap folded over
+                           the opening — so that hole grows by it, then
+                           fill; kept only when every hole then closes
+                           and at most 5 % of the facets go (else the
+                           plain fill's result). The other
+                           facets and vertices move down in order
+                           (geo_poly_compact; rep->nremoved) */
 } geo_mesh_fill_opts;
 
 /* Fills the defaults above (fill: geo_fill_opts_default). */
@@ -138,6 +148,8 @@ typedef struct geo_mesh_fill_report {
     uint32_t nrejected;    /* patches taken back by the check */
     uint32_t nreversed;    /* facets reversed because the closed result
                               was turned inside out (see below) */
+    uint32_t nremoved;     /* crossing rim facets removed first
+                              (remove_crossing) */
     uint32_t verts_added, facets_added;
     double max_dihedral_deg; /* over every filled hole */
     geo_mesh_hole *holes;  /* nloops entries, in loop order */

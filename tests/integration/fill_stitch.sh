@@ -61,6 +61,42 @@ check "--keep-invalid writes the result for inspection" test -s "$T/linked.out.o
     >"$T/po.line" 2>/dev/null
 expect_eq "--parts-overlap: still exit 1 (the parts cross: not a valid solid)" 1 "$?"
 check "--parts-overlap fills the hole the column goes through" grep -q '"filled":1,.*"left_open":0' "$T/po.line"
+# a box of 4 × 4 quads a side without its top, a flap on the rim folded
+# across the opening and out through the far wall: --remove-crossing
+# takes it away first, and the box comes back closed and valid
+python3 - "$T/flap.off" <<'PY'
+import sys
+n, V, F, idx = 4, [], [], {}
+def vid(p):
+    if p not in idx:
+        idx[p] = len(V); V.append(p)
+    return idx[p]
+def face(origin, du, dv):  # quads of the face origin + i/n du + j/n dv
+    for i in range(n):
+        for j in range(n):
+            q = [tuple(o + a * du[k] / n + b * dv[k] / n for k, o in enumerate(origin))
+                 for a, b in ((i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1))]
+            F.append([vid(p) for p in q])
+face((0, 0, 0), (0, 1, 0), (1, 0, 0))  # bottom, outward -z
+face((0, 0, 0), (1, 0, 0), (0, 0, 1))  # y = 0
+face((1, 0, 0), (0, 1, 0), (0, 0, 1))  # x = 1
+face((1, 1, 0), (-1, 0, 0), (0, 0, 1))  # y = 1
+face((0, 1, 0), (0, -1, 0), (0, 0, 1))  # x = 0
+# the rim edge (0.5, 0, 1)-(0.75, 0, 1) runs 0.75 -> 0.5 in the y = 0
+# wall's quad: the flap runs it the other way
+a, b = idx[(0.5, 0, 1)], idx[(0.75, 0, 1)]
+F.append([a, b, vid((0.6, 1.5, 0.5))])
+with open(sys.argv[1], "w") as o:
+    o.write("OFF\n%d %d 0\n" % (len(V), len(F)))
+    for p in V: o.write("%r %r %r\n" % p)
+    for q in F: o.write("%d %s\n" % (len(q), " ".join(map(str, q))))
+PY
+"$F" fill "$T/flap.off" -o "$T/flap.out.off" >/dev/null 2>&1
+expect_eq "a flap across the opening: the plain fill fails (exit 1)" 1 "$?"
+out=$("$F" fill "$T/flap.off" -o "$T/flap.out.off" --remove-crossing --report "$T/flap.rep")
+expect_eq "--remove-crossing closes it validly (exit 0)" 0 "$?"
+check "the result is valid, every hole closed" grep -q '"left_open":0,.*"valid":true' <<<"$out"
+check "the report counts the one facet removed" grep -q '"facets_removed": 1' "$T/flap.rep"
 
 # the crown and the pavilion of the true stone, the facets between
 # -0.3 < z < 0.3 (the girdle band) removed

@@ -317,6 +317,68 @@ static void test_parts_overlap_crosses_only_parts_that_crossed(void **s)
     geo_poly_free(p);
 }
 
+/* remove_crossing: a sphere with its cap cut away and a triangular flap
+ * on the rim folded across the opening and out through the far side. The
+ * plain fill cannot make it valid (the flap crosses the sphere whatever
+ * closes the hole); removing the flap first (it crosses the most facets;
+ * the ones it pierces stay) gives a valid closed solid. A mesh whose
+ * crossing facets touch no hole is filled as without the option. */
+static void test_flap_across_the_opening_is_removed_then_filled(void **s)
+{
+    (void)s;
+    geo_poly *p = gs_sphere(16, 1.0);
+    cut_cap(p, 0.6);
+    geo_topo *t = geo_topo_build(p, NULL);
+    assert_non_null(t);
+    uint32_t a = UINT32_MAX, b = UINT32_MAX; /* the rim edge farthest +x */
+    double best = -INFINITY;
+    for (uint32_t c = 0; c < t->ncorners; c++) {
+        if (t->edge_kind[c] != GEO_EDGE_BOUNDARY)
+            continue;
+        uint32_t u = p->fidx[c], v = p->fidx[geo_topo_next(p, t, c)];
+        double x = p->verts[u][0] + p->verts[v][0];
+        if (x > best)
+            best = x, a = u, b = v;
+    }
+    geo_topo_free(t);
+    const double apex[3] = {-1.6, 0, 0.3};
+    uint32_t c = (uint32_t)geo_poly_add_vertex(p, apex);
+    uint32_t tri[3] = {b, a, c}; /* the rim edge run the other way */
+    int64_t nf = geo_poly_add_facet(p, tri, 3);
+    assert_true(nf >= 0);
+    geo_poly_facet_fit_plane(p, (uint32_t)nf, GEO_PLANE_UNWEIGHTED,
+                             p->planes[nf]);
+    uint32_t nf0 = p->nfacets;
+    geo_poly *q = geo_poly_copy(p);
+
+    geo_mesh_fill_report rep;
+    assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(rep.nremoved, 0);
+    assert_false(is_valid(p));
+    geo_mesh_fill_report_clear(&rep);
+
+    geo_mesh_fill_opts o;
+    geo_mesh_fill_opts_default(&o);
+    o.remove_crossing = true;
+    assert_int_equal(geo_fill(q, &o, NULL, &rep, NULL), 0);
+    assert_int_equal(rep.nremoved, 1);
+    assert_int_equal(rep.nopen, 0);
+    assert_true(is_valid(q));
+    geo_mesh_fill_report_clear(&rep);
+    geo_poly_free(q);
+    geo_poly_free(p);
+
+    /* crossing facets away from every hole: nothing is removed */
+    p = open_box_with_column(-1);
+    nf0 = p->nfacets;
+    assert_int_equal(geo_fill(p, &o, NULL, &rep, NULL), 0);
+    assert_int_equal(rep.nremoved, 0);
+    assert_int_equal(rep.holes[0].status, GEO_HOLE_INTERSECTS);
+    assert_int_equal(p->nfacets, nf0);
+    geo_mesh_fill_report_clear(&rep);
+    geo_poly_free(p);
+}
+
 /* An open sheet (a flat n × n grid of triangles) has no lid that does
  * not lie on it: the fill bends one into a dome, and the result is a
  * valid closed solid. */
@@ -463,6 +525,7 @@ int main(void)
         cmocka_unit_test(test_large_curved_hole_filled_validly_at_mesh_density),
         cmocka_unit_test(test_unfillable_hole_stays_open_with_reason),
         cmocka_unit_test(test_parts_overlap_crosses_only_parts_that_crossed),
+        cmocka_unit_test(test_flap_across_the_opening_is_removed_then_filled),
         cmocka_unit_test(test_open_sheet_is_closed_by_a_dome),
         cmocka_unit_test(test_rim_whose_chords_are_mesh_edges_gets_a_dome),
         cmocka_unit_test(test_every_weight_fills_a_nonplanar_hole_validly),
