@@ -1117,14 +1117,11 @@ static int turn_outward(geo_poly *p, geo_mesh_fill_report *R, geo_err *err)
     return rc;
 }
 
-/* remove_crossing: which facets go. Of the intersecting pairs with a
- * facet on a rim (a vertex on a hole's border), enough facets that touch
- * a rim to leave none of those pairs whole: greedily, the facet in the
- * most such pairs first (ties: the smaller area, then the lower index) —
- * a flap folded over an opening crosses what it lies across, so it goes
- * and the wall it pierces stays. keep[f] false for each; the count. */
+/* remove_crossing removes at most this part of the facets (see
+ * fill_removing) */
 #define REMOVE_MAX_FRACTION 0.05
 
+/* A facet that may be removed: the pairs it is in, its area. */
 typedef struct cand {
     uint32_t f, pairs;
     double area;
@@ -1140,6 +1137,12 @@ static int cmp_cand(const void *a, const void *b)
     return (x->f > y->f) - (x->f < y->f);
 }
 
+/* remove_crossing: which facets go. Of the intersecting pairs with a
+ * facet on a rim (a vertex on a hole's border), enough facets that touch
+ * a rim to leave none of those pairs whole: greedily, the facet in the
+ * most such pairs first (ties: the smaller area, then the lower index) —
+ * a flap folded over an opening crosses what it lies across, so it goes
+ * and the wall it pierces stays. keep[f] false for each; the count. */
 static int choose_removed(const geo_poly *p, const uint8_t *rim,
                           const geo_selfint *si, bool *keep,
                           uint32_t *ret_n)

@@ -251,21 +251,31 @@ static geo_poly *open_box_with_column(double zlo)
     return p;
 }
 
+/* Fills p with o (NULL: defaults) and checks its one hole stays open as
+ * crossing the mesh, nothing added or removed. The report is returned
+ * for the caller's own checks (release with geo_mesh_fill_report_clear). */
+static void fill_leaves_hole_open(geo_poly *p, const geo_mesh_fill_opts *o,
+                                  geo_mesh_fill_report *rep)
+{
+    uint32_t nv = p->nverts, nf = p->nfacets;
+    assert_int_equal(geo_fill(p, o, NULL, rep, NULL), 0);
+    assert_int_equal(rep->nloops, 1);
+    assert_int_equal(rep->nfilled, 0);
+    assert_int_equal(rep->nopen, 1);
+    assert_int_equal(rep->nremoved, 0);
+    assert_int_equal(rep->holes[0].status, GEO_HOLE_INTERSECTS);
+    assert_int_equal(rep->holes[0].facets_added, 0);
+    assert_int_equal(p->nverts, nv);
+    assert_int_equal(p->nfacets, nf);
+}
+
 static void test_unfillable_hole_stays_open_with_reason(void **s)
 {
     (void)s;
     geo_poly *p = open_box_with_column(-1);
-    uint32_t nv = p->nverts, nf = p->nfacets;
     geo_mesh_fill_report rep;
-    assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
-    assert_int_equal(rep.nloops, 1);
-    assert_int_equal(rep.nfilled, 0);
-    assert_int_equal(rep.nopen, 1);
-    assert_int_equal(rep.holes[0].status, GEO_HOLE_INTERSECTS);
-    assert_int_equal(rep.holes[0].facets_added, 0);
+    fill_leaves_hole_open(p, NULL, &rep);
     assert_true(rep.nrejected >= 1);
-    assert_int_equal(p->nverts, nv);
-    assert_int_equal(p->nfacets, nf);
     geo_mesh_fill_report_clear(&rep);
     geo_poly_free(p);
 }
@@ -308,11 +318,7 @@ static void test_parts_overlap_crosses_only_parts_that_crossed(void **s)
     geo_poly_free(p);
 
     p = open_box_with_column(0.2);
-    nf = p->nfacets;
-    assert_int_equal(geo_fill(p, &o, NULL, &rep, NULL), 0);
-    assert_int_equal(rep.nfilled, 0);
-    assert_int_equal(rep.holes[0].status, GEO_HOLE_INTERSECTS);
-    assert_int_equal(p->nfacets, nf);
+    fill_leaves_hole_open(p, &o, &rep);
     geo_mesh_fill_report_clear(&rep);
     geo_poly_free(p);
 }
@@ -348,7 +354,6 @@ static void test_flap_across_the_opening_is_removed_then_filled(void **s)
     assert_true(nf >= 0);
     geo_poly_facet_fit_plane(p, (uint32_t)nf, GEO_PLANE_UNWEIGHTED,
                              p->planes[nf]);
-    uint32_t nf0 = p->nfacets;
     geo_poly *q = geo_poly_copy(p);
 
     geo_mesh_fill_report rep;
@@ -370,11 +375,7 @@ static void test_flap_across_the_opening_is_removed_then_filled(void **s)
 
     /* crossing facets away from every hole: nothing is removed */
     p = open_box_with_column(-1);
-    nf0 = p->nfacets;
-    assert_int_equal(geo_fill(p, &o, NULL, &rep, NULL), 0);
-    assert_int_equal(rep.nremoved, 0);
-    assert_int_equal(rep.holes[0].status, GEO_HOLE_INTERSECTS);
-    assert_int_equal(p->nfacets, nf0);
+    fill_leaves_hole_open(p, &o, &rep);
     geo_mesh_fill_report_clear(&rep);
     geo_poly_free(p);
 }
