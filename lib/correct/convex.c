@@ -88,6 +88,96 @@ static int intersect(const geo_convex_planes *cp, double tol,
     return 0;
 }
 
+/* The checks of the result q (src: its facets' planes in cp) against
+ * the scan p: planar, within the bounds the noise and the view step
+ * allow. Counts cp's redundant planes. 0 when q passes, 1 when declined
+ * (rep->reason says why), -ENOMEM. */
+static int check_result(const geo_poly *p, const geo_poly *q,
+                        const uint32_t *src, const geo_convex_planes *cp,
+                        double max_dev, geo_convex_report *rep)
+{
+    /* a vertex where four planes nearly meet is contracted to one (the
+     * kernel's short-edge contraction) and then lies off one of them by
+     * up to the contraction length: a result the model's planarity
+     * tolerance refuses is never given back as the correction */
+    double np = geo_poly_max_nonplanarity(q), eps = geo_poly_eps(q);
+    if (np > eps)
+        return decline(rep, "the intersection is not planar: a vertex %.2g "
+                       "mm off its facet's plane (tolerance %.2g mm)", np, eps);
+    uint8_t *seen = calloc((size_t)cp->nplanes + 1, 1);
+    if (!seen)
+        return -ENOMEM;
+    for (uint32_t f = 0; f < q->nfacets; f++)
+        seen[src[f]] = 1;
+    /* a kept plane that bounds nothing was redundant after all */
+    rep->redundant = 0;
+    for (uint32_t i = 0; i < cp->nplanes; i++)
+        rep->redundant += !seen[i];
+    free(seen);
+    /* within the scan's bound: every result vertex no farther outside the
+     * scan than the noise moves a hinge, every scan vertex no farther
+     * outside the result than its group's roof allows */
+    /* where many facets meet at shallow angles (a pavilion point, a
+     * girdle corner) a plane's error of a noise moves the vertex by many:
+     * the bound there is the merge's own deviation bound or the largest
+     * roof, whichever is more */
+    double roof_max = 0;
+    for (uint32_t i = 0; i < cp->nplanes; i++)
+        roof_max = fmax(roof_max, cp->allow[i]);
+    double out = 0;
+    double allow = OUTSIDE_FACTOR * fmax(fmax(cp->dev0, cp->hinge_noise),
+                                         fmax(max_dev, roof_max) / 2);
+    for (uint32_t v = 0; v < q->nverts; v++)
+        for (uint32_t f = 0; f < p->nfacets; f++) {
+            double d = geo_plane_eval(p->planes[f], q->verts[v]);
+            if (d > out)
+                out = d;
+        }
+    rep->bound = allow;
+    rep->deviation = out;
+    if (out > allow)
+        return decline(rep, "the result reaches %.2g mm outside the scan "
+                       "(bound %.2g mm)", out, allow);
+    /* each scan vertex's distance outside the result (the largest of its
+     * planes' values), once per vertex: its facets only differ in the
+     * allowance */
+    double *outside = malloc(((size_t)p->nverts + 1) * sizeof *outside);
+    if (!outside)
+        return -ENOMEM;
+    for (uint32_t v = 0; v < p->nverts; v++) {
+        double d = -INFINITY;
+        for (uint32_t g = 0; g < q->nfacets; g++) {
+            double e = geo_plane_eval(q->planes[g], p->verts[v]);
+            if (e > d)
+                d = e;
+        }
+        outside[v] = d;
+    }
+    double worst = 0, worst_allow = 0;
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        uint32_t k = cp->kept[cp->group[f]];
+        double a = k == GEO_NONE ? cp->dev0 + cp->cut_min : cp->allow[k];
+        uint32_t n = geo_poly_facet_size(p, f);
+        const uint32_t *fv = geo_poly_facet(p, f);
+        for (uint32_t i = 0; i < n; i++) {
+            double d = outside[fv[i]];
+            if (d - ROOF_FACTOR * a > worst - worst_allow) {
+                worst = d;
+                worst_allow = ROOF_FACTOR * a;
+            }
+        }
+    }
+    free(outside);
+    if (worst > worst_allow)
+        return decline(rep, "the scan lies %.2g mm outside the result "
+                       "(bound %.2g mm)", worst, worst_allow);
+    if (worst > rep->deviation)
+        rep->deviation = worst;
+    if (worst_allow > rep->bound)
+        rep->bound = worst_allow;
+    return 0;
+}
+
 int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
                        double max_dev, enum geo_convex_fit fit,
                        const geo_ctx *ctx, geo_poly **ret,
@@ -154,96 +244,58 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
             goto done;
     }
     if (fit == GEO_CONVEX_FIT_SILHOUETTE) {
+        /* the adjusted planes replace the fitted ones only when their
+         * intersection passes the checks: an adjustment that took a
+         * wrong pair of vertices for a silhouette edge can move a plane
+         * far, and the fitted planes are then the better answer */
+        double (*fitted)[4] = malloc(((size_t)cp.nplanes + 1) * sizeof *fitted);
+        if (!fitted) {
+            r = geo_err_set(err, -ENOMEM, "out of memory");
+            goto done;
+        }
+        memcpy(fitted, cp.planes, cp.nplanes * sizeof *fitted);
         double sc;
-        r = geo_convex_refine(p, q, src, cp.planes, cp.nplanes, &sc);
+        double cluster = GEO_CONVEX_REFINE_CLUSTER *
+                         fmax(cp.dev0, cp.hinge_noise);
+        r = geo_convex_refine(p, q, src, cluster, cp.planes, cp.nplanes, &sc);
+        geo_poly *qa = NULL;
+        uint32_t *srca = NULL;
+        if (r == 0) {
+            geo_convex_report ra = *rep;
+            r = intersect(&cp, merge_tol, "the adjusted planes", 170, &qa,
+                          &srca, &ra, err);
+            if (r == 0)
+                r = check_result(p, qa, srca, &cp, max_dev, &ra);
+            if (r == 0) {
+                *rep = ra;
+                geo_poly_free(q);
+                free(src);
+                q = qa;
+                src = srca;
+                qa = NULL;
+                srca = NULL;
+            }
+        }
+        geo_poly_free(qa);
+        free(srca);
         if (r == -ENOMEM) {
+            free(fitted);
             r = geo_err_set(err, r, "out of memory");
             goto done;
         }
-        if (r == 0) {
-            r = intersect(&cp, merge_tol, "the adjusted planes", 170, &q,
-                          &src, rep, err);
-            if (r != 0)
-                goto done;
+        if (r != 0) {
+            memcpy(cp.planes, fitted, cp.nplanes * sizeof *fitted);
+            r = check_result(p, q, src, &cp, max_dev, rep);
         }
+        free(fitted);
+    } else {
+        r = check_result(p, q, src, &cp, max_dev, rep);
     }
-    uint8_t *seen = calloc((size_t)cp.nplanes + 1, 1);
-    if (!seen) {
-        r = geo_err_set(err, -ENOMEM, "out of memory");
+    if (r != 0) {
+        if (r == -ENOMEM)
+            r = geo_err_set(err, r, "out of memory");
         goto done;
     }
-    for (uint32_t f = 0; f < q->nfacets; f++)
-        seen[src[f]] = 1;
-    /* a kept plane that bounds nothing was redundant after all */
-    for (uint32_t i = 0; i < cp.nplanes; i++)
-        rep->redundant += !seen[i];
-    free(seen);
-    /* within the scan's bound: every result vertex no farther outside the
-     * scan than the noise moves a hinge, every scan vertex no farther
-     * outside the result than its group's roof allows */
-    /* where many facets meet at shallow angles (a pavilion point, a
-     * girdle corner) a plane's error of a noise moves the vertex by many:
-     * the bound there is the merge's own deviation bound or the largest
-     * roof, whichever is more */
-    double roof_max = 0;
-    for (uint32_t i = 0; i < cp.nplanes; i++)
-        roof_max = fmax(roof_max, cp.allow[i]);
-    double out = 0, allow = OUTSIDE_FACTOR * fmax(fmax(cp.dev0, cp.hinge_noise),
-                                                  fmax(max_dev, roof_max) / 2);
-    for (uint32_t v = 0; v < q->nverts; v++)
-        for (uint32_t f = 0; f < p->nfacets; f++) {
-            double d = geo_plane_eval(p->planes[f], q->verts[v]);
-            if (d > out)
-                out = d;
-        }
-    rep->bound = allow;
-    rep->deviation = out;
-    if (out > allow) {
-        r = decline(rep, "the result reaches %.2g mm outside the scan "
-                    "(bound %.2g mm)", out, allow);
-        goto done;
-    }
-    /* each scan vertex's distance outside the result (the largest of its
-     * planes' values), once per vertex: its facets only differ in the
-     * allowance */
-    double *outside = malloc(((size_t)p->nverts + 1) * sizeof *outside);
-    if (!outside) {
-        r = geo_err_set(err, -ENOMEM, "out of memory");
-        goto done;
-    }
-    for (uint32_t v = 0; v < p->nverts; v++) {
-        double d = -INFINITY;
-        for (uint32_t g = 0; g < q->nfacets; g++) {
-            double e = geo_plane_eval(q->planes[g], p->verts[v]);
-            if (e > d)
-                d = e;
-        }
-        outside[v] = d;
-    }
-    double worst = 0, worst_allow = 0;
-    for (uint32_t f = 0; f < p->nfacets; f++) {
-        uint32_t k = cp.kept[cp.group[f]];
-        double a = k == GEO_NONE ? cp.dev0 + cp.cut_min : cp.allow[k];
-        uint32_t n = geo_poly_facet_size(p, f);
-        const uint32_t *fv = geo_poly_facet(p, f);
-        for (uint32_t i = 0; i < n; i++) {
-            double d = outside[fv[i]];
-            if (d - ROOF_FACTOR * a > worst - worst_allow) {
-                worst = d;
-                worst_allow = ROOF_FACTOR * a;
-            }
-        }
-    }
-    free(outside);
-    if (worst > worst_allow) {
-        r = decline(rep, "the scan lies %.2g mm outside the result (bound "
-                    "%.2g mm)", worst, worst_allow);
-        goto done;
-    }
-    if (worst > rep->deviation)
-        rep->deviation = worst;
-    if (worst_allow > rep->bound)
-        rep->bound = worst_allow;
     *ret = q;
     q = NULL;
     r = 0;

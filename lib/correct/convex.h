@@ -82,17 +82,22 @@ int geo_convex_planes_find(const geo_poly *p, uint32_t views, double noise,
                            enum geo_convex_fit fit, geo_convex_planes *ret,
                            geo_err *err);
 
-/* Adjusts planes[0..nplanes) (unit outward, in place) so that the
- * support of their intersection in the direction of every facet of scan
- * matches that facet's offset (convex_refine.c says how and why). est is
+/* Adjusts planes[0..nplanes) (unit outward, in place) to every
+ * silhouette plane of scan: each scan facet measures the two vertices
+ * of the stone that span it (convex_refine.c says how and why). est is
  * their intersection (geo_halfspace_intersect) and src its facets'
- * planes. *ret_scale gets the robust scale of the supports' residuals
- * before the adjustment, mm. Returns 0, -EINVAL (a vertex of est whose
- * planes do not meet, or normal equations not positive definite: planes
- * unchanged), -E2BIG (too many planes for the dense solve), -ENOMEM. */
+ * planes; vertices of est closer than cluster (mm) are one vertex.
+ * *ret_scale gets the robust scale of the residuals before the
+ * adjustment, mm. Returns 0, -EINVAL (the normal equations not positive
+ * definite: planes unchanged), -ENOMEM. */
+/* The cluster radius geo_correct_convex passes, in noise bounds (the
+ * larger of geo_convex_planes' dev0 and hinge_noise). */
+#define GEO_CONVEX_REFINE_CLUSTER 3.0
+
 int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
-                      const uint32_t *src, double (*planes)[4],
-                      uint32_t nplanes, double *ret_scale);
+                      const uint32_t *src, double cluster,
+                      double (*planes)[4], uint32_t nplanes,
+                      double *ret_scale);
 
 /* What geo_correct_convex did. */
 typedef struct geo_convex_report {

@@ -1,29 +1,34 @@
 /* convex_refine.c — the recovered planes adjusted to the silhouettes
  * (convex.h, geo_convex_refine).
  *
- * Every facet of a raw shadow-profile scan is one silhouette plane
- * (Palachev 2012, §1.2): a plane tangent to the true stone, its offset
- * off by the silhouette noise. So for each scan facet j (unit normal m_j,
- * offset d_j) the true stone's support in direction m_j is −d_j:
+ * Every facet j of a raw shadow-profile scan is one silhouette edge of
+ * one view (Palachev 2012, §1.2): a plane (unit normal m_j, offset d_j)
+ * through the projections of two stone vertices, each off by the
+ * silhouette noise. So each scan facet measures the stone twice, at the
+ * two vertices that span it:
  *
- *     max over the stone's vertices v of  m_j · v  =  −d_j  (+ noise),
+ *     m_j · x_a + d_j = noise,   m_j · x_b + d_j = noise.
  *
- * and the stone's vertices are the meets of its facet planes. The planes
- * are adjusted (Gauss–Newton, each plane by a tilt in two directions and
- * an offset) so that these supports match in the least-squares sense:
- * the estimator that uses every silhouette, where a group fit uses only
- * the slivers that survived on one facet. A scan facet whose support is
- * shared by two vertices within the noise (a sliver hinged on a true
- * edge) constrains both. Residuals are Huber-weighted at twice their
- * robust scale (a scan facet tangent where the estimate has a cluster of
- * vertices instead of one); a small damping keeps the planes no
- * silhouette sees where they were.
+ * The unknowns are the stone's planes (each a tilt in two directions and
+ * an offset) and its vertices (three coordinates each), tied by the
+ * incidences: a vertex lies on every plane of its facets, so where four
+ * or eight facets meet the vertex stays one and every one of those planes
+ * answers for its measurements. Vertices of the estimate closer than the
+ * cluster radius are one vertex (the scan's noise splits a vertex of
+ * degree > 3 into a cluster; the intersection of noisy planes does too).
+ * The incidences enter as measurements of a weight far above the
+ * silhouettes' (a penalty, as the bound of the test bench takes them);
+ * the system is sparse (a plane with its vertices) and solved by
+ * lib/core/spchol, Gauss–Newton, the two spanning vertices of each scan
+ * facet chosen again at each iteration (span_of). Residuals are
+ * Huber-weighted at twice their robust scale (a scan facet the estimate
+ * explains by the wrong pair).
  *
- * Each vertex keeps, through the iterations, the three planes of its
- * facets that meet best (largest |det|); the caller intersects the
- * adjusted planes again for the topology. Cost per iteration: O(F·V)
- * for the supports (F scan facets, V vertices) plus O(P³) for the
- * normal equations of P planes (dense Cholesky). */
+ * Why: the fits of convex_planes.c use the slivers that survived on one
+ * true facet; this uses every silhouette plane of the scan where it
+ * constrains the stone, at the stone's vertices, which is the
+ * information the scan holds (its Cramér–Rao bound is the test bench's
+ * scan_bound with the surviving planes only). */
 #include "convex.h"
 
 #include <errno.h>
@@ -32,80 +37,22 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "plane.h"
+#include "spchol.h"
 #include "topo.h"
 #include "vec.h"
 
-#define REFINE_ITERS 4
-/* Two vertices support a scan facet together when within this many
- * residual scales of each other. */
-#define TIE_SCALE 1.0
+#define REFINE_ITERS 3
 #define HUBER 2.0
-/* Damping: relative to the largest diagonal entry, and absolute (per mm²
- * of the offset's scale). */
-#define DAMP_REL 1e-6
-
-typedef struct vtx {
-    uint32_t pl[3];   /* its three planes */
-    double x[3];      /* position */
-    double w[3][3];   /* columns of N⁻¹ (w[r] = N⁻¹ e_r) */
-} vtx;
-
-/* Solves the meet of planes a, b, c; fills v->x and v->w. false when the
- * normals are dependent. */
-static bool vtx_solve(vtx *v, const double (*pl)[4])
-{
-    const double *a = pl[v->pl[0]], *b = pl[v->pl[1]], *c = pl[v->pl[2]];
-    double bc[3], ca[3], ab[3];
-    geo_vcross(b, c, bc);
-    geo_vcross(c, a, ca);
-    geo_vcross(a, b, ab);
-    double det = geo_vdot(a, bc);
-    if (fabs(det) < 1e-12)
-        return false;
-    /* N⁻¹ = [bc ca ab] / det (columns) */
-    for (int k = 0; k < 3; k++) {
-        v->w[0][k] = bc[k] / det;
-        v->w[1][k] = ca[k] / det;
-        v->w[2][k] = ab[k] / det;
-        v->x[k] = -(a[3] * bc[k] + b[3] * ca[k] + c[3] * ab[k]) / det;
-    }
-    return true;
-}
-
-/* Dense Cholesky solve of the n×n SPD matrix a (row-major, overwritten)
- * with right-hand side b (overwritten by x). false when not SPD. */
-static bool chol_solve(double *a, double *b, uint32_t n)
-{
-    for (uint32_t j = 0; j < n; j++) {
-        double s = a[(size_t)j * n + j];
-        for (uint32_t k = 0; k < j; k++)
-            s -= a[(size_t)j * n + k] * a[(size_t)j * n + k];
-        if (!(s > 0))
-            return false;
-        double l = sqrt(s);
-        a[(size_t)j * n + j] = l;
-        for (uint32_t i = j + 1; i < n; i++) {
-            double t = a[(size_t)i * n + j];
-            for (uint32_t k = 0; k < j; k++)
-                t -= a[(size_t)i * n + k] * a[(size_t)j * n + k];
-            a[(size_t)i * n + j] = t / l;
-        }
-    }
-    for (uint32_t i = 0; i < n; i++) {
-        double t = b[i];
-        for (uint32_t k = 0; k < i; k++)
-            t -= a[(size_t)i * n + k] * b[k];
-        b[i] = t / a[(size_t)i * n + i];
-    }
-    for (uint32_t i = n; i-- > 0;) {
-        double t = b[i];
-        for (uint32_t k = i + 1; k < n; k++)
-            t -= a[(size_t)k * n + i] * b[k];
-        b[i] = t / a[(size_t)i * n + i];
-    }
-    return true;
-}
+/* The incidences' weight relative to the largest measurement's. */
+#define CONSTRAINT_WEIGHT 1e6
+/* Damping relative to the incidences' weight: a plane or vertex no
+ * silhouette sees stays where it was, and a direction the silhouettes
+ * hardly see moves no more than they say (noise-free, without it the
+ * solve wanders along them). */
+#define DAMP_REL 1e-9
+/* A spanning vertex lies at most this many residual scales below the
+ * highest (before the first residuals: the cluster radius). */
+#define SPAN_SCALES 6.0
 
 static void tangents(const double n[3], double t1[3], double t2[3])
 {
@@ -124,157 +71,524 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* One row of the normal equations: residual r, weight wt, for vertex v
- * along direction m. */
-static void add_row(double *A, double *g, uint32_t np3, const vtx *v,
-                    const double m[3], double r, double wt,
-                    const double (*t1)[3], const double (*t2)[3])
+static int cmp_u64(const void *a, const void *b)
 {
-    uint32_t idx[9];
-    double jac[9];
-    for (int s = 0; s < 3; s++) {
-        uint32_t i = v->pl[s];
-        double mw = -geo_vdot(m, v->w[s]);
-        jac[3 * s] = mw * geo_vdot(t1[i], v->x);
-        jac[3 * s + 1] = mw * geo_vdot(t2[i], v->x);
-        jac[3 * s + 2] = mw;
-        idx[3 * s] = 3 * i;
-        idx[3 * s + 1] = 3 * i + 1;
-        idx[3 * s + 2] = 3 * i + 2;
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+static uint32_t uf_find(uint32_t *par, uint32_t v)
+{
+    while (par[v] != v) {
+        par[v] = par[par[v]];
+        v = par[v];
     }
-    for (int a = 0; a < 9; a++) {
-        g[idx[a]] += wt * jac[a] * r;
-        for (int b = 0; b < 9; b++)
-            A[(size_t)idx[a] * np3 + idx[b]] += wt * jac[a] * jac[b];
+    return v;
+}
+
+/* The normal equations as 3×3 blocks: block (i, j) of unknowns' triples
+ * (planes first, then vertices). The pattern is fixed by the incidences
+ * (a plane with its vertices) and the diagonal. */
+typedef struct blocks {
+    uint32_t n;          /* triples */
+    uint32_t *rp, *ci;   /* CSR of the block pattern, both triangles */
+    double (*v)[3][3];   /* values per block entry */
+} blocks;
+
+static double (*block_at(blocks *b, uint32_t i, uint32_t j))[3]
+{
+    uint32_t lo = b->rp[i], hi = b->rp[i + 1];
+    while (lo < hi) {
+        uint32_t mid = (lo + hi) / 2;
+        if (b->ci[mid] < j)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return b->v[lo];
+}
+
+/* Adds w · g gᵀ over the triples ti[0..nt) (g: 3 · nt entries). */
+static void add_outer(blocks *b, const uint32_t *ti, const double *g,
+                      uint32_t nt, double w)
+{
+    for (uint32_t a = 0; a < nt; a++)
+        for (uint32_t c = 0; c < nt; c++) {
+            double (*m)[3] = block_at(b, ti[a], ti[c]);
+            for (int r = 0; r < 3; r++)
+                for (int s = 0; s < 3; s++)
+                    m[r][s] += w * g[3 * a + r] * g[3 * c + s];
+        }
+}
+
+/* c = a · b (3×3). */
+static void mul3(double a[3][3], double b[3][3], double c[3][3])
+{
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            c[i][j] = a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j];
+}
+
+/* ret = a⁻¹ (3×3, by cofactors); false when a is singular. */
+static bool inv3(double a[3][3], double ret[3][3])
+{
+    double c00 = a[1][1] * a[2][2] - a[1][2] * a[2][1];
+    double c01 = a[1][2] * a[2][0] - a[1][0] * a[2][2];
+    double c02 = a[1][0] * a[2][1] - a[1][1] * a[2][0];
+    double det = a[0][0] * c00 + a[0][1] * c01 + a[0][2] * c02;
+    if (!(fabs(det) > 0) || !isfinite(det))
+        return false;
+    ret[0][0] = c00 / det;
+    ret[1][0] = c01 / det;
+    ret[2][0] = c02 / det;
+    ret[0][1] = (a[0][2] * a[2][1] - a[0][1] * a[2][2]) / det;
+    ret[1][1] = (a[0][0] * a[2][2] - a[0][2] * a[2][0]) / det;
+    ret[2][1] = (a[0][1] * a[2][0] - a[0][0] * a[2][1]) / det;
+    ret[0][2] = (a[0][1] * a[1][2] - a[0][2] * a[1][1]) / det;
+    ret[1][2] = (a[0][2] * a[1][0] - a[0][0] * a[1][2]) / det;
+    ret[2][2] = (a[0][0] * a[1][1] - a[0][1] * a[1][0]) / det;
+    return true;
+}
+
+/* The two vertices (of x[0..n)) that span scan facet j, its silhouette
+ * edge's ends, into ret (GEO_NONE where none). Along the edge's
+ * direction e (in the facet's plane, across the view), the two ends lie
+ * one at or before the facet's extent and one at or beyond it (the facet
+ * is what the other views left of the strip between them): each end is
+ * the highest vertex on its side within tau of the highest of all
+ * (slack: how far inside the extent an end may seem). A vertical plane
+ * may be of a side view or of the top view: both are tried and the pair
+ * lying higher kept. When no pair qualifies, the two highest. */
+static void span_of(const geo_poly *scan, uint32_t j, const double (*x)[3],
+                    const uint32_t *adj_start, const uint32_t *adj,
+                    uint32_t *stamp, uint32_t mark, uint32_t hint,
+                    double tau, double slack,
+                    uint32_t *cand, double *ch, uint32_t ret[2])
+{
+    const double *m = scan->planes[j];
+    /* the highest vertex by ascent along the edges (on a convex
+     * polytope a linear function has no other local maximum) */
+    uint32_t top = hint;
+    double s1 = geo_vdot(m, x[top]);
+    for (uint32_t at = GEO_NONE; at != top;) {
+        at = top;
+        for (uint32_t a = adj_start[at]; a < adj_start[at + 1]; a++) {
+            double s = geo_vdot(m, x[adj[a]]);
+            if (s > s1) {
+                s1 = s;
+                top = adj[a];
+            }
+        }
+    }
+    /* those within tau of it: the vertices above a plane form a
+     * connected part of the graph, grown from the top */
+    uint32_t nc = 0, second = GEO_NONE;
+    double s2 = -INFINITY;
+    cand[nc] = top;
+    ch[nc++] = s1;
+    stamp[top] = mark;
+    for (uint32_t i = 0; i < nc; i++)
+        for (uint32_t a = adj_start[cand[i]]; a < adj_start[cand[i] + 1]; a++) {
+            uint32_t u = adj[a];
+            if (stamp[u] == mark)
+                continue;
+            stamp[u] = mark;
+            double s = geo_vdot(m, x[u]);
+            if (s > s2) {
+                s2 = s;
+                second = u;
+            }
+            if (s >= s1 - tau) {
+                cand[nc] = u;
+                ch[nc++] = s;
+            }
+        }
+    ret[0] = top;
+    ret[1] = second;
+    /* the view directions the plane contains: the horizontal one, and z
+     * for a vertical plane */
+    double views[2][3];
+    int nviews = 0;
+    double h = sqrt(m[0] * m[0] + m[1] * m[1]);
+    if (h > 1e-9) {
+        views[nviews][0] = m[1] / h;
+        views[nviews][1] = -m[0] / h;
+        views[nviews++][2] = 0;
+    }
+    if (fabs(m[2]) < 1e-6) {
+        views[nviews][0] = views[nviews][1] = 0;
+        views[nviews++][2] = 1;
+    }
+    uint32_t fn = geo_poly_facet_size(scan, j);
+    const uint32_t *fv = geo_poly_facet(scan, j);
+    double best = INFINITY;
+    for (int k = 0; k < nviews; k++) {
+        double e[3];
+        geo_vcross(m, views[k], e);
+        double tmin = INFINITY, tmax = -INFINITY;
+        for (uint32_t i = 0; i < fn; i++) {
+            double t = geo_vdot(e, scan->verts[fv[i]]);
+            tmin = t < tmin ? t : tmin;
+            tmax = t > tmax ? t : tmax;
+        }
+        double da = INFINITY, db = INFINITY;
+        uint32_t ca = GEO_NONE, cb = GEO_NONE;
+        for (uint32_t i = 0; i < nc; i++) {
+            uint32_t u = cand[i];
+            double drop = s1 - ch[i];
+            if (drop > tau)
+                continue;
+            double t = geo_vdot(e, x[u]);
+            if (t <= tmin + slack && drop < da) {
+                da = drop;
+                ca = u;
+            }
+            if (t >= tmax - slack && drop < db) {
+                db = drop;
+                cb = u;
+            }
+        }
+        if (ca != GEO_NONE && cb != GEO_NONE && ca != cb && da + db < best) {
+            best = da + db;
+            ret[0] = ca;
+            ret[1] = cb;
+        }
     }
 }
 
 int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
-                      const uint32_t *src, double (*planes)[4],
-                      uint32_t nplanes, double *ret_scale)
+                      const uint32_t *src, double cluster,
+                      double (*planes)[4], uint32_t nplanes,
+                      double *ret_scale)
 {
-    uint32_t nv = est->nverts, np3 = 3 * nplanes;
+    uint32_t nv = est->nverts, nc = geo_poly_ncorners(est);
     *ret_scale = 0;
-    if ((size_t)np3 * np3 > (size_t)64 << 20)
-        return -E2BIG; /* beyond what a dense solve should take */
-    vtx *vs = malloc(((size_t)nv + 1) * sizeof *vs);
-    uint32_t *vf = malloc(((size_t)geo_poly_ncorners(est) + 1) * sizeof *vf);
-    uint32_t *vstart = calloc((size_t)nv + 2, sizeof *vstart);
-    double *A = malloc((size_t)np3 * np3 * sizeof *A);
-    double *g = malloc(((size_t)np3 + 1) * sizeof *g);
+    int r = -ENOMEM;
+    uint32_t *par = malloc(((size_t)nv + 1) * sizeof *par);
+    uint32_t *cl = malloc(((size_t)nv + 1) * sizeof *cl);
+    double (*x)[3] = calloc((size_t)nv + 1, sizeof *x);
+    uint32_t *cand = malloc(((size_t)nv + 1) * sizeof *cand);
+    double *ch = malloc(((size_t)nv + 1) * sizeof *ch);
+    uint64_t *inc = malloc(((size_t)nc + 1) * sizeof *inc);
     double (*t1)[3] = malloc(((size_t)nplanes + 1) * sizeof *t1);
     double (*t2)[3] = malloc(((size_t)nplanes + 1) * sizeof *t2);
     double *res = malloc((2 * (size_t)scan->nfacets + 1) * sizeof *res);
+    uint32_t (*pair)[2] = malloc(((size_t)scan->nfacets + 1) * sizeof *pair);
     double (*pl)[4] = malloc(((size_t)nplanes + 1) * sizeof *pl);
-    int r = -ENOMEM;
-    if (!vs || !vf || !vstart || !A || !g || !t1 || !t2 || !res || !pl)
+    blocks B = {0}, S = {0};
+    double (*vinv)[3][3] = NULL;
+    uint32_t *adj_start = NULL, *adj = NULL, *stamp = NULL;
+    uint32_t *rp = NULL, *ci = NULL;
+    double *val = NULL, (*rhs)[3] = NULL;
+    geo_spchol *fac = NULL;
+    if (!par || !cl || !x || !cand || !ch || !inc || !t1 || !t2 || !res || !pair || !pl)
         goto done;
     memcpy(pl, planes, nplanes * sizeof *pl);
-    /* each vertex's facets, then its best-meeting triple of planes */
-    for (uint32_t f = 0; f < est->nfacets; f++)
-        for (uint32_t k = est->fstart[f]; k < est->fstart[f + 1]; k++)
-            vstart[est->fidx[k] + 2]++;
+
+    /* the vertices: the estimate's, those closer than cluster one */
     for (uint32_t v = 0; v < nv; v++)
-        vstart[v + 2] += vstart[v + 1];
+        par[v] = v;
+    for (uint32_t f = 0; f < est->nfacets; f++)
+        for (uint32_t k = est->fstart[f]; k < est->fstart[f + 1]; k++) {
+            uint32_t a = est->fidx[k];
+            uint32_t b = est->fidx[k + 1 < est->fstart[f + 1] ? k + 1
+                                                              : est->fstart[f]];
+            if (geo_vdist(est->verts[a], est->verts[b]) < cluster)
+                par[uf_find(par, a)] = uf_find(par, b);
+        }
+    uint32_t ncl = 0;
+    for (uint32_t v = 0; v < nv; v++)
+        if (uf_find(par, v) == v)
+            cl[v] = ncl++;
+    uint32_t *cnt = calloc((size_t)ncl + 1, sizeof *cnt);
+    if (!cnt)
+        goto done;
+    for (uint32_t v = 0; v < nv; v++) {
+        uint32_t c = cl[uf_find(par, v)];
+        cl[v] = c;
+        cnt[c]++;
+        for (int k = 0; k < 3; k++)
+            x[c][k] += est->verts[v][k];
+    }
+    for (uint32_t c = 0; c < ncl; c++)
+        for (int k = 0; k < 3; k++)
+            x[c][k] /= cnt[c];
+    free(cnt);
+
+    /* the vertices' neighbours across the estimate's edges */
+    adj_start = calloc((size_t)ncl + 2, sizeof *adj_start);
+    adj = malloc(((size_t)nc + 1) * sizeof *adj);
+    stamp = calloc((size_t)ncl + 1, sizeof *stamp);
+    if (!adj_start || !adj || !stamp)
+        goto done;
+    /* each facet edge once per side: its corner's vertex to the next */
+    for (int pass = 0; pass < 2; pass++) {
+        for (uint32_t f = 0; f < est->nfacets; f++)
+            for (uint32_t k = est->fstart[f]; k < est->fstart[f + 1]; k++) {
+                uint32_t a = cl[est->fidx[k]];
+                uint32_t b = cl[est->fidx[k + 1 < est->fstart[f + 1]
+                                            ? k + 1 : est->fstart[f]]];
+                if (a == b)
+                    continue;
+                if (pass == 0)
+                    adj_start[a + 2]++;
+                else
+                    adj[adj_start[a + 1]++] = b;
+            }
+        if (pass == 0)
+            for (uint32_t i = 0; i < ncl; i++)
+                adj_start[i + 2] += adj_start[i + 1];
+    }
+    /* the incidences (plane, vertex), each once */
+    uint32_t ninc = 0;
     for (uint32_t f = 0; f < est->nfacets; f++)
         for (uint32_t k = est->fstart[f]; k < est->fstart[f + 1]; k++)
-            vf[vstart[est->fidx[k] + 1]++] = src[f];
-    for (uint32_t v = 0; v < nv; v++) {
-        double best = -1;
-        const uint32_t *fs = vf + vstart[v];
-        uint32_t n = vstart[v + 1] - vstart[v];
-        for (uint32_t a = 0; a < n; a++)
-            for (uint32_t b = a + 1; b < n; b++)
-                for (uint32_t c = b + 1; c < n; c++) {
-                    double bc[3];
-                    geo_vcross(pl[fs[b]], pl[fs[c]], bc);
-                    double det = fabs(geo_vdot(pl[fs[a]], bc));
-                    if (det > best) {
-                        best = det;
-                        vs[v].pl[0] = fs[a];
-                        vs[v].pl[1] = fs[b];
-                        vs[v].pl[2] = fs[c];
-                    }
-                }
-        if (best <= 0) {
-            r = -EINVAL;
+            inc[ninc++] = (uint64_t)src[f] << 32 | cl[est->fidx[k]];
+    qsort(inc, ninc, sizeof *inc, cmp_u64);
+    uint32_t m = 0;
+    for (uint32_t i = 0; i < ninc; i++)
+        if (m == 0 || inc[i] != inc[m - 1])
+            inc[m++] = inc[i];
+    ninc = m;
+
+    /* the block pattern: the diagonal and each incidence both ways */
+    B.n = nplanes + ncl;
+    B.rp = calloc((size_t)B.n + 2, sizeof *B.rp);
+    B.ci = malloc(((size_t)B.n + 2 * (size_t)ninc + 1) * sizeof *B.ci);
+    if (!B.rp || !B.ci)
+        goto done;
+    for (uint32_t i = 0; i < B.n; i++)
+        B.rp[i + 2]++;
+    for (uint32_t i = 0; i < ninc; i++) {
+        B.rp[(inc[i] >> 32) + 2]++;
+        B.rp[nplanes + (uint32_t)inc[i] + 2]++;
+    }
+    for (uint32_t i = 0; i < B.n; i++)
+        B.rp[i + 2] += B.rp[i + 1];
+    for (uint32_t i = 0; i < B.n; i++)
+        B.ci[B.rp[i + 1]++] = i;
+    for (uint32_t i = 0; i < ninc; i++) {
+        uint32_t p = (uint32_t)(inc[i] >> 32), c = nplanes + (uint32_t)inc[i];
+        B.ci[B.rp[p + 1]++] = c;
+        B.ci[B.rp[c + 1]++] = p;
+    }
+    for (uint32_t i = 0; i < B.n; i++) /* rows sorted for block_at */
+        for (uint32_t a = B.rp[i] + 1; a < B.rp[i + 1]; a++)
+            for (uint32_t b = a; b > B.rp[i] && B.ci[b - 1] > B.ci[b]; b--) {
+                uint32_t t = B.ci[b];
+                B.ci[b] = B.ci[b - 1];
+                B.ci[b - 1] = t;
+            }
+    uint32_t nb = B.rp[B.n], n = 3 * B.n;
+    B.v = malloc(((size_t)nb + 1) * sizeof *B.v);
+    rp = malloc(((size_t)n + 1) * sizeof *rp);
+    ci = malloc((9 * (size_t)nb + 1) * sizeof *ci);
+    val = malloc((9 * (size_t)nb + 1) * sizeof *val);
+    rhs = malloc(((size_t)n + 1) * sizeof *rhs);
+    if (!B.v || !rp || !ci || !val || !rhs)
+        goto done;
+
+    /* the planes' Schur complement: planes meeting at a vertex */
+    {
+        size_t npair = 0;
+        for (uint32_t cv = 0; cv < ncl; cv++) {
+            uint32_t row = nplanes + cv, d = B.rp[row + 1] - B.rp[row];
+            npair += (size_t)d * d;
+        }
+        uint64_t *pq = malloc((npair + nplanes + 1) * sizeof *pq);
+        if (!pq)
+            goto done;
+        size_t k = 0;
+        for (uint32_t p = 0; p < nplanes; p++)
+            pq[k++] = (uint64_t)p << 32 | p;
+        for (uint32_t cv = 0; cv < ncl; cv++) {
+            uint32_t row = nplanes + cv;
+            for (uint32_t ia = B.rp[row]; ia < B.rp[row + 1]; ia++)
+                for (uint32_t ib = B.rp[row]; ib < B.rp[row + 1]; ib++)
+                    if (B.ci[ia] < nplanes && B.ci[ib] < nplanes)
+                        pq[k++] = (uint64_t)B.ci[ia] << 32 | B.ci[ib];
+        }
+        qsort(pq, k, sizeof *pq, cmp_u64);
+        size_t u = 0;
+        for (size_t i = 0; i < k; i++)
+            if (u == 0 || pq[i] != pq[u - 1])
+                pq[u++] = pq[i];
+        S.n = nplanes;
+        S.rp = calloc((size_t)nplanes + 1, sizeof *S.rp);
+        S.ci = malloc((u + 1) * sizeof *S.ci);
+        S.v = malloc((u + 1) * sizeof *S.v);
+        vinv = malloc(((size_t)ncl + 1) * sizeof *vinv);
+        if (!S.rp || !S.ci || !S.v || !vinv) {
+            free(pq);
             goto done;
         }
+        for (size_t i = 0; i < u; i++) {
+            S.rp[(pq[i] >> 32) + 1]++;
+            S.ci[i] = (uint32_t)pq[i];
+        }
+        for (uint32_t p = 0; p < nplanes; p++)
+            S.rp[p + 1] += S.rp[p];
+        free(pq);
     }
-    double scale = 0;
+    double scale = 0, scale_prev = cluster;
+    uint32_t mark = 0;
     for (int it = 0; it < REFINE_ITERS; it++) {
-        for (uint32_t v = 0; v < nv; v++)
-            if (!vtx_solve(&vs[v], (const double(*)[4])pl)) {
+        if (it > 0)
+            scale_prev = scale;
+        for (uint32_t i = 0; i < nplanes; i++)
+            tangents(pl[i], t1[i], t2[i]);
+        memset(B.v, 0, (size_t)nb * sizeof *B.v);
+        memset(rhs, 0, (size_t)n * sizeof *rhs);
+        /* each scan facet's spanning vertices, and the residual scale */
+        uint32_t nr = 0;
+        for (uint32_t j = 0; j < scan->nfacets; j++) {
+            const double *mj = scan->planes[j];
+            uint32_t hint = j > 0 && pair[j - 1][0] != GEO_NONE ? pair[j - 1][0] : 0;
+            span_of(scan, j, (const double(*)[3])x, adj_start, adj, stamp,
+                    ++mark, hint, SPAN_SCALES * scale_prev, cluster, cand, ch,
+                    pair[j]);
+            for (int e = 0; e < 2; e++)
+                if (pair[j][e] != GEO_NONE)
+                    res[nr++] = fabs(geo_vdot(mj, x[pair[j][e]]) + mj[3]);
+        }
+        qsort(res, nr, sizeof *res, cmp_double);
+        scale = fmax(1.4826 * res[nr / 2], 1e-7);
+        if (it == 0)
+            *ret_scale = scale;
+        double dmax = 0;
+        for (uint32_t j = 0; j < scan->nfacets; j++) {
+            const double *mj = scan->planes[j];
+            for (int e = 0; e < 2; e++) {
+                uint32_t c = pair[j][e];
+                if (c == GEO_NONE)
+                    continue;
+                double rr = geo_vdot(mj, x[c]) + mj[3];
+                double w = fabs(rr) <= HUBER * scale ? 1 : HUBER * scale / fabs(rr);
+                uint32_t ti = nplanes + c;
+                add_outer(&B, &ti, mj, 1, w);
+                for (int k = 0; k < 3; k++)
+                    rhs[3 * ti + k][0] -= w * mj[k] * rr;
+            }
+        }
+        for (uint32_t i = 0; i < B.n; i++) {
+            double (*d)[3] = block_at(&B, i, i);
+            for (int k = 0; k < 3; k++)
+                dmax = fmax(dmax, d[k][k]);
+        }
+        double W = CONSTRAINT_WEIGHT * fmax(dmax, 1);
+        for (uint32_t i = 0; i < ninc; i++) {
+            uint32_t p = (uint32_t)(inc[i] >> 32), c = (uint32_t)inc[i];
+            uint32_t ti[2] = {p, nplanes + c};
+            double g[6] = {geo_vdot(t1[p], x[c]), geo_vdot(t2[p], x[c]), 1,
+                           pl[p][0], pl[p][1], pl[p][2]};
+            double rr = geo_vdot(pl[p], x[c]) + pl[p][3];
+            add_outer(&B, ti, g, 2, W);
+            for (int k = 0; k < 3; k++) {
+                rhs[3 * p + k][0] -= W * g[k] * rr;
+                rhs[3 * (nplanes + c) + k][0] -= W * g[3 + k] * rr;
+            }
+        }
+        double damp = DAMP_REL * W + 1e-12;
+        for (uint32_t i = 0; i < B.n; i++) {
+            double (*d)[3] = block_at(&B, i, i);
+            for (int k = 0; k < 3; k++)
+                d[k][k] += damp;
+        }
+        /* the vertices eliminated (each couples only to its planes):
+         * the planes' Schur complement S, factored, then each vertex
+         * back-substituted */
+        memset(S.v, 0, (size_t)S.rp[S.n] * sizeof *S.v);
+        for (uint32_t p = 0; p < nplanes; p++)
+            memcpy(block_at(&S, p, p), block_at(&B, p, p), sizeof S.v[0]);
+        for (uint32_t cv = 0; cv < ncl; cv++) {
+            uint32_t row = nplanes + cv;
+            double mi[3][3];
+            if (!inv3(block_at(&B, row, row), mi)) {
                 r = -EINVAL;
                 goto done;
             }
-        for (uint32_t i = 0; i < nplanes; i++)
-            tangents(pl[i], t1[i], t2[i]);
-        /* the supports: the best vertex per scan facet, and its tie */
-        uint32_t nr = 0;
-        memset(A, 0, (size_t)np3 * np3 * sizeof *A);
-        memset(g, 0, np3 * sizeof *g);
-        for (int pass = 0; pass < 2; pass++) {
-            nr = 0;
-            for (uint32_t j = 0; j < scan->nfacets; j++) {
-                const double *m = scan->planes[j];
-                uint32_t b1 = 0, b2 = GEO_NONE;
-                double s1 = -INFINITY, s2 = -INFINITY;
-                for (uint32_t v = 0; v < nv; v++) {
-                    double s = geo_vdot(m, vs[v].x);
-                    if (s > s1) {
-                        s2 = s1, b2 = b1;
-                        s1 = s, b1 = v;
-                    } else if (s > s2) {
-                        s2 = s, b2 = v;
-                    }
-                }
-                double r1 = s1 + m[3];
-                if (pass == 0) {
-                    res[nr++] = fabs(r1);
+            memcpy(vinv[cv], mi, sizeof mi);
+            for (uint32_t ia = B.rp[row]; ia < B.rp[row + 1]; ia++) {
+                uint32_t p = B.ci[ia];
+                if (p >= nplanes)
                     continue;
-                }
-                double wt = fabs(r1) <= HUBER * scale ? 1 : HUBER * scale / fabs(r1);
-                add_row(A, g, np3, &vs[b1], m, r1, wt, (const double(*)[3])t1,
-                        (const double(*)[3])t2);
-                if (b2 != GEO_NONE && s1 - s2 <= TIE_SCALE * scale) {
-                    double r2 = s2 + m[3];
-                    double w2 = fabs(r2) <= HUBER * scale ? 1 : HUBER * scale / fabs(r2);
-                    add_row(A, g, np3, &vs[b2], m, r2, w2, (const double(*)[3])t1,
-                            (const double(*)[3])t2);
+                double g[3][3]; /* A_pc · A_cc⁻¹ */
+                mul3(block_at(&B, p, row), mi, g);
+                for (int k = 0; k < 3; k++)
+                    for (int l = 0; l < 3; l++)
+                        rhs[3 * p + k][0] -= g[k][l] * rhs[3 * row + l][0];
+                for (uint32_t ib = B.rp[row]; ib < B.rp[row + 1]; ib++) {
+                    uint32_t q = B.ci[ib];
+                    if (q >= nplanes)
+                        continue;
+                    double h[3][3];
+                    mul3(g, B.v[ib], h);
+                    double (*s)[3] = block_at(&S, p, q);
+                    for (int k = 0; k < 3; k++)
+                        for (int l = 0; l < 3; l++)
+                            s[k][l] -= h[k][l];
                 }
             }
-            if (pass == 0) {
-                qsort(res, nr, sizeof *res, cmp_double);
-                scale = fmax(1.4826 * res[nr / 2], 1e-7);
-                if (it == 0)
-                    *ret_scale = scale;
+        }
+        /* scalar CSR from S's blocks */
+        uint32_t z = 0, np3 = 3 * nplanes;
+        for (uint32_t i = 0; i < nplanes; i++)
+            for (int rI = 0; rI < 3; rI++) {
+                rp[3 * i + rI] = z;
+                for (uint32_t a = S.rp[i]; a < S.rp[i + 1]; a++)
+                    for (int s = 0; s < 3; s++) {
+                        ci[z] = 3 * S.ci[a] + s;
+                        val[z++] = S.v[a][rI][s];
+                    }
             }
-        }
-        double dmax = 0;
-        for (uint32_t i = 0; i < np3; i++)
-            dmax = fmax(dmax, A[(size_t)i * np3 + i]);
-        for (uint32_t i = 0; i < np3; i++) {
-            A[(size_t)i * np3 + i] += DAMP_REL * dmax + 1e-12;
-            g[i] = -g[i];
-        }
-        if (!chol_solve(A, g, np3)) {
-            r = -EINVAL;
+        rp[np3] = z;
+        fac = geo_spchol_free(fac);
+        if ((r = geo_spchol_factor(np3, rp, ci, val, 0, NULL, &fac)) < 0) {
+            r = r == -ENOMEM ? r : -EINVAL;
             goto done;
         }
-        for (uint32_t i = 0; i < nplanes; i++) {
-            double n[3];
+        if ((r = geo_spchol_solve3(fac, rhs)) < 0)
+            goto done;
+        for (uint32_t cv = 0; cv < ncl; cv++) {
+            uint32_t row = nplanes + cv;
+            double bv[3] = {rhs[3 * row][0], rhs[3 * row + 1][0],
+                            rhs[3 * row + 2][0]};
+            for (uint32_t ia = B.rp[row]; ia < B.rp[row + 1]; ia++) {
+                uint32_t p = B.ci[ia];
+                if (p >= nplanes)
+                    continue;
+                for (int k = 0; k < 3; k++)
+                    for (int l = 0; l < 3; l++)
+                        bv[k] -= B.v[ia][k][l] * rhs[3 * p + l][0];
+            }
             for (int k = 0; k < 3; k++)
-                n[k] = pl[i][k] + g[3 * i] * t1[i][k] + g[3 * i + 1] * t2[i][k];
-            geo_vnormalize(n);
-            memcpy(pl[i], n, sizeof n);
-            pl[i][3] += g[3 * i + 2];
+                rhs[3 * row + k][0] = vinv[cv][k][0] * bv[0] +
+                                      vinv[cv][k][1] * bv[1] +
+                                      vinv[cv][k][2] * bv[2];
         }
+        for (uint32_t i = 0; i < nplanes; i++) {
+            double nn[3];
+            for (int k = 0; k < 3; k++)
+                nn[k] = pl[i][k] + rhs[3 * i][0] * t1[i][k] +
+                        rhs[3 * i + 1][0] * t2[i][k];
+            double len = sqrt(geo_vdot(nn, nn));
+            for (int k = 0; k < 3; k++)
+                pl[i][k] = nn[k] / len;
+            pl[i][3] = (pl[i][3] + rhs[3 * i + 2][0]) / len;
+        }
+        for (uint32_t c = 0; c < ncl; c++)
+            for (int k = 0; k < 3; k++)
+                x[c][k] += rhs[3 * (nplanes + c) + k][0];
     }
     memcpy(planes, pl, nplanes * sizeof *pl);
     r = 0;
 done:
-    free(vs), free(vf), free(vstart), free(A), free(g), free(t1), free(t2);
-    free(res), free(pl);
+    geo_spchol_free(fac);
+    free(par), free(cl), free(x), free(cand), free(ch), free(inc);
+    free(t1), free(t2), free(res);
+    free(pair), free(pl), free(B.rp), free(B.ci), free(B.v);
+    free(S.rp), free(S.ci), free(S.v), free(vinv);
+    free(adj_start), free(adj), free(stamp);
+    free(rp), free(ci), free(val), free(rhs);
     return r;
 }

@@ -21,7 +21,7 @@ void geo_correct_opts_default(geo_correct_opts *o)
     o->collapse_clusters = true;
     o->max_rounds = 4;
     o->convex = false;
-    o->convex_fit = GEO_CONVEX_FIT_AREA;
+    o->convex_fit = GEO_CONVEX_FIT_SILHOUETTE;
 }
 
 void geo_correct_report_clear(geo_correct_report *r)

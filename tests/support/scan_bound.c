@@ -65,9 +65,11 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-int sim_scan_bound_measure(const geo_poly *stone, uint32_t k, double sigma,
-                           double phase, double tol_deg, double *facet_sd_deg,
-                           sim_scan_bound *ret)
+/* The bound from q[v], the sum over v's measurements of the projector
+ * each measures (times σ², which is divided out here). */
+static int bound_of(const geo_poly *stone, const double (*q)[3][3],
+                    double sigma, double tol_deg, double *facet_sd_deg,
+                    sim_scan_bound *ret)
 {
     uint32_t nf = stone->nfacets, nv = stone->nverts;
     uint32_t n = 3 * nf + 3 * nv;
@@ -80,29 +82,15 @@ int sim_scan_bound_measure(const geo_poly *stone, uint32_t k, double sigma,
         return 0;
     }
     int r = -ENOMEM;
-    double (*q)[3][3] = calloc((size_t)nv + 1, sizeof *q);
-    uint32_t *ids = malloc(((size_t)nv + 1) * sizeof *ids);
     double *info = calloc((size_t)n * n + 1, sizeof *info);
     double (*t1)[3] = malloc(((size_t)nf + 1) * sizeof *t1);
     double (*t2)[3] = malloc(((size_t)nf + 1) * sizeof *t2);
     uint32_t *rp = NULL, *ci = NULL;
     double *val = NULL, (*b)[3] = NULL, *sd = NULL;
     geo_spchol *fac = NULL;
-    if (!q || !ids || !info || !t1 || !t2)
+    if (!info || !t1 || !t2)
         goto done;
 #define INFO(i, j) info[(size_t)(i) * n + (j)]
-    /* Q_x over the views that have x on their silhouette */
-    for (uint32_t i = 0; i <= k; i++) {
-        double e1[3], e2[3];
-        sim_view_basis(k, phase, i, e1, e2);
-        uint32_t h = sim_silhouette(stone, e1, e2, ids);
-        if (h == 0 && nv > 0)
-            goto done;
-        for (uint32_t j = 0; j < h; j++)
-            for (int a = 0; a < 3; a++)
-                for (int c = 0; c < 3; c++)
-                    q[ids[j]][a][c] += e1[a] * e1[c] + e2[a] * e2[c];
-    }
     double qmax = 0;
     for (uint32_t v = 0; v < nv; v++)
         for (int a = 0; a < 3; a++) {
@@ -175,7 +163,71 @@ int sim_scan_bound_measure(const geo_poly *stone, uint32_t k, double sigma,
     r = 0;
 done:
     geo_spchol_free(fac);
-    free(q), free(ids), free(info), free(t1), free(t2);
+    free(info), free(t1), free(t2);
     free(rp), free(ci), free(val), free(b), free(sd);
+    return r;
+}
+
+int sim_scan_bound_measure(const geo_poly *stone, uint32_t k, double sigma,
+                           double phase, double tol_deg, double *facet_sd_deg,
+                           sim_scan_bound *ret)
+{
+    uint32_t nv = stone->nverts;
+    double (*q)[3][3] = calloc((size_t)nv + 1, sizeof *q);
+    uint32_t *ids = malloc(((size_t)nv + 1) * sizeof *ids);
+    int r = -ENOMEM;
+    if (!q || !ids)
+        goto done;
+    /* Q_x over the views that have x on their silhouette */
+    for (uint32_t i = 0; i <= k; i++) {
+        double e1[3], e2[3];
+        sim_view_basis(k, phase, i, e1, e2);
+        uint32_t h = sim_silhouette(stone, e1, e2, ids);
+        if (h == 0 && nv > 0)
+            goto done;
+        for (uint32_t j = 0; j < h; j++)
+            for (int a = 0; a < 3; a++)
+                for (int c = 0; c < 3; c++)
+                    q[ids[j]][a][c] += e1[a] * e1[c] + e2[a] * e2[c];
+    }
+    r = bound_of(stone, (const double(*)[3][3])q, sigma, tol_deg,
+                 facet_sd_deg, ret);
+done:
+    free(q), free(ids);
+    return r;
+}
+
+int sim_scan_bound_of_scan(const geo_poly *stone, const geo_poly *scan,
+                           double sigma, double tol_deg, double *facet_sd_deg,
+                           sim_scan_bound *ret)
+{
+    uint32_t nv = stone->nverts;
+    double (*q)[3][3] = calloc((size_t)nv + 1, sizeof *q);
+    if (!q)
+        return -ENOMEM;
+    /* each scan facet measures, along its normal, the two stone vertices
+     * that span it: the two highest in its direction */
+    for (uint32_t j = 0; j < scan->nfacets; j++) {
+        const double *m = scan->planes[j];
+        uint32_t top[2] = {UINT32_MAX, UINT32_MAX};
+        double s1 = -INFINITY, s2 = -INFINITY;
+        for (uint32_t v = 0; v < nv; v++) {
+            double s = geo_vdot(m, stone->verts[v]);
+            if (s > s1) {
+                s2 = s1, top[1] = top[0];
+                s1 = s, top[0] = v;
+            } else if (s > s2) {
+                s2 = s, top[1] = v;
+            }
+        }
+        for (int e = 0; e < 2; e++)
+            if (top[e] != UINT32_MAX)
+                for (int a = 0; a < 3; a++)
+                    for (int c = 0; c < 3; c++)
+                        q[top[e]][a][c] += m[a] * m[c];
+    }
+    int r = bound_of(stone, (const double(*)[3][3])q, sigma, tol_deg,
+                     facet_sd_deg, ret);
+    free(q);
     return r;
 }

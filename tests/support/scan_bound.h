@@ -43,4 +43,15 @@ int sim_scan_bound_measure(const geo_poly *stone, uint32_t k, double sigma,
                            double phase, double tol_deg, double *facet_sd_deg,
                            sim_scan_bound *ret);
 
+/* The same bound with only what the scanned model keeps: each facet of
+ * scan (sim_scan_phase of stone, noise sigma in mm) is one silhouette
+ * edge, and measures the two stone vertices that span it along its
+ * normal; the silhouette planes the intersection cut away measure
+ * nothing. A correction sees the scan, not the silhouettes, so this is
+ * its bound (still optimistic: the surviving planes are the innermost,
+ * a bias the bound does not model). */
+int sim_scan_bound_of_scan(const geo_poly *stone, const geo_poly *scan,
+                           double sigma, double tol_deg, double *facet_sd_deg,
+                           sim_scan_bound *ret);
+
 #endif
