@@ -15,7 +15,8 @@
  *     leaves) of the group's plane — the criterion of the merge's
  *     automatic groups (merge_groups.c), applied once to the raw scan;
  *  2. planes: each group's plane is its surface's least-squares plane
- *     (the default, GEO_CONVEX_FIT_AREA), or fitted to the group's boundary — the
+ *     (GEO_CONVEX_FIT_AREA, also the start of the silhouette adjustment
+ *     that geo_correct uses), or fitted to the group's boundary — the
  *     edges it shares with other groups, where the slivers hinge on the
  *     true edges — by least squares over the boundary segments (each
  *     weighted by its length), with the segments that lie more than a few
@@ -27,7 +28,9 @@
  *  4. the result is the intersection of the kept half-spaces.
  *
  * Steps 1–3 are geo_convex_planes; geo_correct_convex runs them and step
- * 4 and checks the result (see there). Conventions of lib/core/poly.h; mm.
+ * 4 (with the silhouette fit adjusting the planes to every scan facet:
+ * geo_convex_refine) and checks the result (see there). Conventions of
+ * lib/core/poly.h; mm.
  * Reentrant; thread-safe on distinct models. */
 #ifndef GEO_CONVEX_H
 #define GEO_CONVEX_H
@@ -61,13 +64,15 @@ void geo_convex_planes_clear(geo_convex_planes *r);
 enum geo_convex_fit {
     /* the least-squares plane of the group's surface (Palachev 2012, §2.5.2,
      * the area and inertia ways), over the slivers of the whole true
-     * facet: measured the better one with 0–3 µm of noise (docs) */
+     * facet */
     GEO_CONVEX_FIT_AREA = 0,
     /* the trimmed fit of the group's boundary (step 2 above): better
      * noise-free, worse once the noise is a micrometre */
     GEO_CONVEX_FIT_HINGE = 1,
     /* the area planes, then adjusted to every silhouette plane of the
-     * scan (geo_convex_refine) */
+     * scan at the vertices that span it (geo_convex_refine), kept when
+     * their intersection passes the checks: the most faithful with 0–3 µm
+     * of noise (docs), geo_correct's */
     GEO_CONVEX_FIT_SILHOUETTE = 2,
 };
 

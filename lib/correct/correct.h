@@ -43,7 +43,8 @@ typedef struct geo_correct_opts {
                                    [false: on the fixed suite it does not
                                    yet beat the merge, see
                                    docs/kernels/correct-convex.md] */
-    enum geo_convex_fit convex_fit; /* its planes [GEO_CONVEX_FIT_AREA] */
+    enum geo_convex_fit convex_fit; /* its planes
+                                       [GEO_CONVEX_FIT_SILHOUETTE] */
     uint32_t max_rounds;        /* merge + collapse rounds [4] */
 } geo_correct_opts;
 

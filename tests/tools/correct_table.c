@@ -16,8 +16,9 @@
  * auto = geo_correct with the convex path on (default), merge =
  * its defaults (the convex path off: the Palachev 2012 merge only), planes = geo_convex_planes_find
  * intersected by the simulator (the planes alone, no checks); --fit
- * the convex path's plane fit (convex.h; with --method planes the
- * silhouette fit adjusts the planes, still without the checks).
+ * the convex path's plane fit (convex.h; geo_correct's by default; with
+ * --method planes the silhouette fit adjusts the planes, still without
+ * the checks).
  *
  * One Markdown row per scan (--rows; always without --suite): cut, seed,
  * K, noise, facets truth / scan / corrected, recovered % (normal within
@@ -109,7 +110,7 @@ static void note_worst(totals *t, const char *name, double rec)
 }
 
 /* The correction by the chosen method; a new model or NULL (msg set). */
-static enum geo_convex_fit fit = GEO_CONVEX_FIT_AREA;
+static enum geo_convex_fit fit; /* geo_correct's unless --fit */
 
 static geo_poly *correct(const geo_poly *scan, enum method m, bool *valid,
                          char *msg, size_t len)
@@ -282,6 +283,9 @@ int main(int argc, char **argv)
     unsigned suite = 0, first = 0;
     bool rows = false;
     enum method m = M_AUTO;
+    geo_correct_opts defaults;
+    geo_correct_opts_default(&defaults);
+    fit = defaults.convex_fit;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (strcmp(a, "--rows") == 0) {

@@ -107,6 +107,44 @@ static void test_noisy_scan_comes_out_valid_and_nearer_the_stone(void **state)
     geo_poly_free(stone);
 }
 
+/* With a micrometre of noise the adjustment to the silhouettes gives
+ * back facets the surface fit of the slivers misses: on this brilliant
+ * (K = 400, 1 µm) the girdle facets' planes, each known from its two
+ * surviving slivers. Measured 51 facets of 121 with the area fit, 64
+ * adjusted; the test asks for ten more and a valid result no farther
+ * from the stone than the scan. */
+static void test_adjustment_recovers_more_than_the_area_fit(void **state)
+{
+    (void)state;
+    geo_poly *stone = sim_stone(SIM_BRILLIANT, 2);
+    geo_poly *scan = sim_scan(stone, 400, 1e-3, 2);
+    assert_non_null(scan);
+    geo_convex_report ra, rs;
+    geo_poly *qa = convex_correct(scan, GEO_CONVEX_FIT_AREA, &ra);
+    geo_poly *qs = convex_correct(scan, GEO_CONVEX_FIT_SILHOUETTE, &rs);
+    /* valid; convex only to the rounding of its vertices: the adjustment
+     * makes planes meet where the stone's do, so a vertex solved from
+     * three of them may lie a rounding above a fourth */
+    const char *bad = ms_invalid(qs);
+    if (bad)
+        fail_msg("result not valid: %s", bad);
+    sim_fidelity fa, fs;
+    assert_int_equal(sim_fidelity_measure(stone, qa, 0.1, 0.005, &fa), 0);
+    assert_int_equal(sim_fidelity_measure(stone, qs, 0.1, 0.005, &fs), 0);
+    if (fs.recovered < fa.recovered + 10)
+        fail_msg("adjusted %u, area fit %u of %u", fs.recovered, fa.recovered,
+                 fa.truth);
+    double hs = sim_hausdorff(scan, stone, 2000);
+    double hq = sim_hausdorff(qs, stone, 2000);
+    if (hq > hs)
+        fail_msg("Hausdorff to the stone %.2f µm, the scan's %.2f µm",
+                 hq * 1e3, hs * 1e3);
+    geo_poly_free(qa);
+    geo_poly_free(qs);
+    geo_poly_free(scan);
+    geo_poly_free(stone);
+}
+
 static void test_non_convex_model_is_declined_untouched(void **state)
 {
     (void)state;
@@ -158,6 +196,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_noise_free_scan_gives_back_every_facet),
         cmocka_unit_test(test_noisy_scan_comes_out_valid_and_nearer_the_stone),
+        cmocka_unit_test(test_adjustment_recovers_more_than_the_area_fit),
         cmocka_unit_test(test_non_convex_model_is_declined_untouched),
         cmocka_unit_test(test_correct_auto_takes_the_convex_path_when_asked),
     };

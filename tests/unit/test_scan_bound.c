@@ -167,11 +167,47 @@ static void test_bound_scales_with_the_noise(void **state)
     geo_poly_free(stone);
 }
 
+/* The scanned model keeps a part of the silhouettes' measurements (one
+ * direction of two vertices per surviving plane), so what it holds is
+ * less: per facet and in all. */
+static void test_the_scan_holds_less_than_its_silhouettes(void **state)
+{
+    (void)state;
+    const enum sim_cut cuts[] = {SIM_BRILLIANT, SIM_PRINCESS, SIM_EMERALD};
+    for (int c = 0; c < 3; c++) {
+        geo_poly *stone = sim_stone(cuts[c], 4);
+        assert_non_null(stone);
+        geo_poly *scan = sim_scan_phase(stone, 200, 1e-3, 0.2, 4);
+        assert_non_null(scan);
+        double *s1 = malloc(stone->nfacets * sizeof *s1);
+        double *s2 = malloc(stone->nfacets * sizeof *s2);
+        assert_non_null(s1);
+        assert_non_null(s2);
+        sim_scan_bound bs, bk;
+        assert_int_equal(sim_scan_bound_measure(stone, 200, 1e-3, 0.2, 0.25, s1, &bs), 0);
+        assert_int_equal(sim_scan_bound_of_scan(stone, scan, 1e-3, 0.25, s2, &bk), 0);
+        assert_int_equal(bk.truth, stone->nfacets);
+        assert_true(bk.attainable < bs.attainable);
+        assert_true(bk.sd_median_deg > bs.sd_median_deg);
+        for (uint32_t f = 0; f < stone->nfacets; f++)
+            if (!(s2[f] >= s1[f]))
+                fail_msg("cut %d facet %u: %.4f° from the scan, %.4f° from "
+                         "the silhouettes", c, f, s2[f], s1[f]);
+        /* noise-free, every facet */
+        assert_int_equal(sim_scan_bound_of_scan(stone, scan, 0, 0.25, NULL, &bk), 0);
+        assert_true(bk.attainable == stone->nfacets);
+        free(s1), free(s2);
+        geo_poly_free(scan);
+        geo_poly_free(stone);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_plain_estimator_does_not_beat_the_bound),
         cmocka_unit_test(test_bound_scales_with_the_noise),
+        cmocka_unit_test(test_the_scan_holds_less_than_its_silhouettes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
