@@ -281,7 +281,8 @@ int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
     uint32_t *rp = NULL, *ci = NULL;
     double *val = NULL, (*rhs)[3] = NULL;
     geo_spchol *fac = NULL;
-    if (!par || !cl || !x || !cand || !ch || !inc || !t1 || !t2 || !res || !pair || !pl)
+    if (!par || !cl || !x || !cand || !ch || !inc || !t1 || !t2 || !res ||
+        !pair || !pl)
         goto done;
     memcpy(pl, planes, nplanes * sizeof *pl);
 
@@ -443,7 +444,8 @@ int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
         uint32_t nr = 0;
         for (uint32_t j = 0; j < scan->nfacets; j++) {
             const double *mj = scan->planes[j];
-            uint32_t hint = j > 0 && pair[j - 1][0] != GEO_NONE ? pair[j - 1][0] : 0;
+            /* consecutive scan facets are mostly neighbours */
+            uint32_t hint = j > 0 ? pair[j - 1][0] : 0;
             span_of(scan, j, (const double(*)[3])x, adj_start, adj, stamp,
                     ++mark, hint, SPAN_SCALES * scale_prev, cluster, cand, ch,
                     pair[j]);
@@ -463,7 +465,8 @@ int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
                 if (c == GEO_NONE)
                     continue;
                 double rr = geo_vdot(mj, x[c]) + mj[3];
-                double w = fabs(rr) <= HUBER * scale ? 1 : HUBER * scale / fabs(rr);
+                double w = fabs(rr) <= HUBER * scale ? 1
+                                                      : HUBER * scale / fabs(rr);
                 uint32_t ti = nplanes + c;
                 add_outer(&B, &ti, mj, 1, w);
                 for (int k = 0; k < 3; k++)
