@@ -382,11 +382,8 @@ int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
             }
     uint32_t nb = B.rp[B.n], n = 3 * B.n;
     B.v = malloc(((size_t)nb + 1) * sizeof *B.v);
-    rp = malloc(((size_t)n + 1) * sizeof *rp);
-    ci = malloc((9 * (size_t)nb + 1) * sizeof *ci);
-    val = malloc((9 * (size_t)nb + 1) * sizeof *val);
     rhs = malloc(((size_t)n + 1) * sizeof *rhs);
-    if (!B.v || !rp || !ci || !val || !rhs)
+    if (!B.v || !rhs)
         goto done;
 
     /* the planes' Schur complement: planes meeting at a vertex */
@@ -430,6 +427,12 @@ int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
         for (uint32_t p = 0; p < nplanes; p++)
             S.rp[p + 1] += S.rp[p];
         free(pq);
+        /* S in scalars: 9 entries a block */
+        rp = malloc((3 * (size_t)nplanes + 1) * sizeof *rp);
+        ci = malloc((9 * u + 1) * sizeof *ci);
+        val = malloc((9 * u + 1) * sizeof *val);
+        if (!rp || !ci || !val)
+            goto done;
     }
     double scale = 0, scale_prev = cluster;
     uint32_t mark = 0;

@@ -66,7 +66,8 @@ static int cmp_double(const void *a, const void *b)
 }
 
 /* The bound from q[v], the sum over v's measurements of the projector
- * each measures (times σ², which is divided out here). */
+ * each measures (times σ², which is divided out here); q is not read
+ * when sigma is 0 (every facet attainable). */
 static int bound_of(const geo_poly *stone, const double (*q)[3][3],
                     double sigma, double tol_deg, double *facet_sd_deg,
                     sim_scan_bound *ret)
@@ -172,6 +173,8 @@ int sim_scan_bound_measure(const geo_poly *stone, uint32_t k, double sigma,
                            double phase, double tol_deg, double *facet_sd_deg,
                            sim_scan_bound *ret)
 {
+    if (!(sigma > 0)) /* every facet: no silhouette to look at */
+        return bound_of(stone, NULL, sigma, tol_deg, facet_sd_deg, ret);
     uint32_t nv = stone->nverts;
     double (*q)[3][3] = calloc((size_t)nv + 1, sizeof *q);
     uint32_t *ids = malloc(((size_t)nv + 1) * sizeof *ids);
@@ -201,6 +204,8 @@ int sim_scan_bound_of_scan(const geo_poly *stone, const geo_poly *scan,
                            double sigma, double tol_deg, double *facet_sd_deg,
                            sim_scan_bound *ret)
 {
+    if (!(sigma > 0))
+        return bound_of(stone, NULL, sigma, tol_deg, facet_sd_deg, ret);
     uint32_t nv = stone->nverts;
     double (*q)[3][3] = calloc((size_t)nv + 1, sizeof *q);
     if (!q)
