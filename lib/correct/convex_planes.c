@@ -504,8 +504,9 @@ static void hinge_fit(const geo_poly *p, const seg *sg, uint32_t n,
 
 /* Step 3's measure: how far plane pl cuts the polytope of the planes
  * nb[0..k) — the largest pl(x) over the vertices of their arrangement
- * that satisfy all of them; INFINITY when the neighbours do not bound the
- * region beyond pl (fewer than three, or no feasible vertex). */
+ * that satisfy all of them; INFINITY when there is no feasible vertex.
+ * The caller closes the polytope with a far box, so a region beyond pl
+ * the neighbours leave open reaches the box and counts as deep. */
 static double cut_depth(const double pl[4], const double (*nb)[4], uint32_t k,
                         double tol)
 {
@@ -584,7 +585,8 @@ static int group_neighbours(const geo_poly *p, const geo_topo *t,
 static int support(const geo_convex_planes *r, const double (*gpl)[4],
                    const double *garea, const double *groof,
                    const uint32_t *nstart, const uint32_t *nlist,
-                   double cut_min, double tol, uint8_t *drop)
+                   const double (*box)[4], double cut_min, double tol,
+                   uint8_t *drop)
 {
     uint32_t ng = r->ngroups;
     uint32_t *order = malloc(((size_t)ng + 1) * sizeof *order);
@@ -617,14 +619,27 @@ static int support(const geo_convex_planes *r, const double (*gpl)[4],
                 bool have = false;
                 for (uint32_t j = 0; j < k && !have; j++)
                     have = ids[j] == x;
-                if (have || k == cap)
+                if (have || k + 6 >= cap)
                     continue;
                 ids[k] = x;
                 roof = fmax(roof, groof[x]);
                 memcpy(nb[k++], gpl[x], sizeof nb[0]);
             }
         }
-        if (cut_depth(gpl[g], (const double(*)[4])nb, k, tol) <= cut_min + roof)
+        /* the box closes the region where the neighbours do not (a
+         * dropped neighbour's own can include the far side) */
+        if (k + 6 > cap) {
+            double (*nb2)[4] = realloc(nb, (k + 6) * sizeof *nb);
+            if (!nb2) {
+                free(order), free(nb), free(ids);
+                return -ENOMEM;
+            }
+            nb = nb2;
+            cap = k + 6;
+        }
+        memcpy(nb[k], box, 6 * sizeof nb[0]);
+        if (cut_depth(gpl[g], (const double(*)[4])nb, k + 6, tol) <=
+            cut_min + roof)
             drop[g] = 1;
     }
     free(order), free(nb), free(ids);
@@ -792,8 +807,19 @@ int geo_convex_planes_find(const geo_poly *p, uint32_t views, double noise,
         groof[g] = fit == GEO_CONVEX_FIT_HINGE ? 0
                    : ROOF * width * f.step * hypot(gpl[g][0], gpl[g][1]);
     }
+    /* a box far around the scan (its planes' depth beyond any facet is
+     * far more than any cut the support test allows) */
+    double box[6][4], pad = 10 * size;
+    for (int a = 0; a < 3; a++) {
+        memset(box[2 * a], 0, sizeof box[0]);
+        memset(box[2 * a + 1], 0, sizeof box[0]);
+        box[2 * a][a] = 1;
+        box[2 * a][3] = -(hi[a] + pad);
+        box[2 * a + 1][a] = -1;
+        box[2 * a + 1][3] = lo[a] - pad;
+    }
     r = support(ret, (const double(*)[4])gpl, garea, groof, nstart, nlist,
-                cut_min, geo_poly_eps(p), drop);
+                (const double(*)[4])box, cut_min, geo_poly_eps(p), drop);
     free(groof);
     if (r < 0)
         goto done;
