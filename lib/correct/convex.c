@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "halfspace.h"
+#include "plane.h"
 #include "topo.h"
 #include "vec.h"
 
@@ -29,6 +30,22 @@
  * bounds are not resolved by the scan; up to NARROW_ROUNDS rounds. */
 #define NARROW 20.0
 #define NARROW_ROUNDS 3
+
+/* A plane is needed when the intersection without it leaves some
+ * silhouette of the scan by more than NEED_FACTOR noise scales (the
+ * larger of the scan's surface noise and the hinges' scatter, at least
+ * NEED_REL of the model's size): drop_unneeded. */
+#define NEED_FACTOR 3.0
+#define NEED_REL 1e-6
+/* drop_unneeded's rounds, and the most neighbours of a facet it looks
+ * at */
+#define UNNEEDED_ROUNDS 3
+#define RING_MAX 30
+
+/* The silhouettes a result may be clipped by (clip_to_scan): a few
+ * corners' worth; beyond that the planes are wrong, not a corner. */
+#define CLIP_ROUNDS 4
+#define CLIP_MAX 8
 
 /* The deepest local concavity of p: over every edge, how far the
  * neighbour facet's vertices rise above this facet's plane. */
@@ -88,6 +105,272 @@ static int intersect(const geo_convex_planes *cp, double tol,
     return 0;
 }
 
+static int cmp_area_asc(const void *a, const void *b, void *ctx)
+{
+    const double *ar = ctx;
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    if (ar[x] != ar[y])
+        return ar[x] < ar[y] ? -1 : 1;
+    return (x > y) - (x < y);
+}
+
+/* Removes the planes of cp marked by a NaN offset, with their
+ * allowances; the groups' indices follow. 0 or -ENOMEM. */
+static int remove_marked(geo_convex_planes *cp)
+{
+    uint32_t m = 0, *to = malloc(((size_t)cp->nplanes + 1) * sizeof *to);
+    if (!to)
+        return -ENOMEM;
+    for (uint32_t i = 0; i < cp->nplanes; i++) {
+        to[i] = GEO_NONE;
+        if (isnan(cp->planes[i][3]))
+            continue;
+        memmove(cp->planes[m], cp->planes[i], sizeof cp->planes[0]);
+        cp->allow[m] = cp->allow[i];
+        to[i] = m++;
+    }
+    for (uint32_t g = 0; g < cp->ngroups; g++)
+        if (cp->kept[g] != GEO_NONE && cp->kept[g] < cp->nplanes)
+            cp->kept[g] = to[cp->kept[g]];
+    free(to);
+    cp->nplanes = m;
+    return 0;
+}
+
+/* Would the stone reach farther than need outside the scan p without
+ * facet f of q (plane pl)? The region beyond pl is bounded by the planes
+ * of f's neighbours, so its vertices are among the meets of three of
+ * those planes that satisfy them all; any silhouette plane of p more
+ * than need below one of them says yes. A vertex that some farther
+ * plane would cut off can only say yes wrongly (the plane is kept),
+ * never no. ring: the neighbours' planes, k of them. */
+static bool reaches_beyond(const geo_poly *p, const double pl[4],
+                           const double (*ring)[4], uint32_t k, double tol,
+                           double need)
+{
+    for (uint32_t a = 0; a < k; a++)
+        for (uint32_t b = a + 1; b < k; b++)
+            for (uint32_t c = b + 1; c < k; c++) {
+                double x[3];
+                if (!geo_plane_intersect3(ring[a], ring[b], ring[c], x) ||
+                    geo_plane_eval(pl, x) <= 0)
+                    continue;
+                bool ok = true;
+                for (uint32_t m = 0; m < k && ok; m++)
+                    ok = geo_plane_eval(ring[m], x) <= tol;
+                for (uint32_t f = 0; ok && f < p->nfacets; f++)
+                    if (geo_plane_eval(p->planes[f], x) > need)
+                        return true;
+            }
+    return false;
+}
+
+/* The planes of facet f's neighbours in q and of a far box, into ring
+ * (at most RING_MAX; more make the test unsure: *ret_k = 0). */
+static void ring_of(const geo_poly *q, const geo_topo *t, uint32_t f,
+                    uint32_t *mark, uint32_t stamp, double (*ring)[4],
+                    uint32_t *ret_k)
+{
+    /* a box far around q closes the region where the neighbours do not
+     * (the facet's plane then bounds the model alone): its corners lie
+     * far outside the scan, so such a plane is always needed */
+    double lo[3], hi[3];
+    geo_poly_bbox(q, lo, hi);
+    double pad = 10 * geo_poly_size(q);
+    uint32_t k = 0;
+    for (int a = 0; a < 3; a++) {
+        double n[3] = {0, 0, 0};
+        n[a] = 1;
+        ring[k][0] = n[0], ring[k][1] = n[1], ring[k][2] = n[2];
+        ring[k++][3] = -(hi[a] + pad);
+        ring[k][0] = -n[0], ring[k][1] = -n[1], ring[k][2] = -n[2];
+        ring[k++][3] = lo[a] - pad;
+    }
+    mark[f] = stamp;
+    for (uint32_t c = q->fstart[f]; c < q->fstart[f + 1]; c++) {
+        uint32_t h = geo_topo_neighbor(t, c);
+        if (h == GEO_NONE || mark[h] == stamp)
+            continue;
+        if (k == RING_MAX) {
+            *ret_k = 0;
+            return;
+        }
+        mark[h] = stamp;
+        memcpy(ring[k++], q->planes[h], sizeof ring[0]);
+    }
+    *ret_k = k;
+}
+
+/* Planes the scan does not need: a plane goes when, without it, the
+ * intersection would still lie inside every silhouette of the scan p to
+ * within need (mm, a few noise scales). A true facet's plane cuts off
+ * a corner the silhouettes hold; a bevel strip that the noise left along
+ * a true edge, or a second plane of one true facet, cuts off no more
+ * than the noise. Smallest result facets first; a facet next to one that
+ * goes waits for the next round, the intersection rebuilt between
+ * rounds (UNNEEDED_ROUNDS). rep->unneeded counts them. 0, 1 (declined),
+ * -ENOMEM. */
+static int drop_unneeded(const geo_poly *p, geo_convex_planes *cp,
+                         double need, double tol, geo_poly **q,
+                         uint32_t **src, geo_convex_report *rep,
+                         geo_err *err)
+{
+    int r = 0;
+    for (int round = 0; round < UNNEEDED_ROUNDS; round++) {
+        geo_poly *g = *q;
+        uint32_t nf = g->nfacets, ngone = 0;
+        geo_err perr;
+        geo_topo *t = geo_topo_build(g, &perr);
+        uint32_t *order = malloc(((size_t)nf + 1) * sizeof *order);
+        uint32_t *mark = calloc((size_t)nf + 1, sizeof *mark);
+        uint8_t *near = calloc((size_t)nf + 1, 1);
+        double *area = malloc(((size_t)nf + 1) * sizeof *area);
+        double (*ring)[4] = malloc(RING_MAX * sizeof *ring);
+        if (!t || !order || !mark || !near || !area || !ring) {
+            r = geo_err_set(err, -ENOMEM, "out of memory");
+        } else {
+            for (uint32_t f = 0; f < nf; f++) {
+                order[f] = f;
+                area[f] = geo_poly_facet_area(g, f);
+            }
+            qsort_r(order, nf, sizeof *order, cmp_area_asc, area);
+            for (uint32_t i = 0; i < nf; i++) {
+                uint32_t f = order[i], k;
+                if (near[f])
+                    continue;
+                ring_of(g, t, f, mark, i + 1, ring, &k);
+                if (k < 9 || reaches_beyond(p, g->planes[f],
+                                            (const double(*)[4])ring, k,
+                                            tol, need))
+                    continue;
+                cp->planes[(*src)[f]][3] = NAN;
+                ngone++;
+                for (uint32_t c = g->fstart[f]; c < g->fstart[f + 1]; c++) {
+                    uint32_t h = geo_topo_neighbor(t, c);
+                    if (h != GEO_NONE)
+                        near[h] = 1;
+                }
+            }
+        }
+        geo_topo_free(t);
+        free(order), free(mark), free(near), free(area), free(ring);
+        if (r < 0 || ngone == 0)
+            break;
+        if (remove_marked(cp) < 0) {
+            r = geo_err_set(err, -ENOMEM, "out of memory");
+            break;
+        }
+        rep->unneeded += ngone;
+        r = intersect(cp, tol, "the planes the scan needs", 160, q, src, rep,
+                      err);
+        if (r != 0)
+            break;
+    }
+    return r;
+}
+
+/* *dst = a copy of src's planes, allowances and groups (nf: the scan's
+ * facets; the area is not copied). 0 or -ENOMEM (dst zeroed). */
+static int planes_copy(geo_convex_planes *dst, const geo_convex_planes *src,
+                       uint32_t nf)
+{
+    *dst = *src;
+    dst->area = NULL;
+    size_t np = (size_t)src->nplanes + 1, ng = (size_t)src->ngroups + 1;
+    dst->planes = malloc(np * sizeof *dst->planes);
+    dst->allow = malloc(np * sizeof *dst->allow);
+    dst->kept = malloc(ng * sizeof *dst->kept);
+    dst->group = malloc(((size_t)nf + 1) * sizeof *dst->group);
+    if (!dst->planes || !dst->allow || !dst->kept || !dst->group) {
+        geo_convex_planes_clear(dst);
+        return -ENOMEM;
+    }
+    memcpy(dst->planes, src->planes, src->nplanes * sizeof *dst->planes);
+    memcpy(dst->allow, src->allow, src->nplanes * sizeof *dst->allow);
+    memcpy(dst->kept, src->kept, src->ngroups * sizeof *dst->kept);
+    memcpy(dst->group, src->group, nf * sizeof *dst->group);
+    return 0;
+}
+
+/* How far a result vertex may lie outside the scan (check_result). */
+static double outside_allow(const geo_convex_planes *cp, double max_dev)
+{
+    double roof_max = 0;
+    for (uint32_t i = 0; i < cp->nplanes; i++)
+        roof_max = fmax(roof_max, cp->allow[i]);
+    return OUTSIDE_FACTOR * fmax(fmax(cp->dev0, cp->hinge_noise),
+                                 fmax(max_dev, roof_max) / 2);
+}
+
+/* Where the result q reaches outside the scan p beyond outside_allow,
+ * the silhouettes it crosses are measured bounds of the stone: their
+ * planes join cp's (as the stone lies inside every silhouette) and the
+ * half-spaces are intersected again, up to CLIP_ROUNDS rounds, at most
+ * CLIP_MAX planes in all. Only the corner beyond the silhouette goes
+ * (a bevel the scan itself holds), not the whole recovered stone, as a
+ * fallback to the merge would. rep->clipped counts the planes added.
+ * 0, 1 (declined: the intersection failed), -ENOMEM. */
+static int clip_to_scan(const geo_poly *p, geo_convex_planes *cp,
+                        double max_dev, double tol, geo_poly **q,
+                        uint32_t **src, geo_convex_report *rep, geo_err *err)
+{
+    double allow = outside_allow(cp, max_dev);
+    uint8_t *added = NULL;
+    for (int round = 0; round < CLIP_ROUNDS; round++) {
+        uint32_t nadd = 0, *add = NULL;
+        for (uint32_t f = 0; f < p->nfacets; f++) {
+            if (added && added[f])
+                continue;
+            bool out = false;
+            for (uint32_t v = 0; v < (*q)->nverts && !out; v++)
+                out = geo_plane_eval(p->planes[f], (*q)->verts[v]) > allow;
+            if (!out)
+                continue;
+            uint32_t *a2 = realloc(add, ((size_t)nadd + 1) * sizeof *add);
+            if (!a2) {
+                free(add), free(added);
+                return geo_err_set(err, -ENOMEM, "out of memory");
+            }
+            add = a2;
+            add[nadd++] = f;
+        }
+        if (nadd == 0 || rep->clipped + nadd > CLIP_MAX) {
+            free(add);
+            break;
+        }
+        if (!added)
+            added = calloc((size_t)p->nfacets + 1, 1);
+        uint32_t n = cp->nplanes;
+        double (*pl)[4] = realloc(cp->planes, ((size_t)n + nadd) * sizeof *pl);
+        if (pl)
+            cp->planes = pl;
+        double *al = pl ? realloc(cp->allow, ((size_t)n + nadd) * sizeof *al)
+                        : NULL;
+        if (al)
+            cp->allow = al;
+        if (!added || !pl || !al) {
+            free(add), free(added);
+            return geo_err_set(err, -ENOMEM, "out of memory");
+        }
+        for (uint32_t i = 0; i < nadd; i++) {
+            memcpy(cp->planes[n + i], p->planes[add[i]], sizeof cp->planes[0]);
+            cp->allow[n + i] = cp->dev0;
+            added[add[i]] = 1;
+        }
+        cp->nplanes = n + nadd;
+        rep->clipped += nadd;
+        free(add);
+        int r = intersect(cp, tol, "the planes clipped by the silhouettes",
+                          150, q, src, rep, err);
+        if (r != 0) {
+            free(added);
+            return r;
+        }
+    }
+    free(added);
+    return 0;
+}
+
 /* The checks of the result q (src: its facets' planes in cp) against
  * the scan p: planar, within the bounds the noise and the view step
  * allow. Counts cp's redundant planes. 0 when q passes, 1 when declined
@@ -121,12 +404,7 @@ static int check_result(const geo_poly *p, const geo_poly *q,
      * girdle corner) a plane's error of a noise moves the vertex by many:
      * the bound there is the merge's own deviation bound or the largest
      * roof, whichever is more */
-    double roof_max = 0;
-    for (uint32_t i = 0; i < cp->nplanes; i++)
-        roof_max = fmax(roof_max, cp->allow[i]);
-    double out = 0;
-    double allow = OUTSIDE_FACTOR * fmax(fmax(cp->dev0, cp->hinge_noise),
-                                         fmax(max_dev, roof_max) / 2);
+    double out = 0, allow = outside_allow(cp, max_dev);
     for (uint32_t v = 0; v < q->nverts; v++)
         for (uint32_t f = 0; f < p->nfacets; f++) {
             double d = geo_plane_eval(p->planes[f], q->verts[v]);
@@ -178,6 +456,29 @@ static int check_result(const geo_poly *p, const geo_poly *q,
     return 0;
 }
 
+/* The last steps on the intersection q of cp's planes: the planes the
+ * scan does not need go, the silhouettes q crosses clip it, and the
+ * result is checked. 0 (passed), 1 (declined), -ENOMEM. */
+static int finish(const geo_poly *p, geo_convex_planes *cp, double max_dev,
+                  double need, double tol, geo_poly **q, uint32_t **src,
+                  geo_convex_report *rep, geo_err *err)
+{
+    int r = drop_unneeded(p, cp, need, tol, q, src, rep, err);
+    if (r == 0)
+        r = check_result(p, *q, *src, cp, max_dev, rep);
+    if (r == 1 && rep->deviation > outside_allow(cp, max_dev)) {
+        /* declined for reaching outside the scan: clipped, checked again */
+        r = clip_to_scan(p, cp, max_dev, tol, q, src, rep, err);
+        if (r == 0 && rep->clipped > 0) {
+            rep->reason[0] = 0;
+            r = check_result(p, *q, *src, cp, max_dev, rep);
+        } else if (r == 0) {
+            r = 1;
+        }
+    }
+    return r;
+}
+
 int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
                        double max_dev, enum geo_convex_fit fit,
                        const geo_ctx *ctx, geo_poly **ret,
@@ -209,6 +510,8 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
     geo_poly *q = NULL;
     uint32_t *src = NULL;
     double merge_tol = GEO_HALFSPACE_MERGE * geo_poly_size(p);
+    double need = NEED_FACTOR * fmax(fmax(noise, cp.hinge_noise),
+                                     NEED_REL * geo_poly_size(p));
     r = intersect(&cp, merge_tol, "the recovered planes", 170, &q, &src, rep,
                   err);
     if (r != 0)
@@ -232,11 +535,10 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
         }
         if (gone == 0)
             break;
-        uint32_t m = 0;
-        for (uint32_t i = 0; i < cp.nplanes; i++)
-            if (!isnan(cp.planes[i][3]))
-                memmove(cp.planes[m++], cp.planes[i], sizeof cp.planes[0]);
-        cp.nplanes = m;
+        if (remove_marked(&cp) < 0) {
+            r = geo_err_set(err, -ENOMEM, "out of memory");
+            goto done;
+        }
         rep->narrow += gone;
         r = intersect(&cp, merge_tol, "the recovered planes without the "
                       "narrow ones", 150, &q, &src, rep, err);
@@ -248,24 +550,27 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
          * intersection passes the checks: an adjustment that took a
          * wrong pair of vertices for a silhouette edge can move a plane
          * far, and the fitted planes are then the better answer */
-        double (*fitted)[4] = malloc(((size_t)cp.nplanes + 1) * sizeof *fitted);
-        if (!fitted) {
+        geo_convex_planes ca;
+        if (planes_copy(&ca, &cp, p->nfacets) < 0) {
             r = geo_err_set(err, -ENOMEM, "out of memory");
             goto done;
         }
-        memcpy(fitted, cp.planes, cp.nplanes * sizeof *fitted);
         double sc;
         double cluster = GEO_CONVEX_REFINE_CLUSTER *
                          fmax(cp.dev0, cp.hinge_noise);
-        r = geo_convex_refine(p, q, src, cluster, cp.planes, cp.nplanes, &sc);
+        r = geo_convex_refine(p, q, src, cluster, ca.planes, ca.nplanes, &sc);
+        /* the silhouettes' own noise, when the adjustment measured it */
+        if (r == 0)
+            need = fmax(need, NEED_FACTOR * sc);
         geo_poly *qa = NULL;
         uint32_t *srca = NULL;
         if (r == 0) {
             geo_convex_report ra = *rep;
-            r = intersect(&cp, merge_tol, "the adjusted planes", 170, &qa,
+            r = intersect(&ca, merge_tol, "the adjusted planes", 170, &qa,
                           &srca, &ra, err);
             if (r == 0)
-                r = check_result(p, qa, srca, &cp, max_dev, &ra);
+                r = finish(p, &ca, max_dev, need, merge_tol, &qa, &srca, &ra,
+                           err);
             if (r == 0) {
                 *rep = ra;
                 geo_poly_free(q);
@@ -274,22 +579,22 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
                 src = srca;
                 qa = NULL;
                 srca = NULL;
+                geo_convex_planes_clear(&cp);
+                cp = ca;
+                memset(&ca, 0, sizeof ca);
             }
         }
         geo_poly_free(qa);
         free(srca);
+        geo_convex_planes_clear(&ca);
         if (r == -ENOMEM) {
-            free(fitted);
             r = geo_err_set(err, r, "out of memory");
             goto done;
         }
-        if (r != 0) {
-            memcpy(cp.planes, fitted, cp.nplanes * sizeof *fitted);
-            r = check_result(p, q, src, &cp, max_dev, rep);
-        }
-        free(fitted);
+        if (r != 0)
+            r = finish(p, &cp, max_dev, need, merge_tol, &q, &src, rep, err);
     } else {
-        r = check_result(p, q, src, &cp, max_dev, rep);
+        r = finish(p, &cp, max_dev, need, merge_tol, &q, &src, rep, err);
     }
     if (r != 0) {
         if (r == -ENOMEM)

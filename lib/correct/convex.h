@@ -92,8 +92,9 @@ int geo_convex_planes_find(const geo_poly *p, uint32_t views, double noise,
  * of the stone that span it (convex_refine.c says how and why). est is
  * their intersection (geo_halfspace_intersect) and src its facets'
  * planes; vertices of est closer than cluster (mm) are one vertex.
- * *ret_scale gets the robust scale of the residuals before the
- * adjustment, mm. Returns 0, -EINVAL (the normal equations not positive
+ * *ret_scale gets the robust scale of the residuals at the last step
+ * (the planes adjusted by the steps before it): the silhouettes' own
+ * noise, mm. Returns 0, -EINVAL (the normal equations not positive
  * definite: planes unchanged), -ENOMEM. */
 /* The cluster radius geo_correct_convex passes, in noise bounds (the
  * larger of geo_convex_planes' dev0 and hinge_noise). */
@@ -110,6 +111,10 @@ typedef struct geo_convex_report {
     uint32_t redundant;  /* kept planes that bound no facet of the result */
     uint32_t narrow;     /* planes removed for a facet narrower than the
                             scan resolves */
+    uint32_t unneeded;   /* planes removed as the scan does not need
+                            them */
+    uint32_t clipped;    /* silhouette planes added where the result
+                            reached outside the scan */
     double concavity;  /* the scan's deepest local concavity, mm */
     double bound;      /* the deviation the result may have from the
                           scan, mm */

@@ -458,8 +458,7 @@ int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
         }
         qsort(res, nr, sizeof *res, cmp_double);
         scale = fmax(1.4826 * res[nr / 2], 1e-7);
-        if (it == 0)
-            *ret_scale = scale;
+        *ret_scale = scale;
         double dmax = 0;
         for (uint32_t j = 0; j < scan->nfacets; j++) {
             const double *mj = scan->planes[j];
