@@ -22,6 +22,7 @@ void proto_limits_default(proto_limits *lim)
     lim->max_facets = 4000000;
     lim->max_corners = 16000000;
     lim->max_bytes = (size_t)512 << 20;
+    lim->implicit_planes = false;
 }
 
 typedef geo_poly *(*reader_fn)(const void *data, size_t len,

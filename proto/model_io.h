@@ -55,6 +55,11 @@ typedef struct proto_limits {
     uint32_t max_facets;   /* default 4,000,000 */
     uint32_t max_corners;  /* total facet indices, default 16,000,000 */
     size_t max_bytes;      /* input size, default 512 MiB */
+    /* Not a limit but a reader option (default false): a model whose
+     * every facet is a triangle and gives no plane keeps no planes
+     * (planes NULL, see poly.h), for a caller that only reads it
+     * through geo_poly_facet_plane (geo_inspect): 32 bytes a facet. */
+    bool implicit_planes;
 } proto_limits;
 
 /* Fills the defaults above. */

@@ -204,7 +204,7 @@ geo_poly *proto_json_from_value(const json_t *root, const proto_limits *lim,
             goto fail;
         p->nfacets = f + 1;
     }
-    return proto_read_done(p, given, rep, err);
+    return proto_read_done(p, given, lim, rep, err);
 fail:
     free(given);
     return geo_poly_free(p);
@@ -457,7 +457,10 @@ static int read_facet_pull(mread *m, proto_jtok t)
         facet_shape_error(m, "facets[%llu].vertices: missing", f);
     if (m->store_f) {
         p->fstart[f + 1] = (uint32_t)m->nc;
-        memcpy(p->planes[f], pl, sizeof pl);
+        /* a plane not given is fitted by proto_finish_planes, or not
+         * kept at all: its page is not written here */
+        if (have_plane)
+            memcpy(p->planes[f], pl, sizeof pl);
         m->given[f] = have_plane;
     }
     return 0;
@@ -549,7 +552,7 @@ static int mread_verdict(mread *m, proto_read_report *rep, geo_err *err)
             return geo_err_set(err, -EINVAL, "%s", m->plane_err);
         p->nfacets = f + 1;
     }
-    return proto_finish_planes(p, m->given, rep, err);
+    return proto_finish_planes(p, m->given, m->lim, rep, err);
 }
 
 geo_poly *proto_json_from_pull(proto_jpull *j, proto_jtok first,

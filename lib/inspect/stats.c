@@ -165,7 +165,11 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
     for (uint32_t f = 0; f < nf; f++) {
         double nrm[3];
         s->area += 0.5 * unit_normal(p, f, nrm);
-        if (geo_vdot(nrm, p->planes[f]) < 0)
+        /* an implicit plane's normal is nrm itself, bit for bit (the
+         * same Newell vector normalised by the same geo_vnormalize), and
+         * a dot product of a vector with itself is never negative: no
+         * facet of implicit planes is inverted */
+        if (p->planes && geo_vdot(nrm, p->planes[f]) < 0)
             s->inverted_facets++;
         uint32_t nl = 0;
         for (uint32_t c = p->fstart[f]; c < p->fstart[f + 1]; c++) {

@@ -164,6 +164,55 @@ static void test_absent_plane_is_computed_outward(void **state)
     geo_poly_free(p);
 }
 
+/* Reads text with proto_limits.implicit_planes. */
+static geo_poly *parse_implicit(const char *text)
+{
+    proto_limits lim;
+    proto_limits_default(&lim);
+    lim.implicit_planes = true;
+    geo_err err = {{0}};
+    geo_poly *p = proto_model_read_mem(text, strlen(text), PROTO_FMT_JSON,
+                                       &lim, &err);
+    if (!p)
+        fail_msg("rejected (%s): %s", err.msg, text);
+    return p;
+}
+
+static void test_implicit_planes_only_for_triangles_without_planes(
+    void **state)
+{
+    (void)state;
+    const char *tris = HEAD "\"vertices\":[[0,0,5],[1,0,5],[0,1,5],[0,0,6]],"
+                       "\"facets\":[{\"vertices\":[2,1,0]},"
+                       "{\"vertices\":[0,1,3]}]}";
+    geo_poly *p = parse_implicit(tris), *q = parse_ok(tris, NULL);
+    assert_null(p->planes);
+    for (uint32_t f = 0; f < 2; f++) {
+        double pl[4];
+        geo_poly_facet_plane(p, f, pl);
+        assert_memory_equal(pl, q->planes[f], sizeof pl);
+    }
+    /* a copy makes them explicit, the same bits */
+    geo_poly *c = geo_poly_copy(p);
+    assert_non_null(c);
+    assert_non_null(c->planes);
+    assert_memory_equal(c->planes, q->planes, 2 * sizeof *q->planes);
+    geo_poly_free(c);
+    geo_poly_free(p);
+    geo_poly_free(q);
+    /* a given plane, or a facet of four vertices, keeps them stored */
+    p = parse_implicit(HEAD TRI_VERTS ",\"facets\":[{\"vertices\":[0,1,2],"
+                       "\"plane\":[0,0,2,0]}]}");
+    assert_non_null(p->planes);
+    assert_true(p->planes[0][2] == 1);
+    geo_poly_free(p);
+    p = parse_implicit(HEAD "\"vertices\":[[0,0,0],[1,0,0],[1,1,0],[0,1,0]],"
+                       "\"facets\":[{\"vertices\":[0,1,2,3]}]}");
+    assert_non_null(p->planes);
+    assert_true(p->planes[0][2] == 1);
+    geo_poly_free(p);
+}
+
 static void test_unknown_keys_are_ignored(void **state)
 {
     (void)state;
@@ -588,6 +637,7 @@ int main(void)
         cmocka_unit_test(test_reversed_facet_is_reported_as_inward_plane),
         cmocka_unit_test(test_given_plane_is_normalised_and_checked),
         cmocka_unit_test(test_absent_plane_is_computed_outward),
+        cmocka_unit_test(test_implicit_planes_only_for_triangles_without_planes),
         cmocka_unit_test(test_unknown_keys_are_ignored),
         cmocka_unit_test(test_empty_model_is_valid),
         cmocka_unit_test(test_syntax_errors_name_line_and_column),
