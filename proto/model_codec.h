@@ -153,6 +153,10 @@ geo_poly *proto_json_read(const void *data, size_t len,
                           geo_err *err);
 geo_poly *proto_json_from_value(const json_t *root, const proto_limits *lim,
                                 proto_read_report *rep, geo_err *err);
+/* proto_json_read of the text j was initialised with (j->behind may be
+ * set); j is not cleared. */
+geo_poly *proto_json_read_pull(proto_jpull *j, const proto_limits *lim,
+                               proto_read_report *rep, geo_err *err);
 /* The model whose value begins with first, read from j (see
  * proto_model_from_jpull); *ret_syntax tells a JSON error (err "line L,
  * column C: ...") from an invalid model. */

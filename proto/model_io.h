@@ -60,6 +60,11 @@ typedef struct proto_limits {
      * (planes NULL, see poly.h), for a caller that only reads it
      * through geo_poly_facet_plane (geo_inspect): 32 bytes a facet. */
     bool implicit_planes;
+    /* Also an option (default false): proto_model_read_file maps a
+     * facet-model/1 file and releases its pages as it reads them, so the
+     * text is never resident whole; for a caller that may die of SIGBUS
+     * if the file shrinks meanwhile (text_map.h). */
+    bool map_file;
 } proto_limits;
 
 /* Fills the defaults above. */

@@ -615,24 +615,31 @@ geo_poly *proto_json_from_pull(proto_jpull *j, proto_jtok first,
     return m.p;
 }
 
+geo_poly *proto_json_read_pull(proto_jpull *j, const proto_limits *lim,
+                               proto_read_report *rep, geo_err *err)
+{
+    bool syntax;
+    geo_err model_err;
+    geo_poly *p = proto_json_from_pull(j, proto_jpull_next(j), lim, rep,
+                                       &syntax, &model_err);
+    /* a syntax error after the model outranks what the model lacks */
+    if (!syntax && proto_jpull_next(j) == PROTO_JT_ERROR) {
+        p = geo_poly_free(p);
+        geo_err_set(err, j->error.code, "line %d, column %d: %s",
+                    j->error.line, j->error.column, j->error.text);
+    } else if (!p && err) {
+        *err = model_err;
+    }
+    return p;
+}
+
 geo_poly *proto_json_read(const void *data, size_t len,
                           const proto_limits *lim, proto_read_report *rep,
                           geo_err *err)
 {
     proto_jpull j;
     proto_jpull_init(&j, data, len);
-    bool syntax;
-    geo_err model_err;
-    geo_poly *p = proto_json_from_pull(&j, proto_jpull_next(&j), lim, rep,
-                                       &syntax, &model_err);
-    /* a syntax error after the model outranks what the model lacks */
-    if (!syntax && proto_jpull_next(&j) == PROTO_JT_ERROR) {
-        p = geo_poly_free(p);
-        geo_err_set(err, j.error.code, "line %d, column %d: %s", j.error.line,
-                    j.error.column, j.error.text);
-    } else if (!p && err) {
-        *err = model_err;
-    }
+    geo_poly *p = proto_json_read_pull(&j, lim, rep, err);
     proto_jpull_clear(&j);
     return p;
 }

@@ -76,6 +76,7 @@ int cmd_inspect(int argc, char **argv)
     proto_limits lim;
     proto_limits_default(&lim);
     lim.implicit_planes = true;
+    lim.map_file = true; /* and its text is never resident whole */
     geo_poly *p = proto_model_read_file(path, fmt, &lim, &err);
     if (!p)
         return cli_input_error("inspect", "%s", err.msg);
