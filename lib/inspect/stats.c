@@ -176,7 +176,7 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
             uint32_t m = t->mate[c];
             if (m == GEO_NONE)
                 continue;
-            uint32_t g = t->corner_facet[m];
+            uint32_t g = geo_topo_facet(t, m);
             if (g <= f)
                 continue;
             uint8_t ag = t->edge_kind[c] != GEO_EDGE_FLIPPED;
@@ -292,7 +292,7 @@ int geo_inspect(const geo_poly *p, const geo_inspect_opts *opts,
     else
         geo_inspect_opts_default(&o);
     int rc;
-    geo_topo *t = geo_topo_build_checked(p, &rc, err);
+    geo_topo *t = geo_topo_build_lean(p, &rc, err);
     if (!t)
         return rc;
 
