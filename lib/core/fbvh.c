@@ -44,9 +44,13 @@ static void quantize(const geo_fbvh *h, const double far[3],
             qbox_empty(ret);
             return;
         }
+    /* g is in [0, GEO_FBVH_CELLS]: truncation is its floor */
     for (int k = 0; k < 3; k++) {
-        ret->lo[k] = (uint16_t)floor(grid_of(h, k, b->lo[k], far[k]));
-        ret->hi[k] = (uint16_t)ceil(grid_of(h, k, b->hi[k], far[k]));
+        double lo = grid_of(h, k, b->lo[k], far[k]);
+        double hi = grid_of(h, k, b->hi[k], far[k]);
+        uint32_t l = (uint32_t)lo, u = (uint32_t)hi;
+        ret->lo[k] = (uint16_t)l;
+        ret->hi[k] = (uint16_t)(u + ((double)u < hi));
     }
 }
 
@@ -175,16 +179,19 @@ static void build_node(const builder *b, uint32_t node, uint32_t lo,
     qbox_union(&n->box, &h->nodes[child + 1].box);
 }
 
-/* Codes from the box centres, a radix sort of the items (its buffer the
- * node array, not yet used), the grid from the finite bounds, the boxes
- * written in leaf order (a gather: independent reads), then the nodes,
- * whose array is cut to the nodes used (about 0.7 per item, of the 2 per
- * item a tree may need). -ENOMEM. */
+/* The grid from the finite bounds, then in one pass the codes from the
+ * box centres and the grid boxes in item order (kept in the node array,
+ * not yet used: 20 bytes a node, 2n + 1 nodes), a radix sort of the
+ * items (its buffer the box array, not yet filled), the boxes gathered
+ * in leaf order, then the nodes, whose array is cut to the nodes used
+ * (about 0.7 per item, of the 2 per item a tree may need). Every array
+ * touched is the tree's own. -ENOMEM. */
 static int build(geo_fbvh *h, const box_source *src)
 {
     uint32_t n = h->nitems;
     uint32_t *code = malloc(((size_t)n + 1) * sizeof *code);
-    uint32_t *tmp = (uint32_t *)h->nodes; /* 2n + 1 nodes: room to spare */
+    uint32_t *tmp = (uint32_t *)h->boxes; /* 12 bytes an item: room */
+    geo_qbox *byitem = (geo_qbox *)h->nodes;
     if (!code)
         return -ENOMEM;
     geo_bbox cb, b, all;
@@ -216,9 +223,13 @@ static int build(geo_fbvh *h, const box_source *src)
     /* side may be infinite (bounds beyond ±DBL_MAX/2): scale 0, every
      * finite bound in cell 0 or the last, still monotone */
     h->scale = side > 0 && isfinite(side) ? GEO_FBVH_CELLS / side : 0;
+    double far[3];
+    for (int k = 0; k < 3; k++)
+        far[k] = grid_far(h, k);
     for (uint32_t i = 0; i < n; i++) {
         uint32_t q[3];
         source_box(src, i, &b);
+        quantize(h, far, &b, &byitem[i]);
         for (int k = 0; k < 3; k++) {
             double x = (0.5 * (b.lo[k] + b.hi[k]) - cb.lo[k]) * scale[k];
             q[k] = x >= 0 ? (x < 1023 ? (uint32_t)x : 1023) : 0;
@@ -239,13 +250,8 @@ static int build(geo_fbvh *h, const box_source *src)
         }
         memcpy(h->items, tmp, (size_t)n * sizeof *tmp);
     }
-    double far[3];
-    for (int k = 0; k < 3; k++)
-        far[k] = grid_far(h, k);
-    for (uint32_t k = 0; k < n; k++) {
-        source_box(src, h->items[k], &b);
-        quantize(h, far, &b, &h->boxes[k]);
-    }
+    for (uint32_t k = 0; k < n; k++)
+        h->boxes[k] = byitem[h->items[k]];
     if (n > 0) {
         builder mb = {h, code};
         h->nnodes = 1;
