@@ -197,7 +197,21 @@ static int build(geo_fbvh *h, const box_source *src)
     geo_bbox cb, b, all;
     geo_bbox_empty(&cb);
     geo_bbox_empty(&all);
-    for (uint32_t i = 0; i < n; i++) {
+    /* a facet's box and centre lie within its vertices' box: over the
+     * polyhedron's finite coordinates (a pass over the vertices, not over
+     * the facets) for both grids; any grid keeps the boxes conservative,
+     * and the codes only shape the tree */
+    for (uint32_t v = 0; src->p && v < src->p->nverts; v++)
+        for (int k = 0; k < 3; k++) {
+            double x = src->p->verts[v][k];
+            if (!isfinite(x))
+                continue;
+            all.lo[k] = x < all.lo[k] ? x : all.lo[k];
+            all.hi[k] = x > all.hi[k] ? x : all.hi[k];
+        }
+    if (src->p)
+        cb = all;
+    for (uint32_t i = 0; !src->p && i < n; i++) {
         double c[3];
         source_box(src, i, &b);
         for (int k = 0; k < 3; k++) {

@@ -13,6 +13,8 @@
 
 #include "bvh.h"
 #include "fbvh.h"
+#include "gen_sphere.h"
+#include "vec.h"
 
 enum { N = 3000 };
 
@@ -343,6 +345,54 @@ static void test_grid_tree_rounds_outward(void **state)
     geo_fbvh_free(h);
 }
 
+/* Over a polyhedron's facets (the grid from its vertices): the stored
+ * boxes are the grid boxes of the facets' exact ones, and the pairs
+ * those of the stored boxes, every exactly overlapping pair among them;
+ * also with a vertex far out and one unused at infinity. */
+static void test_grid_tree_over_facets(void **state)
+{
+    (void)state;
+    geo_poly *s = gs_sphere(5, 1.0);
+    assert_non_null(s);
+    for (int round = 0; round < 2; round++) {
+        if (round == 1) {
+            geo_vscale(s->verts[7], 40.0, s->verts[7]);
+            const double inf[3] = {INFINITY, 0, -INFINITY};
+            assert_true(geo_poly_add_vertex(s, inf) >= 0);
+        }
+        uint32_t n = s->nfacets;
+        geo_bbox *b = malloc(n * sizeof *b);
+        assert_non_null(b);
+        for (uint32_t f = 0; f < n; f++)
+            geo_poly_facet_bbox(s, f, &b[f]);
+        geo_fbvh *h = geo_fbvh_build_facets(s, NULL);
+        assert_non_null(h);
+        unsigned char *seen = calloc(n, 1);
+        geo_qbox all;
+        check_fnode(h, 0, b, seen, &all);
+        for (uint32_t i = 0; i < n; i++)
+            assert_int_equal(seen[i], 1);
+        uint32_t *slot = malloc(n * sizeof *slot);
+        for (uint32_t k = 0; k < n; k++)
+            slot[h->items[k]] = k;
+        pairs p = {n, calloc((size_t)n * n, 1)};
+        geo_fbvh_pairs(h, 0, 0, count_pair, &p);
+        for (uint32_t i = 0; i < n; i++)
+            for (uint32_t j = i + 1; j < n; j++) {
+                bool f = qbox_overlap(&h->boxes[slot[i]], &h->boxes[slot[j]]);
+                assert_int_equal(p.count[(size_t)i * n + j], f ? 1 : 0);
+                if (geo_bbox_overlap(&b[i], &b[j]))
+                    assert_true(f);
+            }
+        free(p.count);
+        free(slot);
+        free(seen);
+        geo_fbvh_free(h);
+        free(b);
+    }
+    geo_poly_free(s);
+}
+
 static void test_empty_and_single(void **state)
 {
     (void)state;
@@ -371,6 +421,7 @@ int main(void)
         cmocka_unit_test(test_grid_tree_pairs),
         cmocka_unit_test(test_grid_tree_of_equal_and_nan_boxes),
         cmocka_unit_test(test_grid_tree_rounds_outward),
+        cmocka_unit_test(test_grid_tree_over_facets),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
