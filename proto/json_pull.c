@@ -66,6 +66,7 @@ void proto_jpull_init(proto_jpull *j, const void *data, size_t len)
     j->len = len;
     j->state = ST_START;
     j->str = "";
+    j->behind_next = PROTO_JPULL_BEHIND_STEP;
 }
 
 void proto_jpull_clear(proto_jpull *j)
@@ -936,6 +937,10 @@ proto_jtok proto_jpull_next(proto_jpull *j)
 {
     proto_jtok t = next_token(j);
     j->last = t;
+    if (j->behind && j->pos >= j->behind_next) {
+        j->behind_next = j->pos + PROTO_JPULL_BEHIND_STEP;
+        j->behind(j->behind_user, j->tok_start);
+    }
     return t;
 }
 

@@ -77,6 +77,14 @@ typedef struct proto_jpull {
     unsigned depth;       /* objects and arrays open after the token */
     proto_jerror error;   /* after PROTO_JT_ERROR */
 
+    /* Optional, set after proto_jpull_init: called as the reading passes
+     * each further PROTO_JPULL_BEHIND_STEP bytes, with the start of the
+     * token just read. No byte before it is read again except to count
+     * an error's line and column, so a caller whose input reads back the
+     * same on demand (text_map.h) may release those pages. */
+    void (*behind)(void *user, size_t pos);
+    void *behind_user;
+
     /* Private. */
     const unsigned char *data;
     size_t len, pos;
@@ -97,7 +105,10 @@ typedef struct proto_jpull {
                              an object's own are the last when it ends */
     size_t nlog, cap_log;
     size_t *marks;        /* per open container: nlog when it opened */
+    size_t behind_next;   /* the position that calls behind next */
 } proto_jpull;
+
+#define PROTO_JPULL_BEHIND_STEP ((size_t)1 << 20)
 
 /* Starts reading len bytes at data (data may be NULL when len is 0). */
 void proto_jpull_init(proto_jpull *j, const void *data, size_t len);

@@ -416,7 +416,7 @@ geo_poly *proto_asc_read(const void *data, size_t len,
         given[f] = true; /* the design's planes, not fitted ones */
     if (proto_check_limits(lim, p->nverts, p->nfacets, geo_poly_ncorners(p),
                            err) < 0 ||
-        proto_finish_planes(p, given, rep, err) < 0) {
+        proto_finish_planes(p, given, lim, rep, err) < 0) {
         free(given);
         return geo_poly_free(p);
     }

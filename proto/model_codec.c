@@ -462,12 +462,35 @@ static int check_coordinates(const geo_poly *p, geo_err *err)
     return 0;
 }
 
+/* Whether every facet of p is a triangle without a given plane. */
+static bool triangles_without_planes(const geo_poly *p, const bool *given)
+{
+    for (uint32_t f = 0; f < p->nfacets; f++)
+        if (geo_poly_facet_size(p, f) != 3 || (given && given[f]))
+            return false;
+    return true;
+}
+
 int proto_finish_planes(geo_poly *p, const bool *given,
-                        proto_read_report *rep, geo_err *err)
+                        const proto_limits *lim, proto_read_report *rep,
+                        geo_err *err)
 {
     int r = check_coordinates(p, err);
     if (r < 0)
         return r;
+    /* A triangle's plane is always finite here, so dropping the planes
+     * skips no failure: its coordinates are within ±1e9, so the Newell
+     * vector's components are below 8e18 and its squared length below
+     * 2e38; a squared length that underflows to zero gives the zero
+     * plane, and a subnormal one a root within a few units of the true
+     * length, so the unit normal's components stay below 2 and the
+     * offset below 6e9. */
+    if (lim && lim->implicit_planes && triangles_without_planes(p, given)) {
+        rep->worst_facet = UINT32_MAX;
+        free(p->planes);
+        p->planes = NULL;
+        return 0;
+    }
     rep->worst_facet = UINT32_MAX;
     double eps = geo_poly_eps(p);
     for (uint32_t f = 0; f < p->nfacets; f++) {
@@ -529,10 +552,10 @@ geo_poly *proto_poly_alloc(uint64_t nv, uint64_t nf, uint64_t nc,
     return p;
 }
 
-geo_poly *proto_read_done(geo_poly *p, bool *given, proto_read_report *rep,
-                          geo_err *err)
+geo_poly *proto_read_done(geo_poly *p, bool *given, const proto_limits *lim,
+                          proto_read_report *rep, geo_err *err)
 {
-    int r = proto_finish_planes(p, given, rep, err);
+    int r = proto_finish_planes(p, given, lim, rep, err);
     free(given);
     return r < 0 ? geo_poly_free(p) : p;
 }

@@ -113,9 +113,12 @@ int proto_check_limits(const proto_limits *lim, uint64_t nverts,
  * all) get a least-squares plane; given planes are normalised and
  * checked against their vertices, filling rep (see proto_read_report).
  * 0, or -ERANGE with err naming the vertex (out of range, or a model
- * too small) or the facet (a plane that cannot be computed in doubles). */
+ * too small) or the facet (a plane that cannot be computed in doubles).
+ * With lim->implicit_planes (lim may be NULL: none), a model of triangles
+ * without a given plane keeps none (planes NULL; see proto_limits). */
 int proto_finish_planes(geo_poly *p, const bool *given,
-                        proto_read_report *rep, geo_err *err);
+                        const proto_limits *lim, proto_read_report *rep,
+                        geo_err *err);
 
 /* A new model with room for nv vertices, nf facets and nc corners, and,
  * when ret_given is not NULL, *ret_given an array of nf flags (false) for
@@ -127,8 +130,8 @@ geo_poly *proto_poly_alloc(uint64_t nv, uint64_t nf, uint64_t nc,
 /* The end of every reader: p completed by proto_finish_planes and
  * returned, or freed and NULL when that fails; given (may be NULL) is
  * freed either way. */
-geo_poly *proto_read_done(geo_poly *p, bool *given, proto_read_report *rep,
-                          geo_err *err);
+geo_poly *proto_read_done(geo_poly *p, bool *given, const proto_limits *lim,
+                          proto_read_report *rep, geo_err *err);
 
 /* Appends every vertex of p as a line "PREFIXx y z" (prefix "" or "v "),
  * coordinates as by proto_buf_double. */
@@ -150,6 +153,10 @@ geo_poly *proto_json_read(const void *data, size_t len,
                           geo_err *err);
 geo_poly *proto_json_from_value(const json_t *root, const proto_limits *lim,
                                 proto_read_report *rep, geo_err *err);
+/* proto_json_read of the text j was initialised with (j->behind may be
+ * set); j is not cleared. */
+geo_poly *proto_json_read_pull(proto_jpull *j, const proto_limits *lim,
+                               proto_read_report *rep, geo_err *err);
 /* The model whose value begins with first, read from j (see
  * proto_model_from_jpull); *ret_syntax tells a JSON error (err "line L,
  * column C: ...") from an invalid model. */

@@ -133,7 +133,7 @@ geo_poly *proto_fmb1_read(const void *data, size_t len,
         given[f] = true;
         o += FACET_HEAD + 4 * (size_t)n;
     }
-    return proto_read_done(p, given, rep, err);
+    return proto_read_done(p, given, lim, rep, err);
 fail:
     free(given);
     return geo_poly_free(p);

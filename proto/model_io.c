@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "model_codec.h"
+#include "text_map.h"
 
 void proto_limits_default(proto_limits *lim)
 {
@@ -22,6 +23,8 @@ void proto_limits_default(proto_limits *lim)
     lim->max_facets = 4000000;
     lim->max_corners = 16000000;
     lim->max_bytes = (size_t)512 << 20;
+    lim->implicit_planes = false;
+    lim->map_file = false;
 }
 
 typedef geo_poly *(*reader_fn)(const void *data, size_t len,
@@ -294,6 +297,30 @@ geo_poly *proto_model_read_file_ex(const char *path, proto_format fmt,
     if (fd < 0) {
         geo_err_set(err, -errno, "%s: %s", path, strerror(errno));
         return NULL;
+    }
+    proto_text_map tm;
+    int mr = lim->map_file && fmt == PROTO_FMT_JSON
+                 ? proto_text_map_open(fd, lim->max_bytes, &tm, err)
+                 : 1;
+    if (mr <= 0) {
+        close(fd);
+        geo_poly *p = NULL;
+        if (mr == 0) {
+            proto_read_report rep;
+            memset(&rep, 0, sizeof rep);
+            proto_jpull j;
+            proto_jpull_init(&j, tm.data, tm.len);
+            j.behind = proto_text_map_behind;
+            j.behind_user = &tm;
+            p = proto_json_read_pull(&j, lim, &rep, err);
+            proto_jpull_clear(&j);
+            proto_text_map_close(&tm);
+            if (p && ret_report)
+                *ret_report = rep;
+        }
+        if (!p)
+            geo_err_prefix(err, path);
+        return p;
     }
     char *data = NULL;
     size_t len = 0;

@@ -55,6 +55,16 @@ typedef struct proto_limits {
     uint32_t max_facets;   /* default 4,000,000 */
     uint32_t max_corners;  /* total facet indices, default 16,000,000 */
     size_t max_bytes;      /* input size, default 512 MiB */
+    /* Not a limit but a reader option (default false): a model whose
+     * every facet is a triangle and gives no plane keeps no planes
+     * (planes NULL, see poly.h), for a caller that only reads it
+     * through geo_poly_facet_plane (geo_inspect): 32 bytes a facet. */
+    bool implicit_planes;
+    /* Also an option (default false): proto_model_read_file maps a
+     * facet-model/1 file and releases its pages as it reads them, so the
+     * text is never resident whole; for a caller that may die of SIGBUS
+     * if the file shrinks meanwhile (text_map.h). */
+    bool map_file;
 } proto_limits;
 
 /* Fills the defaults above. */

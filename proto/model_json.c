@@ -204,7 +204,7 @@ geo_poly *proto_json_from_value(const json_t *root, const proto_limits *lim,
             goto fail;
         p->nfacets = f + 1;
     }
-    return proto_read_done(p, given, rep, err);
+    return proto_read_done(p, given, lim, rep, err);
 fail:
     free(given);
     return geo_poly_free(p);
@@ -457,7 +457,10 @@ static int read_facet_pull(mread *m, proto_jtok t)
         facet_shape_error(m, "facets[%llu].vertices: missing", f);
     if (m->store_f) {
         p->fstart[f + 1] = (uint32_t)m->nc;
-        memcpy(p->planes[f], pl, sizeof pl);
+        /* a plane not given is fitted by proto_finish_planes, or not
+         * kept at all: its page is not written here */
+        if (have_plane)
+            memcpy(p->planes[f], pl, sizeof pl);
         m->given[f] = have_plane;
     }
     return 0;
@@ -549,7 +552,7 @@ static int mread_verdict(mread *m, proto_read_report *rep, geo_err *err)
             return geo_err_set(err, -EINVAL, "%s", m->plane_err);
         p->nfacets = f + 1;
     }
-    return proto_finish_planes(p, m->given, rep, err);
+    return proto_finish_planes(p, m->given, m->lim, rep, err);
 }
 
 geo_poly *proto_json_from_pull(proto_jpull *j, proto_jtok first,
@@ -612,24 +615,31 @@ geo_poly *proto_json_from_pull(proto_jpull *j, proto_jtok first,
     return m.p;
 }
 
+geo_poly *proto_json_read_pull(proto_jpull *j, const proto_limits *lim,
+                               proto_read_report *rep, geo_err *err)
+{
+    bool syntax;
+    geo_err model_err;
+    geo_poly *p = proto_json_from_pull(j, proto_jpull_next(j), lim, rep,
+                                       &syntax, &model_err);
+    /* a syntax error after the model outranks what the model lacks */
+    if (!syntax && proto_jpull_next(j) == PROTO_JT_ERROR) {
+        p = geo_poly_free(p);
+        geo_err_set(err, j->error.code, "line %d, column %d: %s",
+                    j->error.line, j->error.column, j->error.text);
+    } else if (!p && err) {
+        *err = model_err;
+    }
+    return p;
+}
+
 geo_poly *proto_json_read(const void *data, size_t len,
                           const proto_limits *lim, proto_read_report *rep,
                           geo_err *err)
 {
     proto_jpull j;
     proto_jpull_init(&j, data, len);
-    bool syntax;
-    geo_err model_err;
-    geo_poly *p = proto_json_from_pull(&j, proto_jpull_next(&j), lim, rep,
-                                       &syntax, &model_err);
-    /* a syntax error after the model outranks what the model lacks */
-    if (!syntax && proto_jpull_next(&j) == PROTO_JT_ERROR) {
-        p = geo_poly_free(p);
-        geo_err_set(err, j.error.code, "line %d, column %d: %s", j.error.line,
-                    j.error.column, j.error.text);
-    } else if (!p && err) {
-        *err = model_err;
-    }
+    geo_poly *p = proto_json_read_pull(&j, lim, rep, err);
     proto_jpull_clear(&j);
     return p;
 }

@@ -136,7 +136,7 @@ geo_poly *proto_obj_read(const void *data, size_t len,
         if (e < 0)
             return geo_poly_free(p);
     }
-    return proto_read_done(p, NULL, rep, err);
+    return proto_read_done(p, NULL, lim, rep, err);
 }
 
 int proto_obj_write(const geo_poly *p, proto_buf *b, geo_err *err)

@@ -332,7 +332,7 @@ geo_poly *proto_off_read(const void *data, size_t len,
                     "announced)", ln, proto_tok_show(line, n, shown), nf);
         return geo_poly_free(p);
     }
-    return proto_read_done(p, NULL, rep, err);
+    return proto_read_done(p, NULL, lim, rep, err);
 }
 
 int proto_off_write(const geo_poly *p, proto_buf *b, geo_err *err)

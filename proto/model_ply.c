@@ -565,7 +565,7 @@ geo_poly *proto_ply_read(const void *data, size_t len,
         goto fail;
     }
     free(h);
-    return proto_read_done(p, given, rep, err);
+    return proto_read_done(p, given, lim, rep, err);
 fail:
     free(given);
     free(h);

@@ -174,7 +174,7 @@ geo_poly *proto_polytxt_read(const void *data, size_t len,
                     proto_tok_show(t, tl, shown), nf);
         goto fail;
     }
-    return proto_read_done(p, given, rep, err);
+    return proto_read_done(p, given, lim, rep, err);
 fail:
     free(given);
     return geo_poly_free(p);

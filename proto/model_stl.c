@@ -142,10 +142,11 @@ static int merge_error(int e, const char *place, uint32_t maxv, geo_err *err)
 /* The end of both readers: the merger's table freed, then p completed
  * (ok) or freed. */
 static geo_poly *read_end(merger *m, geo_poly *p, bool ok,
-                          proto_read_report *rep, geo_err *err)
+                          const proto_limits *lim, proto_read_report *rep,
+                          geo_err *err)
 {
     free(m->slots);
-    return ok ? proto_read_done(p, NULL, rep, err) : geo_poly_free(p);
+    return ok ? proto_read_done(p, NULL, lim, rep, err) : geo_poly_free(p);
 }
 
 static geo_poly *read_binary(const unsigned char *d, size_t len,
@@ -198,9 +199,9 @@ static geo_poly *read_binary(const unsigned char *d, size_t len,
         if (add_triangle(p, tri, place, err) < 0)
             goto fail;
     }
-    return read_end(&m, p, true, rep, err);
+    return read_end(&m, p, true, lim, rep, err);
 fail:
-    return read_end(&m, p, false, rep, err);
+    return read_end(&m, p, false, lim, rep, err);
 }
 
 static bool keyword(const char *t, size_t n, const char *kw)
@@ -357,9 +358,9 @@ static geo_poly *read_ascii(const void *data, size_t len,
                                   "end of the file", s.line);
         goto fail;
     }
-    return read_end(&m, p, true, rep, err);
+    return read_end(&m, p, true, lim, rep, err);
 fail:
-    return read_end(&m, p, false, rep, err);
+    return read_end(&m, p, false, lim, rep, err);
 }
 
 static bool starts_with_solid(const unsigned char *d, size_t len)

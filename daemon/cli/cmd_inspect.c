@@ -71,7 +71,13 @@ int cmd_inspect(int argc, char **argv)
         return cli_usage_error("inspect", "needs a model file");
 
     geo_err err = {{0}};
-    geo_poly *p = proto_model_read_file(path, fmt, NULL, &err);
+    /* the statistics read a triangle's plane where they need it: a
+     * mesh of triangles keeps no planes (32 bytes a facet) */
+    proto_limits lim;
+    proto_limits_default(&lim);
+    lim.implicit_planes = true;
+    lim.map_file = true; /* and its text is never resident whole */
+    geo_poly *p = proto_model_read_file(path, fmt, &lim, &err);
     if (!p)
         return cli_input_error("inspect", "%s", err.msg);
     par_pool *pool = par_pool_new((int)threads);

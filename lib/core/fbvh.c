@@ -1,53 +1,69 @@
-/* fbvh.c — the Morton-ordered hierarchy of single-precision boxes and its
+/* fbvh.c — the Morton-ordered hierarchy of 16-bit grid boxes and its
  * pair search. */
 #include "fbvh.h"
 
 #include <errno.h>
-#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-/* The largest float ≤ x, and the smallest ≥ x (NaN stays NaN). */
-static float round_down(double x)
+/* g(x) of fbvh.h, with the seams at the grid's ends: at or below the
+ * origin 0, at or above its far end the last cell, between them the
+ * product, which rounding may carry past the end (clamped). Monotone. */
+static double grid_of(const geo_fbvh *h, int k, double x, double far)
 {
-    if (x >= FLT_MAX)
-        return FLT_MAX;
-    if (x < -FLT_MAX)
-        return -INFINITY;
-    float f = (float)x;
-    return (double)f > x ? nextafterf(f, -INFINITY) : f;
+    if (x <= h->origin[k])
+        return 0;
+    if (x >= far)
+        return GEO_FBVH_CELLS;
+    double g = (x - h->origin[k]) * h->scale;
+    return g < GEO_FBVH_CELLS ? g : GEO_FBVH_CELLS;
 }
 
-static float round_up(double x)
+/* The far end of axis k of h's grid: origin + the cells' span. */
+static double grid_far(const geo_fbvh *h, int k)
 {
-    if (x <= -FLT_MAX)
-        return -FLT_MAX;
-    if (x > FLT_MAX)
-        return INFINITY;
-    float f = (float)x;
-    return (double)f < x ? nextafterf(f, INFINITY) : f;
+    return h->scale > 0 ? h->origin[k] + GEO_FBVH_CELLS / h->scale
+                        : h->origin[k];
 }
 
-static void fbox_of(const geo_bbox *b, geo_fbox *ret)
+static void qbox_empty(geo_qbox *b)
 {
     for (int k = 0; k < 3; k++) {
-        ret->lo[k] = round_down(b->lo[k]);
-        ret->hi[k] = round_up(b->hi[k]);
+        b->lo[k] = GEO_FBVH_CELLS + 1;
+        b->hi[k] = 0;
     }
 }
 
-static void fbox_empty(geo_fbox *b)
+/* Quantise with the axes' far ends given (computed once per build). */
+static void quantize(const geo_fbvh *h, const double far[3],
+                     const geo_bbox *b, geo_qbox *ret)
 {
+    for (int k = 0; k < 3; k++)
+        if (isnan(b->lo[k]) || isnan(b->hi[k])) {
+            qbox_empty(ret);
+            return;
+        }
+    /* g is in [0, GEO_FBVH_CELLS]: truncation is its floor */
     for (int k = 0; k < 3; k++) {
-        b->lo[k] = INFINITY;
-        b->hi[k] = -INFINITY;
+        double lo = grid_of(h, k, b->lo[k], far[k]);
+        double hi = grid_of(h, k, b->hi[k], far[k]);
+        uint32_t l = (uint32_t)lo, u = (uint32_t)hi;
+        ret->lo[k] = (uint16_t)l;
+        ret->hi[k] = (uint16_t)(u + ((double)u < hi));
     }
 }
 
-/* As geo_bbox_union: selections (min/max instructions); a NaN never
- * replaces a bound. */
-static void fbox_union(geo_fbox *b, const geo_fbox *o)
+void geo_fbvh_quantize(const geo_fbvh *h, const geo_bbox *b, geo_qbox *ret)
+{
+    double far[3];
+    for (int k = 0; k < 3; k++)
+        far[k] = grid_far(h, k);
+    quantize(h, far, b, ret);
+}
+
+/* Selections (min/max instructions); an empty box changes nothing. */
+static void qbox_union(geo_qbox *b, const geo_qbox *o)
 {
     for (int k = 0; k < 3; k++) {
         b->lo[k] = o->lo[k] < b->lo[k] ? o->lo[k] : b->lo[k];
@@ -55,17 +71,18 @@ static void fbox_union(geo_fbox *b, const geo_fbox *o)
     }
 }
 
-static inline bool fbox_overlap(const geo_fbox *a, const geo_fbox *b)
+static inline bool qbox_overlap(const geo_qbox *a, const geo_qbox *b)
 {
     return a->lo[0] <= b->hi[0] && b->lo[0] <= a->hi[0] &&
            a->lo[1] <= b->hi[1] && b->lo[1] <= a->hi[1] &&
            a->lo[2] <= b->hi[2] && b->lo[2] <= a->hi[2];
 }
 
-static double fbox_extent(const geo_fbox *b)
+/* The sum of the sides, in cells (cubic cells: as the sum in mm). */
+static int32_t qbox_extent(const geo_qbox *b)
 {
-    return ((double)b->hi[0] - b->lo[0]) + ((double)b->hi[1] - b->lo[1]) +
-           ((double)b->hi[2] - b->lo[2]);
+    return ((int32_t)b->hi[0] - b->lo[0]) + ((int32_t)b->hi[1] - b->lo[1]) +
+           ((int32_t)b->hi[2] - b->lo[2]);
 }
 
 geo_fbvh *geo_fbvh_free(geo_fbvh *h)
@@ -142,10 +159,10 @@ static void build_node(const builder *b, uint32_t node, uint32_t lo,
 {
     geo_fbvh *h = b->h;
     geo_fbvh_node *n = &h->nodes[node];
-    fbox_empty(&n->box);
+    qbox_empty(&n->box);
     if (hi - lo <= GEO_FBVH_LEAF) {
         for (uint32_t i = lo; i < hi; i++)
-            fbox_union(&n->box, &h->boxes[i]);
+            qbox_union(&n->box, &h->boxes[i]);
         n->child = lo;
         n->count = hi - lo;
         return;
@@ -158,39 +175,75 @@ static void build_node(const builder *b, uint32_t node, uint32_t lo,
     build_node(b, child, lo, mid);
     build_node(b, child + 1, mid, hi);
     n = &h->nodes[node];
-    fbox_union(&n->box, &h->nodes[child].box);
-    fbox_union(&n->box, &h->nodes[child + 1].box);
+    qbox_union(&n->box, &h->nodes[child].box);
+    qbox_union(&n->box, &h->nodes[child + 1].box);
 }
 
-/* Codes from the box centres, a radix sort of the items, the boxes
- * written in leaf order (a gather: independent reads), then the nodes,
- * whose array is cut to the nodes used (about 0.7 per item, of the 2 per
- * item a tree may need). -ENOMEM. */
+/* The grid from the finite bounds, then in one pass the codes from the
+ * box centres and the grid boxes in item order (kept in the node array,
+ * not yet used: 20 bytes a node, 2n + 1 nodes), a radix sort of the
+ * items (its buffer the box array, not yet filled), the boxes gathered
+ * in leaf order, then the nodes, whose array is cut to the nodes used
+ * (about 0.7 per item, of the 2 per item a tree may need). Every array
+ * touched is the tree's own. -ENOMEM. */
 static int build(geo_fbvh *h, const box_source *src)
 {
     uint32_t n = h->nitems;
     uint32_t *code = malloc(((size_t)n + 1) * sizeof *code);
-    uint32_t *tmp = malloc(((size_t)n + 1) * sizeof *tmp);
-    if (!code || !tmp) {
-        free(code);
-        free(tmp);
+    uint32_t *tmp = (uint32_t *)h->boxes; /* 12 bytes an item: room */
+    geo_qbox *byitem = (geo_qbox *)h->nodes;
+    if (!code)
         return -ENOMEM;
-    }
-    geo_bbox cb, b;
+    geo_bbox cb, b, all;
     geo_bbox_empty(&cb);
-    for (uint32_t i = 0; i < n; i++) {
+    geo_bbox_empty(&all);
+    /* a facet's box and centre lie within its vertices' box: over the
+     * polyhedron's finite coordinates (a pass over the vertices, not over
+     * the facets) for both grids; any grid keeps the boxes conservative,
+     * and the codes only shape the tree */
+    for (uint32_t v = 0; src->p && v < src->p->nverts; v++)
+        for (int k = 0; k < 3; k++) {
+            double x = src->p->verts[v][k];
+            if (!isfinite(x))
+                continue;
+            all.lo[k] = x < all.lo[k] ? x : all.lo[k];
+            all.hi[k] = x > all.hi[k] ? x : all.hi[k];
+        }
+    if (src->p)
+        cb = all;
+    for (uint32_t i = 0; !src->p && i < n; i++) {
         double c[3];
         source_box(src, i, &b);
-        for (int k = 0; k < 3; k++)
+        for (int k = 0; k < 3; k++) {
             c[k] = 0.5 * (b.lo[k] + b.hi[k]);
+            /* the grid spans every finite bound, lo or hi */
+            for (int e = 0; e < 2; e++) {
+                double x = e ? b.hi[k] : b.lo[k];
+                if (!isfinite(x))
+                    continue;
+                all.lo[k] = x < all.lo[k] ? x : all.lo[k];
+                all.hi[k] = x > all.hi[k] ? x : all.hi[k];
+            }
+        }
         geo_bbox_add(&cb, c);
     }
-    double scale[3];
-    for (int k = 0; k < 3; k++)
+    double scale[3], side = 0;
+    for (int k = 0; k < 3; k++) {
         scale[k] = cb.hi[k] > cb.lo[k] ? 1024.0 / (cb.hi[k] - cb.lo[k]) : 0;
+        h->origin[k] = all.lo[k] <= all.hi[k] ? all.lo[k] : 0;
+        if (all.lo[k] <= all.hi[k] && all.hi[k] - all.lo[k] > side)
+            side = all.hi[k] - all.lo[k];
+    }
+    /* side may be infinite (bounds beyond ±DBL_MAX/2): scale 0, every
+     * finite bound in cell 0 or the last, still monotone */
+    h->scale = side > 0 && isfinite(side) ? GEO_FBVH_CELLS / side : 0;
+    double far[3];
+    for (int k = 0; k < 3; k++)
+        far[k] = grid_far(h, k);
     for (uint32_t i = 0; i < n; i++) {
         uint32_t q[3];
         source_box(src, i, &b);
+        quantize(h, far, &b, &byitem[i]);
         for (int k = 0; k < 3; k++) {
             double x = (0.5 * (b.lo[k] + b.hi[k]) - cb.lo[k]) * scale[k];
             q[k] = x >= 0 ? (x < 1023 ? (uint32_t)x : 1023) : 0;
@@ -211,11 +264,8 @@ static int build(geo_fbvh *h, const box_source *src)
         }
         memcpy(h->items, tmp, (size_t)n * sizeof *tmp);
     }
-    free(tmp);
-    for (uint32_t k = 0; k < n; k++) {
-        source_box(src, h->items[k], &b);
-        fbox_of(&b, &h->boxes[k]);
-    }
+    for (uint32_t k = 0; k < n; k++)
+        h->boxes[k] = byitem[h->items[k]];
     if (n > 0) {
         builder mb = {h, code};
         h->nnodes = 1;
@@ -265,7 +315,7 @@ bool geo_fbvh_pairs(const geo_fbvh *h, uint32_t na, uint32_t nb,
         if (a->count) {
             for (uint32_t i = a->child; i < a->child + a->count; i++)
                 for (uint32_t j = i + 1; j < a->child + a->count; j++)
-                    if (fbox_overlap(&h->boxes[i], &h->boxes[j]) &&
+                    if (qbox_overlap(&h->boxes[i], &h->boxes[j]) &&
                         !visit(user, h->items[i], h->items[j]))
                         return false;
             return true;
@@ -274,21 +324,21 @@ bool geo_fbvh_pairs(const geo_fbvh *h, uint32_t na, uint32_t nb,
                geo_fbvh_pairs(h, a->child + 1, a->child + 1, visit, user) &&
                geo_fbvh_pairs(h, a->child, a->child + 1, visit, user);
     }
-    if (!fbox_overlap(&a->box, &b->box))
+    if (!qbox_overlap(&a->box, &b->box))
         return true;
     if (a->count && b->count) {
         for (uint32_t i = a->child; i < a->child + a->count; i++) {
-            if (!fbox_overlap(&h->boxes[i], &b->box))
+            if (!qbox_overlap(&h->boxes[i], &b->box))
                 continue;
             for (uint32_t j = b->child; j < b->child + b->count; j++)
-                if (fbox_overlap(&h->boxes[i], &h->boxes[j]) &&
+                if (qbox_overlap(&h->boxes[i], &h->boxes[j]) &&
                     !visit(user, h->items[i], h->items[j]))
                     return false;
         }
         return true;
     }
     bool split_a = !a->count &&
-                   (b->count || fbox_extent(&a->box) >= fbox_extent(&b->box));
+                   (b->count || qbox_extent(&a->box) >= qbox_extent(&b->box));
     if (split_a)
         return geo_fbvh_pairs(h, a->child, nb, visit, user) &&
                geo_fbvh_pairs(h, a->child + 1, nb, visit, user);
@@ -329,7 +379,7 @@ uint32_t geo_fbvh_pair_tasks(const geo_fbvh *h, uint32_t *ret_a,
                                   {a->child + 1, b->child + 1}};
             uint32_t kept = 0;
             for (int k = 0; k < 4; k++) {
-                if (!fbox_overlap(&h->nodes[sub[k][0]].box,
+                if (!qbox_overlap(&h->nodes[sub[k][0]].box,
                                   &h->nodes[sub[k][1]].box))
                     continue;
                 uint32_t slot = kept++ == 0 ? i : n++;

@@ -1,6 +1,7 @@
 /* fbvh.h — a bounding-volume hierarchy for the pair search over many
- * boxes (the self-intersection search over a model's facets), in half
- * the memory of a geo_bvh: its boxes are single precision.
+ * boxes (the self-intersection search over a model's facets), in a
+ * quarter of the memory of a geo_bvh: its boxes are 16-bit integers on a
+ * grid over all the boxes.
  *
  * Build in O(n): the boxes' centres are quantised to a 1024³ grid over
  * their bounds and ordered along its Morton (Z-order) curve by a radix
@@ -10,11 +11,17 @@
  * most GEO_FBVH_LEAF items. Its depth is at most 30 + log2 n. A box with
  * a NaN centre goes to the grid's first cell.
  *
- * Boxes: each bound of an item's box is rounded outward to a float (lo
- * down, hi up), so two items whose exact boxes overlap overlap here too;
- * two may overlap here and not exactly (within the rounding, about 6e-8
- * relative). Boxes only prune; the caller's exact test decides. A NaN
- * bound stays NaN (its box overlaps nothing, as in a geo_bvh).
+ * Boxes: the grid has cubic cells, GEO_FBVH_CELLS of them along the
+ * longest side of the box around every finite bound; each bound maps to
+ * g(x) = (x − origin)·scale, clamped to [0, GEO_FBVH_CELLS], lo taken
+ * down (floor) and hi up (ceil). g is monotone (a correctly rounded
+ * subtraction and product by a positive constant are), so lo ≤ hi'
+ * implies floor(g(lo)) ≤ g(lo) ≤ g(hi') ≤ ceil(g(hi')): two items whose
+ * exact boxes overlap overlap here too. Two may overlap here and not
+ * exactly (within a cell). Boxes only prune; the caller's exact test
+ * decides. A box with a NaN bound becomes the empty box (lo
+ * GEO_FBVH_CELLS + 1 and hi 0 on every axis): it overlaps nothing, as
+ * in a geo_bvh, and a union ignores it.
  *
  * Node layout as geo_bvh's: nodes[0] is the root; an internal node's
  * children are nodes[child] and nodes[child + 1]; a leaf (count > 0)
@@ -31,13 +38,14 @@
 #include "bvh.h"
 
 #define GEO_FBVH_LEAF 4
+#define GEO_FBVH_CELLS 65534
 
-typedef struct geo_fbox {
-    float lo[3], hi[3];
-} geo_fbox;
+typedef struct geo_qbox {
+    uint16_t lo[3], hi[3];
+} geo_qbox;
 
 typedef struct geo_fbvh_node {
-    geo_fbox box;
+    geo_qbox box;
     uint32_t child; /* first child (internal) or first item slot (leaf) */
     uint32_t count; /* 0 for internal nodes, else the leaf's item count */
 } geo_fbvh_node;
@@ -46,8 +54,12 @@ typedef struct geo_fbvh {
     uint32_t nnodes, nitems;
     geo_fbvh_node *nodes; /* nnodes; nodes[0] is the root (if nitems > 0) */
     uint32_t *items;      /* nitems item indices in leaf order */
-    geo_fbox *boxes;      /* nitems: boxes[k] is the box of items[k] */
+    geo_qbox *boxes;      /* nitems: boxes[k] is the box of items[k] */
+    double origin[3], scale; /* the grid: g(x) = (x − origin)·scale */
 } geo_fbvh;
+
+/* The grid box of b in h's grid (as the build stores an item's). */
+void geo_fbvh_quantize(const geo_fbvh *h, const geo_bbox *b, geo_qbox *ret);
 
 /* Builds the hierarchy over n boxes (rounded outward, in leaf order).
  * NULL on out-of-memory (err set). */

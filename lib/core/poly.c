@@ -1,6 +1,7 @@
 /* poly.c — storage, construction, measures and compaction of geo_poly.
  * Invariant kept by every function here: fstart[0] = 0, fstart is
- * non-decreasing, planes has one entry per facet. */
+ * non-decreasing, planes has one entry per facet (or is NULL: implicit
+ * planes, see poly.h, which only the readers make). */
 #include "poly.h"
 
 #include <errno.h>
@@ -126,8 +127,10 @@ int geo_poly_assign(geo_poly *dst, const geo_poly *src)
     memcpy(dst->fstart, src->fstart, (src->nfacets + 1) * sizeof *src->fstart);
     if (nc)
         memcpy(dst->fidx, src->fidx, nc * sizeof *src->fidx);
-    if (src->nfacets)
+    if (src->nfacets && src->planes)
         memcpy(dst->planes, src->planes, src->nfacets * sizeof *src->planes);
+    for (uint32_t f = 0; !src->planes && f < src->nfacets; f++)
+        geo_poly_facet_plane(src, f, dst->planes[f]); /* made explicit */
     dst->nverts = src->nverts;
     dst->nfacets = src->nfacets;
     return 0;
@@ -303,6 +306,17 @@ void geo_poly_facet_fit_plane(const geo_poly *p, uint32_t f,
         free(w);
 }
 
+void geo_poly_facet_plane(const geo_poly *p, uint32_t f, double ret[4])
+{
+    if (p->planes) {
+        memcpy(ret, p->planes[f], 4 * sizeof *ret);
+        return;
+    }
+    geo_poly_facet_fit_plane(p, f, GEO_PLANE_UNWEIGHTED, ret);
+    for (int k = 0; k < 4; k++)
+        ret[k] += 0.0; /* as proto_finish_planes stores it */
+}
+
 void geo_poly_compute_planes(geo_poly *p, enum geo_plane_weight weight)
 {
     for (uint32_t f = 0; f < p->nfacets; f++)
@@ -393,8 +407,10 @@ double geo_poly_max_nonplanarity(const geo_poly *p)
     for (uint32_t f = 0; f < p->nfacets; f++) {
         uint32_t n = geo_poly_facet_size(p, f);
         const uint32_t *v = geo_poly_facet(p, f);
+        double pl[4];
+        geo_poly_facet_plane(p, f, pl);
         for (uint32_t i = 0; i < n; i++) {
-            double d = fabs(geo_plane_eval(p->planes[f], p->verts[v[i]]));
+            double d = fabs(geo_plane_eval(pl, p->verts[v[i]]));
             if (d > m)
                 m = d;
         }

@@ -13,6 +13,13 @@
  * being its bounding-box diagonal; that tolerance measures planarity and
  * nothing else. Signs that decide topology use lib/core/predicates.h exactly.
  *
+ * Implicit planes: a reader may leave planes NULL for a model whose every
+ * facet is a triangle with no plane given (proto_limits.implicit_planes);
+ * each plane is then the one geo_poly_facet_fit_plane computes, read
+ * through geo_poly_facet_plane. Such a model is for reading only:
+ * geo_inspect, geo_poly_max_nonplanarity and geo_poly_copy accept it; a
+ * function that changes a model or reads p->planes directly does not.
+ *
  * Ownership: a geo_poly owns all four arrays; geo_poly_free releases them.
  * Nothing here is thread-safe for concurrent mutation; concurrent readers
  * of an unchanging geo_poly are fine. */
@@ -31,7 +38,8 @@ typedef struct geo_poly {
     double (*verts)[3]; /* nverts positions */
     uint32_t *fstart;   /* nfacets + 1 offsets into fidx; fstart[0] = 0 */
     uint32_t *fidx;     /* fstart[nfacets] vertex indices (corners) */
-    double (*planes)[4];/* nfacets planes: unit outward normal, offset */
+    double (*planes)[4];/* nfacets planes: unit outward normal, offset;
+                           NULL when implicit (above) */
     uint32_t cap_verts, cap_facets, cap_idx; /* allocated capacities */
 } geo_poly;
 
@@ -127,6 +135,11 @@ void geo_poly_compute_planes(geo_poly *p, enum geo_plane_weight weight);
 /* Least-squares plane of facet f into ret (see compute_planes). */
 void geo_poly_facet_fit_plane(const geo_poly *p, uint32_t f,
                               enum geo_plane_weight weight, double ret[4]);
+
+/* The plane of facet f into ret: the stored one, or for implicit planes
+ * (p->planes NULL) the one a reader would have stored: the unweighted
+ * fit, each -0 made +0. */
+void geo_poly_facet_plane(const geo_poly *p, uint32_t f, double ret[4]);
 
 /* Axis-aligned bounding box; an empty model gives lo = hi = 0. */
 void geo_poly_bbox(const geo_poly *p, double ret_lo[3], double ret_hi[3]);

@@ -25,17 +25,17 @@ geo_topo *geo_topo_free(geo_topo *t)
 /* Pairs corners sharing an undirected edge; fills mate, edge_kind and the
  * edge counters. The corners are bucketed by their edge's lower vertex
  * (a counting sort: two sequential passes, no hashing), and each bucket —
- * a few corners — is grouped by the edge's upper vertex. */
+ * a few corners — is grouped by the edge's upper vertex. The buckets are
+ * kept in vcorners (order_fans fills it after) and each corner's upper
+ * vertex in its mate until its edge is grouped: no scratch of 8 bytes a
+ * corner. */
 static int pair_edges(const geo_poly *p, geo_topo *t)
 {
     uint32_t nc = t->ncorners, nv = t->nverts;
     uint32_t *start = calloc((size_t)nv + 2, sizeof *start);
-    uint32_t *order = malloc(((size_t)nc + 1) * sizeof *order);
-    uint32_t *upper = malloc(((size_t)nc + 1) * sizeof *upper);
-    if (!start || !order || !upper) {
-        free(start), free(order), free(upper);
+    uint32_t *order = t->vcorners, *upper = t->mate;
+    if (!start)
         return -ENOMEM;
-    }
     for (uint32_t f = 0; f < p->nfacets; f++)
         for (uint32_t c = p->fstart[f]; c < p->fstart[f + 1]; c++) {
             uint32_t a = p->fidx[c];
@@ -63,10 +63,14 @@ static int pair_edges(const geo_poly *p, geo_topo *t)
             uint32_t c0 = order[i];
             if (t->edge_kind[c0] != UINT8_MAX)
                 continue;
-            /* the corners of edge {v, upper[c0]}: c0, and c1, c2 ... */
-            uint32_t n = 1, c1 = GEO_NONE;
+            /* the corners of edge {v, upper[c0]}: c0, and c1, c2 ...;
+             * all still ungrouped (an edge is grouped whole), so the
+             * grouped ones, whose upper was overwritten by their mate,
+             * are passed over */
+            uint32_t n = 1, c1 = GEO_NONE, u0 = upper[c0];
             for (uint32_t j = i + 1; j < hi; j++)
-                if (upper[order[j]] == upper[c0]) {
+                if (t->edge_kind[order[j]] == UINT8_MAX &&
+                    upper[order[j]] == u0) {
                     if (n == 1)
                         c1 = order[j];
                     n++;
@@ -86,7 +90,8 @@ static int pair_edges(const geo_poly *p, geo_topo *t)
                     t->nflipped_edges++;
             } else {
                 for (uint32_t j = i; j < hi; j++)
-                    if (upper[order[j]] == upper[c0]) {
+                    if (t->edge_kind[order[j]] == UINT8_MAX &&
+                        upper[order[j]] == u0) {
                         t->mate[order[j]] = GEO_NONE;
                         t->edge_kind[order[j]] = GEO_EDGE_NONMANIFOLD;
                     }
@@ -94,7 +99,7 @@ static int pair_edges(const geo_poly *p, geo_topo *t)
             }
         }
     }
-    free(start), free(order), free(upper);
+    free(start);
     return 0;
 }
 
@@ -139,25 +144,38 @@ static uint32_t walk_fan(const geo_poly *p, const geo_topo *t, uint32_t v,
     }
 }
 
+/* Each vertex's corners in fan order into vcorners: bucketed there by
+ * vertex first, then each bucket copied out (raw, as long as the largest
+ * bucket) and written back fan by fan. */
 static int order_fans(const geo_poly *p, geo_topo *t)
 {
     uint32_t nv = t->nverts, nc = t->ncorners;
     uint32_t *fill = calloc((size_t)nv + 1, sizeof *fill);
-    uint32_t *raw = malloc(((size_t)nc + 1) * sizeof *raw);
     uint8_t *taken = calloc((size_t)nc + 1, 1);
-    uint32_t *bufa = malloc(((size_t)nc + 1) * sizeof *bufa);
-    uint32_t *bufb = malloc(((size_t)nc + 1) * sizeof *bufb);
-    if (!fill || !raw || !taken || !bufa || !bufb) {
-        free(fill), free(raw), free(taken), free(bufa), free(bufb);
+    if (!fill || !taken) {
+        free(fill), free(taken);
         return -ENOMEM;
     }
     for (uint32_t c = 0; c < nc; c++)
         t->vstart[p->fidx[c] + 1]++;
-    for (uint32_t v = 0; v < nv; v++)
+    uint32_t maxdeg = 0;
+    for (uint32_t v = 0; v < nv; v++) {
+        if (t->vstart[v + 1] > maxdeg)
+            maxdeg = t->vstart[v + 1];
         t->vstart[v + 1] += t->vstart[v];
+    }
     for (uint32_t c = 0; c < nc; c++) {
         uint32_t v = p->fidx[c];
-        raw[t->vstart[v] + fill[v]++] = c;
+        t->vcorners[t->vstart[v] + fill[v]++] = c;
+    }
+    free(fill);
+    /* a fan of v holds at most its corners */
+    uint32_t *raw = malloc(((size_t)maxdeg + 1) * sizeof *raw);
+    uint32_t *bufa = malloc(((size_t)maxdeg + 1) * sizeof *bufa);
+    uint32_t *bufb = malloc(((size_t)maxdeg + 1) * sizeof *bufb);
+    if (!raw || !bufa || !bufb) {
+        free(raw), free(taken), free(bufa), free(bufb);
+        return -ENOMEM;
     }
 
     for (uint32_t v = 0; v < nv; v++) {
@@ -166,9 +184,10 @@ static int order_fans(const geo_poly *p, geo_topo *t)
             t->vertex_kind[v] = GEO_VERTEX_ISOLATED;
             continue;
         }
+        memcpy(raw, t->vcorners + lo, (size_t)(hi - lo) * sizeof *raw);
         uint32_t fans = 0;
         bool closed_all = true, bad_edge = false;
-        for (uint32_t i = lo; i < hi; i++) {
+        for (uint32_t i = 0; i < hi - lo; i++) {
             uint32_t k0 = raw[i];
             uint8_t kin = t->edge_kind[geo_topo_prev(p, t, k0)];
             uint8_t kout = t->edge_kind[k0];
@@ -205,11 +224,13 @@ static int order_fans(const geo_poly *p, geo_topo *t)
                 closed_all ? GEO_VERTEX_INTERIOR : GEO_VERTEX_BOUNDARY;
         }
     }
-    free(fill), free(raw), free(taken), free(bufa), free(bufb);
+    free(raw), free(taken), free(bufa), free(bufb);
     return 0;
 }
 
-geo_topo *geo_topo_build(const geo_poly *p, geo_err *err)
+/* The topology of p; without corner_facet when lean and every facet
+ * is a triangle (facets of at least 3 corners, 3 per facet on average). */
+static geo_topo *build(const geo_poly *p, bool lean, geo_err *err)
 {
     geo_topo *t = calloc(1, sizeof *t);
     if (!t)
@@ -218,18 +239,22 @@ geo_topo *geo_topo_build(const geo_poly *p, geo_err *err)
     t->nverts = p->nverts;
     t->nfacets = p->nfacets;
     t->ncorners = nc;
-    t->corner_facet = malloc(((size_t)nc + 1) * sizeof *t->corner_facet);
+    if (!lean || nc != 3 * (uint64_t)p->nfacets) {
+        t->corner_facet = malloc(((size_t)nc + 1) * sizeof *t->corner_facet);
+        if (!t->corner_facet)
+            goto oom;
+        for (uint32_t f = 0; f < p->nfacets; f++)
+            for (uint32_t c = p->fstart[f]; c < p->fstart[f + 1]; c++)
+                t->corner_facet[c] = f;
+    }
     t->mate = malloc(((size_t)nc + 1) * sizeof *t->mate);
     t->edge_kind = malloc((size_t)nc + 1);
     t->vstart = calloc((size_t)p->nverts + 1, sizeof *t->vstart);
     t->vcorners = malloc(((size_t)nc + 1) * sizeof *t->vcorners);
     t->vertex_kind = malloc((size_t)p->nverts + 1);
-    if (!t->corner_facet || !t->mate || !t->edge_kind || !t->vstart ||
-        !t->vcorners || !t->vertex_kind)
+    if (!t->mate || !t->edge_kind || !t->vstart || !t->vcorners ||
+        !t->vertex_kind)
         goto oom;
-    for (uint32_t f = 0; f < p->nfacets; f++)
-        for (uint32_t c = p->fstart[f]; c < p->fstart[f + 1]; c++)
-            t->corner_facet[c] = f;
     if (pair_edges(p, t) < 0 || order_fans(p, t) < 0)
         goto oom;
     return t;
@@ -238,14 +263,30 @@ oom:
     return geo_topo_free(t);
 }
 
-geo_topo *geo_topo_build_checked(const geo_poly *p, int *ret_rc,
-                                 geo_err *err)
+geo_topo *geo_topo_build(const geo_poly *p, geo_err *err)
+{
+    return build(p, false, err);
+}
+
+static geo_topo *build_checked(const geo_poly *p, bool lean, int *ret_rc,
+                               geo_err *err)
 {
     int rc = geo_poly_validate_indices(p, err);
-    geo_topo *t = rc < 0 ? NULL : geo_topo_build(p, err);
+    geo_topo *t = rc < 0 ? NULL : build(p, lean, err);
     if (!t)
         *ret_rc = rc < 0 ? rc : -ENOMEM;
     return t;
+}
+
+geo_topo *geo_topo_build_checked(const geo_poly *p, int *ret_rc,
+                                 geo_err *err)
+{
+    return build_checked(p, false, ret_rc, err);
+}
+
+geo_topo *geo_topo_build_lean(const geo_poly *p, int *ret_rc, geo_err *err)
+{
+    return build_checked(p, true, ret_rc, err);
 }
 
 /* The boundary corner that follows boundary corner c around its hole:

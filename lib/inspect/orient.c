@@ -196,7 +196,7 @@ int geo_orient_analyze(const geo_poly *p, const geo_topo *t,
                     closed[s] = 0;
                     continue;
                 }
-                uint32_t g = t->corner_facet[m];
+                uint32_t g = geo_topo_facet(t, m);
                 uint8_t want = colour[f] ^
                                (t->edge_kind[c] == GEO_EDGE_FLIPPED);
                 if (shell[g] == GEO_NONE) {

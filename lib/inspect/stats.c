@@ -123,6 +123,19 @@ static bool surely_wider(double yy, double c, double tan_max)
     return c < 0 || yy > lim * lim * (1 + 1e-8);
 }
 
+/* Whether that angle is surely below t (tan_t = tan(t), 0 when never
+ * sure, as above): c > 0 and yy < (c·tan(t))²·(1 − 1e-8), a tangent
+ * below tan(t) by 5e-9 relative, which moves the angle by at least
+ * 5.6e-11 relative over 1e-6° ≤ t ≤ 89° — far beyond the few units in
+ * the last place of the root, atan2 and the conversion to degrees. */
+static bool surely_narrower(double yy, double c, double tan_t)
+{
+    if (tan_t == 0 || !(c > 0))
+        return false;
+    double lim = c * tan_t;
+    return yy < lim * lim * (1 - 1e-8);
+}
+
 /* The unit Newell normal of facet f, and its length. */
 static double unit_normal(const geo_poly *p, uint32_t f, double ret[3])
 {
@@ -162,17 +175,26 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
             tmax = s->coplanar_deg[k];
     double tan_max = tmax >= 1e-6 && tmax <= 89 ? tan(tmax * M_PI / 180.0)
                                                 : 0;
+    double tan_k[GEO_STATS_NCOPLANAR];
+    for (int k = 0; k < GEO_STATS_NCOPLANAR; k++) {
+        double deg = s->coplanar_deg[k];
+        tan_k[k] = deg >= 1e-6 && deg <= 89 ? tan(deg * M_PI / 180.0) : 0;
+    }
     for (uint32_t f = 0; f < nf; f++) {
         double nrm[3];
         s->area += 0.5 * unit_normal(p, f, nrm);
-        if (geo_vdot(nrm, p->planes[f]) < 0)
+        /* an implicit plane's normal is nrm itself, bit for bit (the
+         * same Newell vector normalised by the same geo_vnormalize), and
+         * a dot product of a vector with itself is never negative: no
+         * facet of implicit planes is inverted */
+        if (p->planes && geo_vdot(nrm, p->planes[f]) < 0)
             s->inverted_facets++;
         uint32_t nl = 0;
         for (uint32_t c = p->fstart[f]; c < p->fstart[f + 1]; c++) {
             uint32_t m = t->mate[c];
             if (m == GEO_NONE)
                 continue;
-            uint32_t g = t->corner_facet[m];
+            uint32_t g = geo_topo_facet(t, m);
             if (g <= f)
                 continue;
             uint8_t ag = t->edge_kind[c] != GEO_EDGE_FLIPPED;
@@ -193,8 +215,24 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
             double yy = geo_vdot(x, x), dot = geo_vdot(nrm, n2);
             if (surely_wider(yy, dot, tan_max))
                 continue;
+            /* each threshold decided by the tangent where it surely can
+             * be (a smooth mesh's neighbours: all of them), else by the
+             * angle itself */
+            unsigned below = 0;
+            int k = 0;
+            for (; k < GEO_STATS_NCOPLANAR; k++) {
+                if (surely_narrower(yy, dot, tan_k[k]))
+                    below |= 1u << k;
+                else if (!surely_wider(yy, dot, tan_k[k]))
+                    break;
+            }
+            if (k == GEO_STATS_NCOPLANAR) {
+                for (k = 0; k < GEO_STATS_NCOPLANAR; k++)
+                    s->near_coplanar[k] += below >> k & 1;
+                continue;
+            }
             double ang = atan2(sqrt(yy), dot) * 180.0 / M_PI;
-            for (int k = 0; k < GEO_STATS_NCOPLANAR; k++)
+            for (k = 0; k < GEO_STATS_NCOPLANAR; k++)
                 if (ang < s->coplanar_deg[k])
                     s->near_coplanar[k]++;
         }
@@ -288,7 +326,7 @@ int geo_inspect(const geo_poly *p, const geo_inspect_opts *opts,
     else
         geo_inspect_opts_default(&o);
     int rc;
-    geo_topo *t = geo_topo_build_checked(p, &rc, err);
+    geo_topo *t = geo_topo_build_lean(p, &rc, err);
     if (!t)
         return rc;
 

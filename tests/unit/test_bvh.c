@@ -1,10 +1,10 @@
 /* test_bvh.c — every BVH query returns exactly what a brute-force scan of
  * the boxes returns (random boxes, many duplicates), and the pair tasks
- * partition the self-pairs; the float tree's pairs are those of its
+ * partition the self-pairs; the grid tree's pairs are those of its
  * stored boxes, a superset of the exact ones, and the tree is checked for
- * shape (each item once, boxes the unions of their items and the tightest
- * float boxes around the exact ones, bounded depth) on random, identical,
- * NaN-centred and out-of-range boxes. */
+ * shape (each item once, boxes the unions of their items and the grid
+ * boxes of the exact ones, bounded depth) on random, identical,
+ * NaN-centred, infinite, touching and out-of-range boxes. */
 #include "testutil.h"
 
 #include <math.h>
@@ -13,6 +13,8 @@
 
 #include "bvh.h"
 #include "fbvh.h"
+#include "gen_sphere.h"
+#include "vec.h"
 
 enum { N = 3000 };
 
@@ -164,39 +166,59 @@ static void test_pair_tasks_report_each_overlap_once(void **state)
     free(b);
 }
 
-/* The float tree: each node's box the union of its items' stored boxes,
- * each item once, and each stored box the tightest float box holding the
- * exact one. Returns the depth. */
+/* The grid coordinate of x on axis k of h, as fbvh.h defines it. */
+static double grid(const geo_fbvh *h, int k, double x)
+{
+    double far = h->scale > 0 ? h->origin[k] + GEO_FBVH_CELLS / h->scale
+                              : h->origin[k];
+    if (x <= h->origin[k])
+        return 0;
+    if (x >= far)
+        return GEO_FBVH_CELLS;
+    double g = (x - h->origin[k]) * h->scale;
+    return g < GEO_FBVH_CELLS ? g : GEO_FBVH_CELLS;
+}
+
+/* The compact tree: each node's box the union of its items' stored
+ * boxes, each item once, and each stored box the grid box of the exact
+ * one (floor of lo, ceil of hi; empty for a NaN bound). Returns the
+ * depth. */
 static uint32_t check_fnode(const geo_fbvh *h, uint32_t node,
                             const geo_bbox *in, unsigned char *seen,
-                            geo_fbox *ret_box)
+                            geo_qbox *ret_box)
 {
     const geo_fbvh_node *n = &h->nodes[node];
-    geo_fbox box;
+    geo_qbox box;
     for (int k = 0; k < 3; k++) {
-        box.lo[k] = INFINITY;
-        box.hi[k] = -INFINITY;
+        box.lo[k] = GEO_FBVH_CELLS + 1;
+        box.hi[k] = 0;
     }
     uint32_t depth = 1;
     if (n->count) {
         for (uint32_t i = n->child; i < n->child + n->count; i++) {
-            const geo_fbox *b = &h->boxes[i];
+            const geo_qbox *b = &h->boxes[i];
             const geo_bbox *x = &in[h->items[i]];
             seen[h->items[i]]++;
+            bool nan = false;
+            for (int k = 0; k < 3; k++)
+                nan = nan || isnan(x->lo[k]) || isnan(x->hi[k]);
+            geo_qbox q;
+            geo_fbvh_quantize(h, x, &q);
+            assert_memory_equal(&q, b, sizeof q);
             for (int k = 0; k < 3; k++) {
-                if (isnan(x->lo[k]))
-                    assert_true(isnan(b->lo[k]));
-                else
-                    assert_true(b->lo[k] <= x->lo[k] &&
-                                nextafterf(b->lo[k], INFINITY) > x->lo[k]);
-                assert_true(b->hi[k] >= x->hi[k] &&
-                            nextafterf(b->hi[k], -INFINITY) < x->hi[k]);
+                if (nan) {
+                    assert_int_equal(b->lo[k], GEO_FBVH_CELLS + 1);
+                    assert_int_equal(b->hi[k], 0);
+                    continue;
+                }
+                assert_true(b->lo[k] == floor(grid(h, k, x->lo[k])));
+                assert_true(b->hi[k] == ceil(grid(h, k, x->hi[k])));
                 box.lo[k] = b->lo[k] < box.lo[k] ? b->lo[k] : box.lo[k];
                 box.hi[k] = b->hi[k] > box.hi[k] ? b->hi[k] : box.hi[k];
             }
         }
     } else {
-        geo_fbox l, r;
+        geo_qbox l, r;
         uint32_t dl = check_fnode(h, n->child, in, seen, &l);
         uint32_t dr = check_fnode(h, n->child + 1, in, seen, &r);
         for (int k = 0; k < 3; k++) {
@@ -210,7 +232,7 @@ static uint32_t check_fnode(const geo_fbvh *h, uint32_t node,
     return depth;
 }
 
-static bool fbox_overlap(const geo_fbox *a, const geo_fbox *b)
+static bool qbox_overlap(const geo_qbox *a, const geo_qbox *b)
 {
     for (int k = 0; k < 3; k++)
         if (!(a->lo[k] <= b->hi[k] && b->lo[k] <= a->hi[k]))
@@ -218,7 +240,7 @@ static bool fbox_overlap(const geo_fbox *a, const geo_fbox *b)
     return true;
 }
 
-static void test_float_tree_pairs(void **state)
+static void test_grid_tree_pairs(void **state)
 {
     (void)state;
     const uint32_t n = 800;
@@ -226,7 +248,7 @@ static void test_float_tree_pairs(void **state)
     geo_fbvh *h = geo_fbvh_build(b, n, NULL);
     assert_non_null(h);
     unsigned char seen[800] = {0};
-    geo_fbox all;
+    geo_qbox all;
     uint32_t depth = check_fnode(h, 0, b, seen, &all);
     for (uint32_t i = 0; i < n; i++)
         assert_int_equal(seen[i], 1);
@@ -245,7 +267,7 @@ static void test_float_tree_pairs(void **state)
             geo_fbvh_pairs(h, ta[t], tb[t], count_pair, &p);
         for (uint32_t i = 0; i < n; i++)
             for (uint32_t j = i + 1; j < n; j++) {
-                bool f = fbox_overlap(&h->boxes[slot[i]], &h->boxes[slot[j]]);
+                bool f = qbox_overlap(&h->boxes[slot[i]], &h->boxes[slot[j]]);
                 assert_int_equal(p.count[(size_t)i * n + j], f ? 1 : 0);
                 if (geo_bbox_overlap(&b[i], &b[j]))
                     assert_true(f);
@@ -257,7 +279,7 @@ static void test_float_tree_pairs(void **state)
     free(b);
 }
 
-static void test_float_tree_of_equal_and_nan_boxes(void **state)
+static void test_grid_tree_of_equal_and_nan_boxes(void **state)
 {
     (void)state;
     /* all centres in one grid cell, a few NaN: median splits, every item
@@ -272,7 +294,7 @@ static void test_float_tree_of_equal_and_nan_boxes(void **state)
     geo_fbvh *h = geo_fbvh_build(b, M, NULL);
     assert_non_null(h);
     unsigned char seen[M] = {0};
-    geo_fbox all;
+    geo_qbox all;
     uint32_t depth = check_fnode(h, 0, b, seen, &all);
     for (uint32_t i = 0; i < M; i++)
         assert_int_equal(seen[i], 1);
@@ -286,20 +308,89 @@ static void test_float_tree_of_equal_and_nan_boxes(void **state)
     geo_fbvh_free(h);
 }
 
-/* Bounds beyond a float's range and between two floats. */
-static void test_float_tree_rounds_outward(void **state)
+/* Bounds far apart, infinite, touching exactly and a hair apart: every
+ * pair that overlaps exactly overlaps on the grid. */
+static void test_grid_tree_rounds_outward(void **state)
 {
     (void)state;
-    geo_bbox b[3] = {{{-1e300, 0.1, 1.0 / 3}, {1e300, 0.1, 1.0 / 3}},
-                     {{3.4028235677973366e38, -0.1, -1.0 / 3},
-                      {3.4028235677973366e38, -0.1, -1.0 / 3}},
-                     {{0, 0, 0}, {0, 0, 0}}};
-    geo_fbvh *h = geo_fbvh_build(b, 3, NULL);
+    const double t = 1.0 / 3, u = nextafter(t, 1);
+    geo_bbox b[7] = {{{-1e300, 0.1, t}, {1e300, 0.1, t}},
+                     {{3.4028235677973366e38, -0.1, -t},
+                      {3.4028235677973366e38, -0.1, -t}},
+                     {{0, 0, 0}, {0, 0, 0}},
+                     {{-INFINITY, 0.1, u}, {0, 0.2, 1}},
+                     {{t, t, t}, {u, u, u}},
+                     {{u, u, u}, {1, 1, 1}},
+                     {{0, 0, 0}, {t, t, t}}};
+    geo_fbvh *h = geo_fbvh_build(b, 7, NULL);
     assert_non_null(h);
-    unsigned char seen[3] = {0};
-    geo_fbox all;
+    unsigned char seen[7] = {0};
+    geo_qbox all;
     check_fnode(h, 0, b, seen, &all);
+    uint32_t slot[7];
+    for (uint32_t k = 0; k < 7; k++)
+        slot[h->items[k]] = k;
+    for (uint32_t i = 0; i < 7; i++)
+        for (uint32_t j = 0; j < 7; j++)
+            if (geo_bbox_overlap(&b[i], &b[j]))
+                assert_true(qbox_overlap(&h->boxes[slot[i]],
+                                         &h->boxes[slot[j]]));
     geo_fbvh_free(h);
+    /* a small model far from the origin: its cells are its own */
+    geo_bbox c[2] = {{{1e6, 1e6, 1e6}, {1e6 + 1e-6, 1e6, 1e6}},
+                     {{1e6 + 2e-6, 1e6, 1e6}, {1e6 + 3e-6, 1e6, 1e6}}};
+    h = geo_fbvh_build(c, 2, NULL);
+    assert_non_null(h);
+    assert_false(qbox_overlap(&h->boxes[0], &h->boxes[1]));
+    geo_fbvh_free(h);
+}
+
+/* Over a polyhedron's facets (the grid from its vertices): the stored
+ * boxes are the grid boxes of the facets' exact ones, and the pairs
+ * those of the stored boxes, every exactly overlapping pair among them;
+ * also with a vertex far out and one unused at infinity. */
+static void test_grid_tree_over_facets(void **state)
+{
+    (void)state;
+    geo_poly *s = gs_sphere(5, 1.0);
+    assert_non_null(s);
+    for (int round = 0; round < 2; round++) {
+        if (round == 1) {
+            geo_vscale(s->verts[7], 40.0, s->verts[7]);
+            const double inf[3] = {INFINITY, 0, -INFINITY};
+            assert_true(geo_poly_add_vertex(s, inf) >= 0);
+        }
+        uint32_t n = s->nfacets;
+        geo_bbox *b = malloc(n * sizeof *b);
+        assert_non_null(b);
+        for (uint32_t f = 0; f < n; f++)
+            geo_poly_facet_bbox(s, f, &b[f]);
+        geo_fbvh *h = geo_fbvh_build_facets(s, NULL);
+        assert_non_null(h);
+        unsigned char *seen = calloc(n, 1);
+        geo_qbox all;
+        check_fnode(h, 0, b, seen, &all);
+        for (uint32_t i = 0; i < n; i++)
+            assert_int_equal(seen[i], 1);
+        uint32_t *slot = malloc(n * sizeof *slot);
+        for (uint32_t k = 0; k < n; k++)
+            slot[h->items[k]] = k;
+        pairs p = {n, calloc((size_t)n * n, 1)};
+        geo_fbvh_pairs(h, 0, 0, count_pair, &p);
+        for (uint32_t i = 0; i < n; i++)
+            for (uint32_t j = i + 1; j < n; j++) {
+                bool f = qbox_overlap(&h->boxes[slot[i]], &h->boxes[slot[j]]);
+                assert_int_equal(p.count[(size_t)i * n + j], f ? 1 : 0);
+                if (geo_bbox_overlap(&b[i], &b[j]))
+                    assert_true(f);
+            }
+        free(p.count);
+        free(slot);
+        free(seen);
+        geo_fbvh_free(h);
+        free(b);
+    }
+    geo_poly_free(s);
 }
 
 static void test_empty_and_single(void **state)
@@ -327,9 +418,10 @@ int main(void)
         cmocka_unit_test(test_query_ray_finds_every_hit_box),
         cmocka_unit_test(test_pair_tasks_report_each_overlap_once),
         cmocka_unit_test(test_empty_and_single),
-        cmocka_unit_test(test_float_tree_pairs),
-        cmocka_unit_test(test_float_tree_of_equal_and_nan_boxes),
-        cmocka_unit_test(test_float_tree_rounds_outward),
+        cmocka_unit_test(test_grid_tree_pairs),
+        cmocka_unit_test(test_grid_tree_of_equal_and_nan_boxes),
+        cmocka_unit_test(test_grid_tree_rounds_outward),
+        cmocka_unit_test(test_grid_tree_over_facets),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -808,7 +808,8 @@ static void test_huge_counts_fail_before_allocating(void **state)
     (void)state;
     /* limits raised as far as they go: only the input's length can stop
      * these (an attempt to allocate would abort under the sanitizers) */
-    proto_limits big = {UINT32_MAX, UINT32_MAX, UINT32_MAX, (size_t)1 << 40};
+    proto_limits big = {UINT32_MAX, UINT32_MAX, UINT32_MAX, (size_t)1 << 40,
+                        false, false};
     unsigned char fmb[20] = "FMB1";
     put_u32(fmb + 4, 1u << 31);
     put_u32(fmb + 8, 5);

@@ -9,10 +9,12 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <fcntl.h>
 #include <unistd.h>
 
 #include "model_cmp.h"
 #include "model_io.h"
+#include "text_map.h"
 
 static geo_poly *load(const char *name, proto_read_report *rep)
 {
@@ -161,6 +163,55 @@ static void test_absent_plane_is_computed_outward(void **state)
     assert_int_equal(rep.planes_given, 0);
     assert_true(fabs(p->planes[0][2] + 1) < 1e-15);
     assert_true(fabs(p->planes[0][3] - 5) < 1e-14);
+    geo_poly_free(p);
+}
+
+/* Reads text with proto_limits.implicit_planes. */
+static geo_poly *parse_implicit(const char *text)
+{
+    proto_limits lim;
+    proto_limits_default(&lim);
+    lim.implicit_planes = true;
+    geo_err err = {{0}};
+    geo_poly *p = proto_model_read_mem(text, strlen(text), PROTO_FMT_JSON,
+                                       &lim, &err);
+    if (!p)
+        fail_msg("rejected (%s): %s", err.msg, text);
+    return p;
+}
+
+static void test_implicit_planes_only_for_planeless_triangles(
+    void **state)
+{
+    (void)state;
+    const char *tris = HEAD "\"vertices\":[[0,0,5],[1,0,5],[0,1,5],[0,0,6]],"
+                       "\"facets\":[{\"vertices\":[2,1,0]},"
+                       "{\"vertices\":[0,1,3]}]}";
+    geo_poly *p = parse_implicit(tris), *q = parse_ok(tris, NULL);
+    assert_null(p->planes);
+    for (uint32_t f = 0; f < 2; f++) {
+        double pl[4];
+        geo_poly_facet_plane(p, f, pl);
+        assert_memory_equal(pl, q->planes[f], sizeof pl);
+    }
+    /* a copy makes them explicit, the same bits */
+    geo_poly *c = geo_poly_copy(p);
+    assert_non_null(c);
+    assert_non_null(c->planes);
+    assert_memory_equal(c->planes, q->planes, 2 * sizeof *q->planes);
+    geo_poly_free(c);
+    geo_poly_free(p);
+    geo_poly_free(q);
+    /* a given plane, or a facet of four vertices, keeps them stored */
+    p = parse_implicit(HEAD TRI_VERTS ",\"facets\":[{\"vertices\":[0,1,2],"
+                       "\"plane\":[0,0,2,0]}]}");
+    assert_non_null(p->planes);
+    assert_true(p->planes[0][2] == 1);
+    geo_poly_free(p);
+    p = parse_implicit(HEAD "\"vertices\":[[0,0,0],[1,0,0],[1,1,0],[0,1,0]],"
+                       "\"facets\":[{\"vertices\":[0,1,2,3]}]}");
+    assert_non_null(p->planes);
+    assert_true(p->planes[0][2] == 1);
     geo_poly_free(p);
 }
 
@@ -564,6 +615,77 @@ static void test_read_file_errors_name_the_file(void **state)
     unlink(path);
 }
 
+/* Writes a facet-model/1 text of several MiB (n vertices on lines, a
+ * name with multi-byte characters, then tail) to path. */
+static void write_big(const char *path, uint32_t n, const char *tail)
+{
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs(HEAD "\"name\":\"\u00e9t\u00e9 \xc3\xa9t\xc3\xa9"
+          "\",\n\"vertices\":[\n", f);
+    for (uint32_t i = 0; i < n; i++)
+        fprintf(f, "[%u.125,%u.5,%u]%s\n", i, i % 7, i % 3,
+                i + 1 < n ? "," : "");
+    fputs(tail, f);
+    assert_int_equal(fclose(f), 0);
+}
+
+static void test_mapped_file_reads_as_read(void **state)
+{
+    (void)state;
+    char path[600];
+    snprintf(path, sizeof path, "%s/big.json", tmpdir);
+    proto_limits lim;
+    proto_limits_default(&lim);
+    lim.map_file = true;
+    /* a model, and errors late in the text: the same model, the same
+     * messages (line and column counted over released pages) */
+    static const char *tails[] = {
+        "],\"facets\":[{\"vertices\":[0,1,2]},{\"vertices\":[3,2,1]}]}\n",
+        "],\"facets\":[{\"vertices\":[0,1,2]},{\"vertices\":[3,2,1]]}\n",
+        "],\"facets\":[{\"vertices\":[0,1,2]},{\"vertices\":[3,2,9999999]}]}",
+        "],\"facets\":[{\"vertices\":[0,1,2]}]} x",
+    };
+    for (size_t k = 0; k < sizeof tails / sizeof *tails; k++) {
+        write_big(path, 300000, tails[k]);
+        geo_err e1 = {{0}}, e2 = {{0}};
+        geo_poly *a = proto_model_read_file(path, PROTO_FMT_UNKNOWN, NULL, &e1);
+        geo_poly *b = proto_model_read_file(path, PROTO_FMT_UNKNOWN, &lim, &e2);
+        assert_true((a == NULL) == (b == NULL));
+        assert_true((a == NULL) == (k > 0));
+        if (a) {
+            char why[256];
+            assert_true(tu_poly_same(a, b, 0, 0, why, sizeof why));
+        } else {
+            assert_string_equal(e1.msg, e2.msg);
+        }
+        geo_poly_free(a);
+        geo_poly_free(b);
+    }
+    /* the pages behind are given back and read back the same */
+    int fd = open(path, O_RDONLY);
+    assert_true(fd >= 0);
+    proto_text_map tm;
+    geo_err err = {{0}};
+    assert_int_equal(proto_text_map_open(fd, lim.max_bytes, &tm, &err), 0);
+    close(fd);
+    assert_true(tm.len > 3 * PROTO_JPULL_BEHIND_STEP);
+    char head[64];
+    memcpy(head, tm.data, sizeof head);
+    proto_text_map_behind(&tm, tm.len / 2);
+    assert_true(tm.released > 0 && tm.released <= tm.len / 2);
+    assert_memory_equal(tm.data, head, sizeof head);
+    proto_text_map_close(&tm);
+    /* the limit, and what cannot be mapped, as without the option */
+    lim.max_bytes = 16;
+    assert_null(proto_model_read_file(path, PROTO_FMT_UNKNOWN, &lim, &err));
+    assert_non_null(strstr(err.msg, "exceed the limit of 16"));
+    lim.max_bytes = (size_t)512 << 20;
+    assert_null(proto_model_read_file(tmpdir, PROTO_FMT_JSON, &lim, &err));
+    assert_non_null(strstr(err.msg, "directory"));
+    unlink(path);
+}
+
 static void test_writers_reject_non_finite_models(void **state)
 {
     (void)state;
@@ -588,6 +710,7 @@ int main(void)
         cmocka_unit_test(test_reversed_facet_is_reported_as_inward_plane),
         cmocka_unit_test(test_given_plane_is_normalised_and_checked),
         cmocka_unit_test(test_absent_plane_is_computed_outward),
+        cmocka_unit_test(test_implicit_planes_only_for_planeless_triangles),
         cmocka_unit_test(test_unknown_keys_are_ignored),
         cmocka_unit_test(test_empty_model_is_valid),
         cmocka_unit_test(test_syntax_errors_name_line_and_column),
@@ -601,6 +724,7 @@ int main(void)
         cmocka_unit_test(test_format_names_and_extensions),
         cmocka_unit_test(test_write_file_is_atomic_and_reads_back),
         cmocka_unit_test(test_read_file_errors_name_the_file),
+        cmocka_unit_test(test_mapped_file_reads_as_read),
         cmocka_unit_test(test_writers_reject_non_finite_models),
     };
     return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);

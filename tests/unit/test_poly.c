@@ -7,6 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gen_garbage.h"
+#include "gen_sphere.h"
 #include "plane.h"
 #include "poly.h"
 #include "topo.h"
@@ -248,6 +250,70 @@ static void test_compact_renumbers(void **state)
     geo_poly_free(p);
 }
 
+/* geo_topo_build_lean is geo_topo_build_checked without corner_facet on
+ * triangles: every other array and count the same, geo_topo_facet the
+ * stored facet. */
+static void check_lean(const geo_poly *p)
+{
+    geo_err err = {{0}};
+    int rc = 0;
+    geo_topo *a = geo_topo_build_checked(p, &rc, &err);
+    geo_topo *b = geo_topo_build_lean(p, &rc, &err);
+    assert_non_null(a);
+    assert_non_null(b);
+    bool tris = geo_poly_ncorners(p) == 3 * p->nfacets;
+    assert_true((b->corner_facet == NULL) == tris);
+    uint32_t nc = a->ncorners, nv = a->nverts;
+    assert_int_equal(b->ncorners, nc);
+    for (uint32_t c = 0; c < nc; c++) {
+        assert_int_equal(geo_topo_facet(b, c), a->corner_facet[c]);
+        assert_int_equal(geo_topo_next(p, b, c), geo_topo_next(p, a, c));
+        assert_int_equal(geo_topo_prev(p, b, c), geo_topo_prev(p, a, c));
+    }
+    assert_memory_equal(a->mate, b->mate, nc * sizeof *a->mate);
+    assert_memory_equal(a->edge_kind, b->edge_kind, nc);
+    assert_memory_equal(a->vstart, b->vstart, (nv + 1) * sizeof *a->vstart);
+    assert_memory_equal(a->vcorners, b->vcorners, nc * sizeof *a->vcorners);
+    assert_memory_equal(a->vertex_kind, b->vertex_kind, nv);
+    assert_int_equal(a->nedges, b->nedges);
+    assert_int_equal(a->nboundary_edges, b->nboundary_edges);
+    assert_int_equal(a->nnonmanifold_edges, b->nnonmanifold_edges);
+    assert_int_equal(a->nflipped_edges, b->nflipped_edges);
+    assert_int_equal(a->nnonmanifold_vertices, b->nnonmanifold_vertices);
+    geo_topo_free(a);
+    geo_topo_free(b);
+}
+
+static void test_lean_topology_is_the_same(void **state)
+{
+    (void)state;
+    /* a sphere, then with a facet doubled, one flipped, one removed */
+    geo_poly *s = gs_sphere(6, 1.0);
+    assert_non_null(s);
+    check_lean(s);
+    uint32_t idx[3];
+    memcpy(idx, geo_poly_facet(s, 5), sizeof idx);
+    assert_true(geo_poly_add_facet(s, idx, 3) >= 0);
+    geo_poly_flip_facet(s, 40);
+    check_lean(s);
+    bool *keep = malloc(s->nfacets * sizeof *keep);
+    assert_non_null(keep);
+    for (uint32_t f = 0; f < s->nfacets; f++)
+        keep[f] = f != 77;
+    assert_int_equal(geo_poly_compact(s, keep, NULL, NULL), 0);
+    free(keep);
+    check_lean(s);
+    geo_poly_free(s);
+    /* random facets on a 3x3x3 grid: every defect, polygons too */
+    uint64_t rng = 7;
+    for (int trial = 0; trial < 60; trial++) {
+        geo_poly *g = gen_garbage_model(&rng);
+        assert_non_null(g);
+        check_lean(g);
+        geo_poly_free(g);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -262,6 +328,7 @@ int main(void)
         cmocka_unit_test(test_plane_intersect3_and_parallel),
         cmocka_unit_test(test_sym3_eigen_and_spd_solve),
         cmocka_unit_test(test_compact_renumbers),
+        cmocka_unit_test(test_lean_topology_is_the_same),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

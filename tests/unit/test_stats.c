@@ -317,6 +317,61 @@ static void test_near_coplanar_thresholds(void **state)
     geo_poly_free(p);
 }
 
+/* The angle between the two squares' unit Newell normals, in degrees,
+ * as the statistics define it (atan2 of the cross and dot products). */
+static double bend_angle(const geo_poly *p)
+{
+    double n1[3], n2[3], x[3];
+    geo_poly_facet_area_vector(p, 0, n1);
+    geo_poly_facet_area_vector(p, 1, n2);
+    geo_vnormalize(n1);
+    geo_vnormalize(n2);
+    geo_vcross(n1, n2, x);
+    return atan2(sqrt(geo_vdot(x, x)), geo_vdot(n1, n2)) * 180.0 / M_PI;
+}
+
+static void test_near_coplanar_counts_are_the_angles(void **state)
+{
+    (void)state;
+    /* bends at and a hair around each threshold, and random ones; the
+     * thresholds also where no tangent is sure (tiny, above 89°) */
+    static const double th[][3] = {{0.5, 1.0, 2.0},
+                                   {1e-7, 89.5, 120.0},
+                                   {1e-6, 45.0, 89.0}};
+    uint64_t rng = 5;
+    for (size_t set = 0; set < sizeof th / sizeof *th; set++) {
+        geo_inspect_opts o;
+        geo_inspect_opts_default(&o);
+        memcpy(o.coplanar_deg, th[set], sizeof o.coplanar_deg);
+        for (int trial = 0; trial < 400; trial++) {
+            double b;
+            if (trial < 3 * 9) {
+                static const double e[9] = {-1e-6, -1e-9, -1e-12, -1e-15, 0,
+                                            1e-15, 1e-12, 1e-9, 1e-6};
+                b = th[set][trial / 9] * (1 + e[trial % 9]);
+            } else {
+                b = 3.0 * geo_rand_unit(&rng);
+                if (set == 1)
+                    b *= 60;
+            }
+            double a = b * M_PI / 180;
+            const double v[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0,
+                                1, -cos(a), sin(a), 0, -cos(a), sin(a)};
+            const uint32_t start[] = {0, 4, 8};
+            const uint32_t idx[] = {0, 1, 2, 3, 1, 0, 5, 4};
+            geo_poly *p = geo_poly_from_arrays(6, v, 2, start, idx, NULL,
+                                               NULL);
+            assert_non_null(p);
+            double ang = bend_angle(p);
+            geo_stats s = inspect(p, &o);
+            for (int k = 0; k < 3; k++)
+                assert_int_equal(s.near_coplanar[k], ang < th[set][k]);
+            geo_stats_clear(&s);
+            geo_poly_free(p);
+        }
+    }
+}
+
 static void test_inspection_independent_of_thread_count(void **state)
 {
     (void)state;
@@ -460,6 +515,7 @@ int main(void)
         cmocka_unit_test(test_nonmanifold_edge_and_vertex),
         cmocka_unit_test(test_degenerate_facet_and_nonplanarity),
         cmocka_unit_test(test_near_coplanar_thresholds),
+        cmocka_unit_test(test_near_coplanar_counts_are_the_angles),
         cmocka_unit_test(test_inspection_independent_of_thread_count),
         cmocka_unit_test(test_empty_and_vertex_only_models),
         cmocka_unit_test(test_random_garbage_models_never_fail),

@@ -132,8 +132,45 @@ static void check_text(const char *name, const char *text)
     free(want);
 }
 
+/* Whether every facet of p is a triangle. */
+static bool all_triangles(const geo_poly *p)
+{
+    for (uint32_t f = 0; f < p->nfacets; f++)
+        if (geo_poly_facet_size(p, f) != 3)
+            return false;
+    return true;
+}
+
+/* For a model of triangles whose planes are its own fitted ones, the
+ * statistics of its copy with implicit planes (planes NULL, as `facet
+ * inspect` reads a mesh without planes) are the same text. Counts the
+ * models so compared in implicit_checked. */
+static unsigned implicit_checked;
+
+static void check_implicit(const geo_poly *p, const char *text, size_t flags)
+{
+    if (!all_triangles(p))
+        return;
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        double pl[4];
+        geo_poly_facet_fit_plane(p, f, GEO_PLANE_UNWEIGHTED, pl);
+        for (int k = 0; k < 4; k++)
+            if (pl[k] != p->planes[f][k])
+                return; /* planes of its own: not what a reader leaves out */
+    }
+    implicit_checked++;
+    geo_poly *q = geo_poly_copy(p);
+    assert_non_null(q);
+    free(q->planes);
+    q->planes = NULL;
+    char *t = stats_text(q, 0, flags);
+    assert_string_equal(t, text);
+    free(t);
+    geo_poly_free(q);
+}
+
 /* p's statistics on 1 thread (no pool) and on 2 threads, each equal to
- * the reference `name`; frees p. */
+ * the reference `name`, and with implicit planes where p allows; frees p. */
 static void check_model(const char *name, geo_poly *p)
 {
     assert_non_null(p);
@@ -141,6 +178,7 @@ static void check_model(const char *name, geo_poly *p)
     check_text(name, one);
     char *two = stats_text(p, 2, JSON_INDENT(2));
     assert_string_equal(one, two);
+    check_implicit(p, one, JSON_INDENT(2));
     free(one);
     free(two);
     geo_poly_free(p);
@@ -211,7 +249,9 @@ static void test_pushed_vertices_match_their_references(void **state)
         geo_vscale(s->verts[v], -0.2 - 0.3 * k, s->verts[v]);
     }
     geo_poly_compute_planes(s, GEO_PLANE_UNWEIGHTED);
+    unsigned before = implicit_checked;
     check_model("sphere12.pushed.stats.json", s);
+    assert_int_equal(implicit_checked, before + 1);
 }
 
 static void test_orientation_and_topology_defects_match(void **state)
@@ -298,6 +338,7 @@ static void test_convex_and_garbage_models_match(void **state)
         char *one = stats_text(p, 0, JSON_COMPACT);
         char *two = stats_text(p, 2, JSON_COMPACT);
         assert_string_equal(one, two);
+        check_implicit(p, one, JSON_COMPACT);
         size_t k = strlen(one);
         while (len + k + 2 > cap) {
             char *na = realloc(all, cap *= 2);
@@ -312,6 +353,7 @@ static void test_convex_and_garbage_models_match(void **state)
         free(two);
         geo_poly_free(p);
     }
+    assert_true(implicit_checked > 0);
     all[--len] = '\0'; /* check_text adds the last newline */
     check_text("garbage.stats.jsonl", all);
     free(all);
