@@ -499,7 +499,7 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
         return geo_err_set(err, -ECANCELED, "correction canceled");
     geo_convex_planes cp;
     geo_err perr;
-    int r = geo_convex_planes_find(p, views, noise, fit, &cp, &perr);
+    int r = geo_convex_planes_find(p, views, noise, fit, ctx, &cp, &perr);
     if (r == -EINVAL)
         return decline(rep, "not a closed manifold");
     if (r < 0)

@@ -82,10 +82,11 @@ enum geo_convex_fit {
  * known (no roof term); noise: the scan's surface noise in mm
  * (geo_merge_surface_noise), 0 for none. ret is filled (arrays malloc'd,
  * free with geo_convex_planes_clear). Returns 0, -EINVAL (p not closed
- * and manifold; err says so), -ENOMEM (ret zeroed). */
+ * and manifold; err says so), -ENOMEM or -ECANCELED (ctx, which may be
+ * NULL; ret zeroed). */
 int geo_convex_planes_find(const geo_poly *p, uint32_t views, double noise,
-                           enum geo_convex_fit fit, geo_convex_planes *ret,
-                           geo_err *err);
+                           enum geo_convex_fit fit, const geo_ctx *ctx,
+                           geo_convex_planes *ret, geo_err *err);
 
 /* Adjusts planes[0..nplanes) (unit outward, in place) to every
  * silhouette plane of scan: each scan facet measures the two vertices

@@ -165,6 +165,8 @@ typedef struct finder {
     uint32_t *mem, nmem;
     uint32_t *vs, nvs;
     uint32_t *cand, ncand;
+    const geo_ctx *ctx; /* polled while the groups grow */
+    bool canceled;
 } finder;
 
 /* Would facet h fit the group of moments m, vertices f->vs and plane pl?
@@ -259,7 +261,13 @@ static uint32_t grow_groups(finder *f, uint32_t *order)
         mom m = f->fm[s];
         double pl[4];
         memcpy(pl, p->planes[s], sizeof pl);
-        for (;;) {
+        for (uint32_t it = 1;; it++) {
+            /* a group of thousands of facets checks each candidate
+             * against all its vertices: poll the cancellation */
+            if ((it & GEO_CTX_CHECK_MASK) == 0 && geo_ctx_canceled(f->ctx)) {
+                f->canceled = true;
+                return ng;
+            }
             uint32_t bi = GEO_NONE;
             double bd = -2;
             for (uint32_t j = 0; j < f->ncand; j++) {
@@ -422,6 +430,8 @@ static int cmp_seg_group(const void *x, const void *y)
     const seg *s = x, *t = y;
     if (s->g != t->g)
         return s->g < t->g ? -1 : 1;
+    if (s->f != t->f) /* a facet's segments together: hinge_fit */
+        return s->f < t->f ? -1 : 1;
     return (s->a > t->a) - (s->a < t->a);
 }
 
@@ -468,15 +478,20 @@ static void hinge_fit(const geo_poly *p, const seg *sg, uint32_t n,
             scale = fmax(*ret_scale, scale_floor);
         }
         uint32_t kept = 0;
+        double lo = INFINITY, hi = -INFINITY;
         for (uint32_t i = 0; i < n; i++) {
             /* a hinge is the low side of its sliver: the sliver rises
-             * from it by its tilt */
-            uint32_t nv = geo_poly_facet_size(p, sg[i].f);
-            const uint32_t *fv = geo_poly_facet(p, sg[i].f);
-            double lo = INFINITY, hi = -INFINITY;
-            for (uint32_t j = 0; j < nv; j++) {
-                double d = geo_plane_eval(ref, p->verts[fv[j]]);
-                lo = fmin(lo, d), hi = fmax(hi, d);
+             * from it by its tilt; a facet's segments are consecutive,
+             * its range is found once (a facet of 10,000 edges would
+             * otherwise cost 10⁸) */
+            if (i == 0 || sg[i].f != sg[i - 1].f) {
+                uint32_t nv = geo_poly_facet_size(p, sg[i].f);
+                const uint32_t *fv = geo_poly_facet(p, sg[i].f);
+                lo = INFINITY, hi = -INFINITY;
+                for (uint32_t j = 0; j < nv; j++) {
+                    double d = geo_plane_eval(ref, p->verts[fv[j]]);
+                    lo = fmin(lo, d), hi = fmax(hi, d);
+                }
             }
             double ra = geo_plane_eval(ref, p->verts[sg[i].a]);
             double rb = geo_plane_eval(ref, p->verts[sg[i].b]);
@@ -647,8 +662,8 @@ static int support(const geo_convex_planes *r, const double (*gpl)[4],
 }
 
 int geo_convex_planes_find(const geo_poly *p, uint32_t views, double noise,
-                           enum geo_convex_fit fit, geo_convex_planes *ret,
-                           geo_err *err)
+                           enum geo_convex_fit fit, const geo_ctx *ctx,
+                           geo_convex_planes *ret, geo_err *err)
 {
     memset(ret, 0, sizeof *ret);
     geo_topo *t = geo_topo_build(p, err);
@@ -697,7 +712,12 @@ int geo_convex_planes_find(const geo_poly *p, uint32_t views, double noise,
         f.farea[h] = f.fm[h].a;
         f.group[h] = GEO_NONE;
     }
+    f.ctx = ctx;
     uint32_t ng = grow_groups(&f, order);
+    if (f.canceled) {
+        r = -ECANCELED;
+        goto done;
+    }
     if (join_groups(&f, &ng) < 0)
         goto done;
     ret->ngroups = ng;
@@ -849,7 +869,8 @@ int geo_convex_planes_find(const geo_poly *p, uint32_t views, double noise,
 done:
     if (r < 0) {
         geo_convex_planes_clear(ret);
-        geo_err_set(err, r, "out of memory");
+        geo_err_set(err, r, r == -ECANCELED ? "correction canceled"
+                                            : "out of memory");
     }
     free(f.fm), free(f.farea), free(f.group), free(f.vstamp), free(f.fstamp);
     free(f.mem), free(f.vs), free(f.cand), free(order), free(sg), free(res);
