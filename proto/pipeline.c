@@ -299,6 +299,7 @@ static void set_defaults(proto_op *op)
         op->u.correct.radius = 0;
         op->u.correct.max_angle_deg = 60.0;
         op->u.correct.max_deviation = 0;
+        op->u.correct.convex = true;
         break;
     case PROTO_OP_MOVE:
         op->u.move.schedule = PROTO_SCHED_LOCAL_EXP;

@@ -1,7 +1,8 @@
 /* cmd_correct.c — `facet correct MODEL -o OUT [--report FILE]`: the
- * automatic post-scan correction (lib/correct/correct.h: merge the slivers of
- * each true facet, collapse vertex clusters), the same call the daemon's
- * "auto" pipeline makes, so both give the same model. */
+ * automatic post-scan correction (lib/correct/correct.h: a convex scan
+ * rebuilt from its recovered planes, else the slivers of each true facet
+ * merged and vertex clusters collapsed), the same call the daemon's "auto"
+ * pipeline makes, so both give the same model. */
 #include <math.h>
 #include <stdio.h>
 
@@ -16,7 +17,9 @@
 static const char USAGE[] =
     "usage: facet correct MODEL -o OUT [--report FILE] [options]\n"
     "\n"
-    "Corrects a scanned model: merges the groups of nearly coplanar facets\n"
+    "Corrects a scanned model. A convex scan is rebuilt as the intersection\n"
+    "of its true facets' planes, recovered from the slivers of each; else\n"
+    "(and with --no-convex) it merges the groups of nearly coplanar facets\n"
     "a shadow-profile scanner makes of each true facet (Palachev 2012, §2) and\n"
     "collapses the clusters of vertices joined by very short edges (§4.1),\n"
     "repeating both until nothing changes; every step is checked and\n"
@@ -34,8 +37,10 @@ static const char USAGE[] =
     "                       measured on the scan\n"
     "  --radius R           clusters: mm; default 2e-4 of the model's size\n"
     "  --no-collapse        do not collapse clusters\n"
-    "  --convex             a convex scan: intersect its recovered facet planes\n"
-    "                       (the merge stays the fallback)\n"
+    "  --convex             a convex scan is rebuilt as the intersection of its\n"
+    "                       recovered facet planes, the merge its fallback and\n"
+    "                       the path of a non-convex scan (the default)\n"
+    "  --no-convex          the merge rounds alone\n"
     "\n"
     "Prints one line of JSON: vertices and facets before and after,\n"
     "groups_merged, groups_failed, clusters_collapsed, views and noise (mm)\n"
@@ -54,14 +59,15 @@ int cmd_correct(int argc, char **argv)
     geo_correct_opts o;
     geo_correct_opts_default(&o);
     enum { O_OUT, O_REPORT, O_ANGLE, O_DEV, O_VIEWS, O_NOISE, O_RADIUS,
-           O_NO_COLLAPSE, O_CONVEX };
+           O_NO_COLLAPSE, O_CONVEX, O_NO_CONVEX };
     static const cli_opt opts[] = {
         {"-o", O_OUT, true},              {"--output", O_OUT, true},
         {"--report", O_REPORT, true},     {"--max-angle", O_ANGLE, true},
         {"--max-deviation", O_DEV, true}, {"--views", O_VIEWS, true},
         {"--noise", O_NOISE, true},       {"--radius", O_RADIUS, true},
         {"--no-collapse", O_NO_COLLAPSE, false},
-        {"--convex", O_CONVEX, false},    {NULL, 0, false},
+        {"--convex", O_CONVEX, false},
+        {"--no-convex", O_NO_CONVEX, false}, {NULL, 0, false},
     };
     static const char LENGTH[] = "a positive length in mm";
     static const char VIEWS[] = "a whole number of views";
@@ -97,6 +103,7 @@ int cmd_correct(int argc, char **argv)
             break;
         case O_NO_COLLAPSE: o.collapse_clusters = false; break;
         case O_CONVEX: o.convex = true; break;
+        case O_NO_CONVEX: o.convex = false; break;
         default: r = CLI_ARGS_ERROR;
         }
         if (r)

@@ -20,7 +20,7 @@ void geo_correct_opts_default(geo_correct_opts *o)
     geo_collapse_opts_default(&o->collapse);
     o->collapse_clusters = true;
     o->max_rounds = 4;
-    o->convex = false;
+    o->convex = true;
     o->convex_fit = GEO_CONVEX_FIT_SILHOUETTE;
 }
 

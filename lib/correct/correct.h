@@ -40,8 +40,9 @@ typedef struct geo_correct_opts {
     bool convex;                /* a convex scan: its recovered planes
                                    intersected (convex.h) instead of the
                                    merge rounds, which stay the fallback
-                                   [false: on the fixed suite it does not
-                                   yet beat the merge, see
+                                   and the path of a non-convex scan
+                                   [true: on the fixed suite it recovers
+                                   more facets, see
                                    docs/kernels/correct-convex.md] */
     enum geo_convex_fit convex_fit; /* its planes
                                        [GEO_CONVEX_FIT_SILHOUETTE] */

@@ -2,8 +2,8 @@
 # correct.sh — the automatic post-scan correction end to end: `facet
 # correct` and `facet merge` offline (summaries, reports, exit codes), and
 # facetd's "correct" pipeline serving byte for byte the model `facet correct`
-# writes (with the op's convex argument, the one `facet correct --convex`
-# writes), with statistics that call it valid.
+# writes (the convex path by default; with the op's convex: false, the one
+# `facet correct --no-convex` writes), with statistics that call it valid.
 . "$(dirname "$0")/lib.sh" "$@"
 F="$BUILD/facet"
 K400=$MODELS/brilliant.scan-k400.json
@@ -53,20 +53,23 @@ req GET "/v1/jobs/$ID/stats"
 expect_eq "the statistics after the correction say valid" '"valid":true' \
     "$(grep -o '"valid":[a-z]*' "$BODY" | tail -n 1)"
 check "the statistics report the correct op" grep -q '"op":"correct"' "$BODY"
-check "a correction not asked to be convex says so (convex: null)" \
-    grep -q '"convex":null' "$BODY"
+check "by default the convex path gave the result" \
+    grep -q '"convex":{"used":true,"reason":null' "$BODY"
 
-# the convex path asked for by the op's argument, as by facet correct --convex
-"$F" correct --convex "$K400" -o "$T/convex.json" >/dev/null
-submit brilliant.scan-k400.json '[{"op":"correct","convex":true}]'
-expect_eq "a correct job with convex: true is accepted" 202 "$CODE"
+# the merge alone, asked for by the op's argument as by facet correct
+# --no-convex
+"$F" correct --no-convex "$K400" -o "$T/merged.json" >/dev/null
+check "the merge alone gives another model than the convex path" \
+    bash -c "! cmp -s '$T/merged.json' '$T/offline.json'"
+submit brilliant.scan-k400.json '[{"op":"correct","convex":false}]'
+expect_eq "a correct job with convex: false is accepted" 202 "$CODE"
 wait_job "$ID" 60
 expect_eq "it succeeds" succeeded "$STATE_OF"
 req GET "/v1/jobs/$ID/model?format=json"
-cp "$BODY" "$T/served-convex.json"
-check "the served model equals facet correct --convex's, byte for byte" \
-    cmp -s "$T/served-convex.json" "$T/convex.json"
+cp "$BODY" "$T/served-merged.json"
+check "the served model equals facet correct --no-convex's, byte for byte" \
+    cmp -s "$T/served-merged.json" "$T/merged.json"
 req GET "/v1/jobs/$ID/stats"
-check "the report says the convex path gave the result" \
-    grep -q '"convex":{"used":true,"reason":null' "$BODY"
+check "a correction asked for the merge alone says so (convex: null)" \
+    grep -q '"convex":null' "$BODY"
 finish

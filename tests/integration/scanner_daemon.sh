@@ -175,10 +175,17 @@ check "a re-plugged scanner scans again" test $? -eq 0
 nb=$(njobs SN-B1)
 nh=$(njobs SN-H1)
 mock_cmd model SN-B1 "$K400" >/dev/null
+JB=; JH=
 mock_cmd scan SN-B1 >/dev/null && mock_cmd scan SN-H1 >/dev/null
 new_job SN-B1 "$nb" && JB=$ID && new_job SN-H1 "$nh" && JH=$ID &&
     wait_job "$JB" && wait_job "$JH" && result_for SN-B1 "$JB" && result_for SN-H1 "$JH"
-check "two scanners scan at once, each gets its own RESULT" test $? -eq 0
+r=$?
+check "two scanners scan at once, each gets its own RESULT" test $r -eq 0
+if [ $r -ne 0 ]; then # what each side saw, for the failure's reader
+    echo "# jobs: SN-B1 $nb -> $(njobs SN-B1) (${JB:-none}), SN-H1 $nh -> $(njobs SN-H1) (${JH:-none})"
+    tail -n 30 "$MLOG" | sed 's/^/#   mock: /'
+    tail -n 30 "$LOG" | sed 's/^/#   facetd: /'
+fi
 check "both connected" test "$(metric facetd_scanner_devices_connected)" -eq 2
 
 # --- START_SCAN over HTTP ----------------------------------------------------

@@ -13,8 +13,8 @@
  * the stone as drawn. With --suite N: the fixed suite of N scans, scan i
  * drawn from seed i: a cut (in turn), K in {100, 200, 400, 800}, noise
  * uniform in 0–3 µm, a random view phase and stone azimuth. --method:
- * auto = geo_correct with the convex path on (default), merge =
- * its defaults (the convex path off: the Palachev 2012 merge only), planes = geo_convex_planes_find
+ * auto = geo_correct as it defaults (the convex path on), merge =
+ * the convex path off (the Palachev 2012 merge only), planes = geo_convex_planes_find
  * intersected by the simulator (the planes alone, no checks); --fit
  * the convex path's plane fit (convex.h; geo_correct's by default; with
  * --method planes the silhouette fit adjusts the planes, still without

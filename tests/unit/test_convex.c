@@ -145,6 +145,41 @@ static void test_adjustment_recovers_more_than_the_area_fit(void **state)
     geo_poly_free(stone);
 }
 
+/* A 2 mm cube with one edge bevelled depth mm deep, corrected as if it
+ * were a scan with 1 µm of noise: the number of facets of the result. */
+static uint32_t facets_of_bevelled_cube(double depth)
+{
+    const double s = 1 / sqrt(2.0);
+    double pl[7][4] = {{1, 0, 0, -1}, {-1, 0, 0, -1}, {0, 1, 0, -1},
+                       {0, -1, 0, -1}, {0, 0, 1, -1}, {0, 0, -1, -1},
+                       {s, s, 0, -(2 * s - depth)}};
+    geo_poly *scan = sim_halfspace_intersection(&pl[0][0], 7, 10);
+    assert_non_null(scan);
+    assert_int_equal(scan->nfacets, 7);
+    geo_poly *q = NULL;
+    geo_convex_report rep;
+    geo_err err;
+    int r = geo_correct_convex(scan, 0, 1e-3, 1e-3, GEO_CONVEX_FIT_SILHOUETTE,
+                               NULL, &q, &rep, &err);
+    if (r != 0)
+        fail_msg("declined: %s", r == 1 ? rep.reason : err.msg);
+    assert_valid_convex(q);
+    uint32_t n = q->nfacets;
+    geo_poly_free(q);
+    geo_poly_free(scan);
+    return n;
+}
+
+/* A facet stays only when the scan needs it: a bevel cutting less than
+ * the noise is not told from a sharp edge, one cutting forty noise
+ * scales is a facet. */
+static void test_a_bevel_within_the_noise_is_no_facet(void **state)
+{
+    (void)state;
+    assert_int_equal(facets_of_bevelled_cube(0.5e-3), 6);
+    assert_int_equal(facets_of_bevelled_cube(40e-3), 7);
+}
+
 static void test_non_convex_model_is_declined_untouched(void **state)
 {
     (void)state;
@@ -163,7 +198,7 @@ static void test_non_convex_model_is_declined_untouched(void **state)
     geo_poly_free(p);
 }
 
-static void test_correct_auto_takes_the_convex_path_when_asked(void **state)
+static void test_correct_takes_the_convex_path_by_default(void **state)
 {
     (void)state;
     geo_poly *stone = sim_stone(SIM_PRINCESS, 4);
@@ -171,8 +206,7 @@ static void test_correct_auto_takes_the_convex_path_when_asked(void **state)
     geo_poly *raw = geo_poly_copy(scan);
     geo_correct_opts o;
     geo_correct_opts_default(&o);
-    assert_false(o.convex);
-    o.convex = true;
+    assert_true(o.convex);
     geo_correct_report rep;
     geo_err err;
     assert_int_equal(geo_correct(scan, &o, NULL, &rep, &err), 0);
@@ -197,8 +231,9 @@ int main(void)
         cmocka_unit_test(test_noise_free_scan_gives_back_every_facet),
         cmocka_unit_test(test_noisy_scan_comes_out_valid_and_nearer_the_stone),
         cmocka_unit_test(test_adjustment_recovers_more_than_the_area_fit),
+        cmocka_unit_test(test_a_bevel_within_the_noise_is_no_facet),
         cmocka_unit_test(test_non_convex_model_is_declined_untouched),
-        cmocka_unit_test(test_correct_auto_takes_the_convex_path_when_asked),
+        cmocka_unit_test(test_correct_takes_the_convex_path_by_default),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

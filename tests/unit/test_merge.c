@@ -28,6 +28,9 @@
 #include "stone_sim.h"
 #include "triangulate.h"
 #include "tu_load.h"
+
+/* geo_correct with the merge rounds alone (set in main) */
+static geo_correct_opts merge_alone;
 #include "vec.h"
 
 static void assert_valid(const geo_poly *p)
@@ -296,7 +299,7 @@ static void test_correct_auto_recovers_the_stone_from_its_scan(void **state)
     geo_poly *scan = geo_poly_copy(p);
     geo_correct_report rep;
     geo_err err = {{0}};
-    int r = geo_correct(p, NULL, NULL, &rep, &err);
+    int r = geo_correct(p, &merge_alone, NULL, &rep, &err);
     if (r != 0)
         fail_msg("%s", err.msg);
     assert_true(rep.after.valid);
@@ -399,7 +402,7 @@ static void check_scan_correction(enum sim_cut cut, uint64_t seed, uint32_t k,
     geo_poly *p = geo_poly_copy(scan);
     geo_correct_report rep;
     geo_err err = {{0}};
-    assert_int_equal(geo_correct(p, NULL, NULL, &rep, &err), 0);
+    assert_int_equal(geo_correct(p, &merge_alone, NULL, &rep, &err), 0);
     assert_true(rep.after.valid);
     if (strict) {
         assert_int_equal(rep.views, k);
@@ -551,7 +554,7 @@ static void test_report_json_has_the_documented_keys(void **state)
     (void)state;
     geo_poly *p = tu_load_model("brilliant.scan-k100.json");
     geo_correct_report rep;
-    assert_int_equal(geo_correct(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(geo_correct(p, &merge_alone, NULL, &rep, NULL), 0);
     json_t *j = proto_correct_report_to_json(&rep);
     assert_non_null(j);
     const char *keys[] = {"vertices_before", "facets_after", "hausdorff",
@@ -565,6 +568,7 @@ static void test_report_json_has_the_documented_keys(void **state)
     json_t *g0 = json_array_get(groups, 0);
     assert_true(json_is_array(json_object_get(g0, "facets")));
     assert_true(json_is_true(json_object_get(j, "valid")));
+    assert_true(json_is_null(json_object_get(j, "convex"))); /* not asked */
     json_decref(j);
     geo_correct_report_clear(&rep);
     geo_poly_free(p);
@@ -614,6 +618,9 @@ static void test_correction_of_a_torus_keeps_its_volume(void **state)
 
 int main(void)
 {
+    /* these tests are of the merge rounds: the convex path off */
+    geo_correct_opts_default(&merge_alone);
+    merge_alone.convex = false;
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_edit_rollback_restores_the_model_bit_for_bit),
         cmocka_unit_test(test_merging_two_facets_of_a_scan),
