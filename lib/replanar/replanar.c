@@ -18,6 +18,7 @@
 #include <string.h>
 
 #include "grow.h"
+#include "least_norm.h"
 #include "bvh.h"
 #include "plane.h"
 #include "selfint.h"
@@ -35,7 +36,7 @@ struct geo_replanar_prep {
 
 /* The names of each option enum, indexed by its values (0, 1, ...). */
 static const char *const SCHEDULE_NAMES[] = {"local-exp", "scaled",
-                                             "global-exp"};
+                                             "global-exp", "least-norm"};
 static const char *const FIT_NAMES[] = {"through-fixed", "all"};
 static const char *const SCALED_K_NAMES[] = {"s2sum", "s2"};
 #define NNAMES(a) (sizeof a / sizeof a[0])
@@ -804,6 +805,282 @@ static double fixed_residual(const run *r, uint32_t nfixed,
     return m;
 }
 
+/* ---- the least-norm schedule ---- */
+
+/* Steps of least_norm.h are capped here: Gauss–Newton converges in a few
+ * or not at all. */
+#define LN_MAX_STEPS 50
+/* Entries of one factor (12 bytes each: about 200 MB). */
+#define LN_MAX_NNZ (UINT64_C(1) << 24)
+/* Steps aimed at the least-norm point from the start; the later ones only
+ * restore planarity nearest the current positions (Gauss–Newton on the
+ * constraints alone, quadratic), instead of creeping on to the exact
+ * least-norm point at a linear rate where slivers turn far. */
+#define LN_FROM_START 2
+/* The first region's rings, and the share of the largest move its outer
+ * ring may keep before the region grows. */
+#define LN_RINGS 4
+#define LN_EDGE 1e-2
+/* Steps of one region before it counts as stalled. */
+#define LN_ATTEMPT_STEPS 12
+
+/* Refits the planes of the facets with a vertex off its start or fixed
+ * (the others keep their start planes exactly), activates them, and sets
+ * r's step figures against the positions before the step (prev). */
+static void ln_account(run *r, const double (*prev)[3])
+{
+    const geo_poly *p = r->p0;
+    const geo_replanar_prep *pr = r->prep;
+    const uint8_t *fixflag = r->fit_all ? NULL : r->vflag;
+    double delta = 0, s1 = 0;
+    for (uint32_t v = 0; v < p->nverts; v++) {
+        if (r->vflag[v] & V_FIXED)
+            continue;
+        double d[3];
+        geo_vsub(r->x[v], prev[v], d);
+        delta += geo_vdot(d, d);
+        geo_vsub(r->x[v], start_pos(r, v), d);
+        s1 += geo_vdot(d, d);
+    }
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        const uint32_t *fv = geo_poly_facet(p, f);
+        uint32_t n = geo_poly_facet_size(p, f);
+        bool off = false;
+        for (uint32_t i = 0; i < n && !off; i++)
+            off = (r->vflag[fv[i]] & V_FIXED) ||
+                  memcmp(r->x[fv[i]], start_pos(r, fv[i]),
+                         sizeof r->x[0]) != 0;
+        if (off) {
+            activate_facet(r, f);
+            fit_plane(p, r->x, fixflag, f, r->pl[f]);
+        } else {
+            memcpy(r->pl[f], p->planes[f], sizeof r->pl[f]);
+        }
+    }
+    double s2 = 0, s2sum = 0;
+    for (uint32_t i = 0; i < r->nav; i++) {
+        uint32_t v = r->av[i];
+        if (r->vflag[v] & V_FIXED)
+            continue;
+        for (uint32_t j = pr->vstart[v]; j < pr->vstart[v + 1]; j++) {
+            double e = geo_plane_eval(r->pl[pr->vfacets[j]], r->x[v]);
+            s2sum += e * e;
+            if (fabs(e) > s2 || isnan(e))
+                s2 = isnan(e) ? INFINITY : fabs(e);
+        }
+    }
+    r->delta = delta;
+    r->s1 = s1;
+    r->s2 = s2;
+    r->s2sum = s2sum;
+}
+
+/* The region of a least-norm solve: the facets within `rings` rings (by
+ * shared vertices) of the seeds, which are the run's first active facets
+ * (those of the fixed vertices and any not planar at the start). ring[f]
+ * is the ring of facet f, or UINT32_MAX outside; hold[v] is set for the
+ * fixed vertices and for every vertex of a facet of four or more vertices
+ * outside the region, which must not move. Returns whether the region is
+ * every facet. */
+static bool ln_region(const run *r, uint32_t rings, uint32_t *ring,
+                      uint32_t *queue, uint8_t *in, uint8_t *hold)
+{
+    const geo_poly *p = r->p0;
+    const geo_replanar_prep *pr = r->prep;
+    uint32_t head = 0, tail = 0;
+    for (uint32_t f = 0; f < p->nfacets; f++)
+        ring[f] = UINT32_MAX;
+    for (uint32_t i = 0; i < r->naf; i++) {
+        ring[r->af[i]] = 0;
+        queue[tail++] = r->af[i];
+    }
+    while (head < tail) {
+        uint32_t f = queue[head++];
+        if (ring[f] + 1 >= rings)
+            continue;
+        const uint32_t *fv = geo_poly_facet(p, f);
+        for (uint32_t i = 0, n = geo_poly_facet_size(p, f); i < n; i++)
+            for (uint32_t j = pr->vstart[fv[i]]; j < pr->vstart[fv[i] + 1];
+                 j++) {
+                uint32_t g = pr->vfacets[j];
+                if (ring[g] == UINT32_MAX) {
+                    ring[g] = ring[f] + 1;
+                    queue[tail++] = g;
+                }
+            }
+    }
+    for (uint32_t v = 0; v < p->nverts; v++)
+        hold[v] = (r->vflag[v] & V_FIXED) != 0;
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        in[f] = ring[f] != UINT32_MAX;
+        if (in[f] || geo_poly_facet_size(p, f) <= 3)
+            continue;
+        const uint32_t *fv = geo_poly_facet(p, f);
+        for (uint32_t i = 0, n = geo_poly_facet_size(p, f); i < n; i++)
+            hold[fv[i]] = 1;
+    }
+    return tail == p->nfacets;
+}
+
+/* The largest move from the start of a free vertex of the region's outer
+ * ring, and of any free vertex. */
+static void ln_reach(const run *r, const uint32_t *ring, uint32_t rings,
+                     double *ret_outer, double *ret_all)
+{
+    const geo_poly *p = r->p0;
+    double outer = 0, all = 0;
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        if (ring[f] == UINT32_MAX)
+            continue;
+        const uint32_t *fv = geo_poly_facet(p, f);
+        for (uint32_t i = 0, n = geo_poly_facet_size(p, f); i < n; i++) {
+            if (r->vflag[fv[i]] & V_FIXED)
+                continue;
+            double d = geo_vdist(r->x[fv[i]], start_pos(r, fv[i]));
+            if (d > all)
+                all = d;
+            if (ring[f] + 1 == rings && d > outer)
+                outer = d;
+        }
+    }
+    *ret_outer = outer;
+    *ret_all = all;
+}
+
+/* Gauss–Newton steps of the least-norm problem until S2 < eps_final, on a
+ * region around the fixed vertices that grows (rings ×2) until the move
+ * has died out at its edge — below LN_EDGE of the largest move there —
+ * or the region is everything. A region that stalls (its held edge bends
+ * the facets across it) grows too. The rest of the model is held where
+ * it is, so a local edit costs a local solve. A free vertex left within
+ * eps_final / 100 of its start (rounding of a solve that reaches every
+ * vertex of the region) is put back there, so the result differs from the
+ * start only where the move reached. */
+static int least_norm_run(run *r, const geo_replanar_opts *o,
+                          const geo_ctx *ctx, geo_replanar_log *log,
+                          uint32_t *ret_steps, bool *ret_converged,
+                          int64_t *nsi, geo_replanar_result *ret,
+                          geo_err *err)
+{
+    const geo_poly *p = r->p0;
+    size_t nv = (size_t)p->nverts + 1, nf = (size_t)p->nfacets + 1;
+    uint8_t *hold = malloc(nv), *in = malloc(nf);
+    uint32_t *ring = malloc(nf * sizeof *ring),
+             *queue = malloc(nf * sizeof *queue);
+    if (!hold || !in || !ring || !queue) {
+        free(hold);
+        free(in);
+        free(ring);
+        free(queue);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    const uint8_t *fixflag = r->fit_all ? NULL : r->vflag;
+    uint32_t budget = o->max_steps < LN_MAX_STEPS ? o->max_steps
+                                                   : LN_MAX_STEPS;
+    uint32_t stepno = 0, rings = LN_RINGS;
+    bool converged = false;
+    int rc = 0;
+    for (;;) {
+        bool whole = ln_region(r, rings, ring, queue, in, hold);
+        /* every attempt starts from the start, the planes through the
+         * fixed vertices first: the first linearisation is then about
+         * planes the result can keep */
+        for (uint32_t v = 0; v < p->nverts; v++)
+            if (!(r->vflag[v] & V_FIXED))
+                memcpy(r->x[v], start_pos(r, v), sizeof r->x[v]);
+        memcpy(r->pl, p->planes, (size_t)p->nfacets * sizeof *r->pl);
+        for (uint32_t i = 0; i < r->naf; i++)
+            fit_plane(p, r->x, fixflag, r->af[i], r->pl[r->af[i]]);
+        uint32_t worse = 0, first = stepno;
+        double best = INFINITY;
+        converged = false;
+        while (stepno < budget && stepno - first < LN_ATTEMPT_STEPS) {
+            rc = geo_ctx_progress(ctx, (double)stepno / budget);
+            if (rc < 0) {
+                geo_err_set(err, rc, "canceled");
+                break;
+            }
+            memcpy(r->xn, r->x, (size_t)p->nverts * sizeof *r->x);
+            rc = geo_least_norm_step(p, hold, in, (const double(*)[4])r->pl,
+                                     r->x, stepno - first < LN_FROM_START,
+                                     LN_MAX_NNZ, ctx);
+            if (rc < 0) {
+                if (rc == -ERANGE)
+                    geo_err_set(err, rc, "least-norm: the region is too "
+                                "large for one sparse factor (over %llu "
+                                "entries); use the local-exp schedule",
+                                (unsigned long long)LN_MAX_NNZ);
+                else if (rc == -EDOM)
+                    geo_err_set(err, rc, "least-norm: the planarity system "
+                                "is singular (facets whose fixed vertices "
+                                "are not coplanar?)");
+                else
+                    geo_err_set(err, rc, rc == -ECANCELED ? "canceled"
+                                                          : "out of memory");
+                break;
+            }
+            ln_account(r, (const double(*)[3])r->xn);
+            if (o->count_selfint) {
+                rc = count_selfint(r, nsi);
+                if (rc < 0) {
+                    geo_err_set(err, rc, "out of memory");
+                    break;
+                }
+                if (*nsi > 0 && ret->first_selfint_step < 0)
+                    ret->first_selfint_step = stepno;
+            }
+            rc = log_row(log, r, stepno, rings, stepno - first, o->eps_final,
+                         0, o->count_selfint ? *nsi : -1);
+            if (rc < 0) {
+                geo_err_set(err, rc, "out of memory for the log");
+                break;
+            }
+            stepno++;
+            if (!isfinite(r->s2) || !isfinite(r->s1))
+                break; /* diverged */
+            if (r->s2 < o->eps_final) {
+                converged = true;
+                break;
+            }
+            /* Gauss–Newton that does not improve twice in a row is stuck */
+            worse = r->s2 < best ? 0 : worse + 1;
+            if (r->s2 < best)
+                best = r->s2;
+            if (worse == 2)
+                break;
+        }
+        if (rc < 0 || whole || stepno >= budget)
+            break;
+        /* a region too tight for the move stalls (its held edge bends the
+         * facets across it) or still moves at its edge: grow it */
+        double outer, all;
+        ln_reach(r, ring, rings, &outer, &all);
+        if (converged && outer <= LN_EDGE * all)
+            break;
+        rings *= 2;
+    }
+    if (rc == 0 && converged) {
+        double snap = o->eps_final / 100;
+        memcpy(r->xn, r->x, (size_t)p->nverts * sizeof *r->x);
+        for (uint32_t v = 0; v < p->nverts; v++)
+            if (!(r->vflag[v] & V_FIXED) &&
+                geo_vdist(r->x[v], start_pos(r, v)) <= snap)
+                memcpy(r->x[v], start_pos(r, v), sizeof r->x[v]);
+        /* the figures of the result as written (delta: the last step's) */
+        double delta = r->delta;
+        ln_account(r, (const double(*)[3])r->xn);
+        r->delta = delta;
+        converged = r->s2 < o->eps_final;
+    }
+    free(hold);
+    free(in);
+    free(ring);
+    free(queue);
+    *ret_steps = stepno;
+    *ret_converged = converged;
+    return rc;
+}
+
 int geo_replanar_solve(const geo_replanar_prep *prep, uint32_t nfixed,
                        const uint32_t *fixed, const double (*targets)[3],
                        enum geo_replanar_schedule schedule,
@@ -826,9 +1103,14 @@ int geo_replanar_solve(const geo_replanar_prep *prep, uint32_t nfixed,
          o.scaled_k != GEO_REPLANAR_SCALED_K_S2))
         return geo_err_set(err, -EINVAL, "options: out of range");
     if (schedule != GEO_REPLANAR_LOCAL_EXP &&
-        schedule != GEO_REPLANAR_SCALED && schedule != GEO_REPLANAR_GLOBAL_EXP)
+        schedule != GEO_REPLANAR_SCALED &&
+        schedule != GEO_REPLANAR_GLOBAL_EXP &&
+        schedule != GEO_REPLANAR_LEAST_NORM)
         return geo_err_set(err, -EINVAL, "schedule: unknown (%d)",
                            (int)schedule);
+    if (schedule == GEO_REPLANAR_LEAST_NORM && o.fit == GEO_REPLANAR_FIT_ALL)
+        return geo_err_set(err, -EINVAL, "fit all: the least-norm schedule "
+                           "fits its planes through the fixed vertices");
     if (ret_poly && (ret_poly->nverts != prep->poly->nverts ||
                      ret_poly->nfacets != prep->poly->nfacets))
         return geo_err_set(err, -EINVAL,
@@ -849,66 +1131,72 @@ int geo_replanar_solve(const geo_replanar_prep *prep, uint32_t nfixed,
     uint32_t stepno = 0, outer = 0, inner = 0;
     bool converged = false;
     int64_t nsi = -1;
-    for (;;) {
-        if (stepno >= o.max_steps)
-            break;
-        rc = geo_ctx_progress(ctx, (double)stepno / o.max_steps);
-        if (rc < 0) {
-            geo_err_set(err, rc, "canceled");
-            break;
-        }
-        step(&r, k, local);
-        bool below = r.s2 < eps;
-        if (o.count_selfint) {
-            rc = count_selfint(&r, &nsi);
+    if (schedule == GEO_REPLANAR_LEAST_NORM) {
+        rc = least_norm_run(&r, &o, ctx, log, &stepno, &converged, &nsi,
+                            ret, err);
+        k = 0;
+    } else {
+        for (;;) {
+            if (stepno >= o.max_steps)
+                break;
+            rc = geo_ctx_progress(ctx, (double)stepno / o.max_steps);
             if (rc < 0) {
-                geo_err_set(err, rc, "out of memory");
+                geo_err_set(err, rc, "canceled");
                 break;
             }
-            if (nsi > 0 && ret->first_selfint_step < 0)
-                ret->first_selfint_step = stepno;
-        }
-        rc = log_row(log, &r, stepno, schedule == GEO_REPLANAR_LOCAL_EXP
-                                          ? outer : stepno,
-                     schedule == GEO_REPLANAR_LOCAL_EXP ? inner : stepno, eps,
-                     k, nsi);
-        if (rc < 0) {
-            geo_err_set(err, rc, "out of memory for the log");
-            break;
-        }
-        stepno++;
-        inner++;
-        if (!isfinite(r.s2) || !isfinite(r.s1))
-            break; /* diverged */
-        if (schedule == GEO_REPLANAR_LOCAL_EXP) {
-            if (below) {
-                if (++outer == o.outer_rounds) {
-                    converged = true;
+            step(&r, k, local);
+            bool below = r.s2 < eps;
+            if (o.count_selfint) {
+                rc = count_selfint(&r, &nsi);
+                if (rc < 0) {
+                    geo_err_set(err, rc, "out of memory");
                     break;
                 }
-                inner = 0;
-                k *= o.k_factor;
-                eps *= o.eps_factor;
-            } else if (r.delta == 0) {
-                break; /* stalled: the next step would repeat this one */
+                if (nsi > 0 && ret->first_selfint_step < 0)
+                    ret->first_selfint_step = stepno;
             }
-        } else if (below) {
-            converged = true;
-            break;
-        } else if (schedule == GEO_REPLANAR_SCALED) {
-            double nk = k;
-            if (o.scaled_k == GEO_REPLANAR_SCALED_K_S2)
-                nk = r.s2 > 0 ? r.s1 / r.s2 : k;
-            else if (r.s2sum > 0)
-                nk = r.s1 / r.s2sum;
-            if (r.delta == 0 && nk == k)
+            rc = log_row(log, &r, stepno, schedule == GEO_REPLANAR_LOCAL_EXP
+                                              ? outer : stepno,
+                         schedule == GEO_REPLANAR_LOCAL_EXP ? inner : stepno, eps,
+                         k, nsi);
+            if (rc < 0) {
+                geo_err_set(err, rc, "out of memory for the log");
                 break;
-            k = nk;
-        } else {
-            k *= o.k_factor;
+            }
+            stepno++;
+            inner++;
+            if (!isfinite(r.s2) || !isfinite(r.s1))
+                break; /* diverged */
+            if (schedule == GEO_REPLANAR_LOCAL_EXP) {
+                if (below) {
+                    if (++outer == o.outer_rounds) {
+                        converged = true;
+                        break;
+                    }
+                    inner = 0;
+                    k *= o.k_factor;
+                    eps *= o.eps_factor;
+                } else if (r.delta == 0) {
+                    break; /* stalled: the next step would repeat this one */
+                }
+            } else if (below) {
+                converged = true;
+                break;
+            } else if (schedule == GEO_REPLANAR_SCALED) {
+                double nk = k;
+                if (o.scaled_k == GEO_REPLANAR_SCALED_K_S2)
+                    nk = r.s2 > 0 ? r.s1 / r.s2 : k;
+                else if (r.s2sum > 0)
+                    nk = r.s1 / r.s2sum;
+                if (r.delta == 0 && nk == k)
+                    break;
+                k = nk;
+            } else {
+                k *= o.k_factor;
+            }
+            if (!isfinite(k) || !(k > 0))
+                break;
         }
-        if (!isfinite(k) || !(k > 0))
-            break;
     }
     if (rc == 0) {
         ret->converged = converged;

@@ -68,9 +68,17 @@ enum geo_replanar_schedule {
     /* §4.3.3: the total displacement is minimised (x0 = the start
      * position); K ×= k_factor each step until S2 < eps_final. */
     GEO_REPLANAR_GLOBAL_EXP = 2,
+    /* Not the paper's: the free vertices nearest their start in the sum
+     * of squares such that every facet is planar, the planes free
+     * (least_norm.h); Gauss–Newton steps, each one sparse factorisation,
+     * until S2 < eps_final (at most max_steps, capped at 50). A move is
+     * taken up by the planes wherever they can turn, so it stays local
+     * where the alternating schedules spread it along slivers. No penalty:
+     * the log's k is 0. The default of facet move and the move op. */
+    GEO_REPLANAR_LEAST_NORM = 3,
 };
 
-/* Name "local-exp", "scaled", "global-exp"; parse returns -EINVAL for an
+/* Name "local-exp", "scaled", "global-exp", "least-norm"; parse returns -EINVAL for an
  * unknown name (ret untouched). */
 const char *geo_replanar_schedule_name(enum geo_replanar_schedule s);
 int geo_replanar_schedule_parse(const char *name,
