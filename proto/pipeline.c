@@ -70,7 +70,7 @@ static const char *const op_keys[PROTO_OP_COUNT][8] = {
 };
 
 static const char *const sched_names[] = {"local-exp", "scaled",
-                                          "global-exp"};
+                                          "global-exp", "least-norm"};
 static const char *const fill_names[] = {"area", "edges"};
 static const char *const fair_names[] = {"none", "uniform", "length"};
 
@@ -211,7 +211,7 @@ static int get_schedule(const json_t *o, const place *pl, proto_schedule *v,
                         geo_err *err)
 {
     int s = (int)*v;
-    int r = get_choice(o, "schedule", pl, sched_names, 3, &s, err);
+    int r = get_choice(o, "schedule", pl, sched_names, 4, &s, err);
     *v = (proto_schedule)s;
     return r;
 }
@@ -302,7 +302,7 @@ static void set_defaults(proto_op *op)
         op->u.correct.convex = true;
         break;
     case PROTO_OP_MOVE:
-        op->u.move.schedule = PROTO_SCHED_LOCAL_EXP;
+        op->u.move.schedule = PROTO_SCHED_LEAST_NORM;
         op->u.move.max_steps = 10000;
         break;
     case PROTO_OP_INVERSION_STATS:

@@ -92,6 +92,7 @@ typedef enum proto_schedule {
     PROTO_SCHED_LOCAL_EXP = 0, /* Palachev 2012, §4.3.1 */
     PROTO_SCHED_SCALED,        /* §4.3.2 */
     PROTO_SCHED_GLOBAL_EXP,    /* §4.3.3 */
+    PROTO_SCHED_LEAST_NORM,    /* least sum of squares, planes free */
 } proto_schedule;
 
 typedef enum proto_fair {

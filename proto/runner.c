@@ -483,6 +483,7 @@ static enum geo_replanar_schedule schedule_of(proto_schedule s)
 {
     return s == PROTO_SCHED_SCALED       ? GEO_REPLANAR_SCALED
            : s == PROTO_SCHED_GLOBAL_EXP ? GEO_REPLANAR_GLOBAL_EXP
+           : s == PROTO_SCHED_LEAST_NORM ? GEO_REPLANAR_LEAST_NORM
                                          : GEO_REPLANAR_LOCAL_EXP;
 }
 

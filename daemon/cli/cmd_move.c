@@ -21,24 +21,29 @@ static void usage(FILE *out)
 {
     fprintf(out,
             "usage: facet move MODEL --vertex I (--to X,Y,Z | --by DX,DY,DZ)\n"
-            "                  [--schedule local-exp|scaled|global-exp]\n"
+            "                  [--schedule least-norm|local-exp|scaled|"
+            "global-exp]\n"
             "                  [--max-steps N] [--count-selfint] [--log FILE]\n"
             "                  [--fit through-fixed|all] [--scaled-k s2sum|s2]\n"
             "                  [--force] -o OUT\n"
             "\n"
             "Moves vertex I (0-based) to X,Y,Z (or by DX,DY,DZ, mm), keeps it\n"
             "there, and moves the other vertices and the planes until every\n"
-            "vertex lies in its facets again (Palachev 2012, section 4.2.3).\n"
-            "Schedules (default local-exp): local-exp minimises each step,\n"
-            "K=100 doubling over 10 rounds of bounds 1e-7 halving; scaled sets\n"
-            "K = S1/S2sum every step; global-exp minimises the total\n"
-            "displacement, K doubling until S2 < 1e-10.\n"
+            "vertex lies in its facets again.\n"
+            "Schedules (default least-norm): least-norm moves the other\n"
+            "vertices as little as can be (least sum of squares, the planes\n"
+            "free), by Gauss-Newton steps on a region that grows from I until\n"
+            "S2 < 1e-10; the paper's (Palachev 2012, section 4.2.3):\n"
+            "local-exp minimises each step, K=100 doubling over 10 rounds of\n"
+            "bounds 1e-7 halving; scaled sets K = S1/S2sum every step;\n"
+            "global-exp minimises the total displacement, K doubling until\n"
+            "S2 < 1e-10.\n"
             "  --log FILE       the iteration log: JSON if FILE ends in .json,\n"
             "                   else a tab-separated table like the paper's\n"
             "  --count-selfint  count self-intersections after every step\n"
             "  --fit all        plain least-squares planes, the moved vertex\n"
             "                   included (the paper's logs; leaves it off its\n"
-            "                   planes by fixed_residual)\n"
+            "                   planes by fixed_residual; not least-norm)\n"
             "  --scaled-k s2    scaled: K = S1/S2 as in the paper's tables\n"
             "  --force          write OUT even when the result is not valid\n"
             "Prints the result as JSON. Exit 1 when the result is not valid.\n");
@@ -116,7 +121,7 @@ int cmd_move(int argc, char **argv)
     const char *log_path = NULL, *out = NULL;
     bool count_si = false;
     cli_replanar_args rp;
-    cli_replanar_args_init(&rp, GEO_REPLANAR_LOCAL_EXP);
+    cli_replanar_args_init(&rp, GEO_REPLANAR_LEAST_NORM);
     const char *optarg, *model = NULL;
     cli_args a;
     cli_args_init(&a, CMD, argc, argv, opts);

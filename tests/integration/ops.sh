@@ -35,6 +35,14 @@ expect_eq "a move job succeeds" succeeded "$STATE_OF"
 req GET "/v1/jobs/$ID/stats"
 check "its report has the result" grep -q '"result":{[^}]*"converged":true' "$BODY"
 check "and the iteration log" grep -q '"log":\[{"step":0' "$BODY"
+submit brilliant.scan-k400.json '[{"op":"move","vertex":2000,"by":[3.4e-5,0,0]}]'
+wait_job "$ID"
+expect_eq "a move without a schedule succeeds on the raw scan" succeeded "$STATE_OF"
+req GET "/v1/jobs/$ID/stats"
+check "by the least-norm schedule" grep -q '"result":{"schedule":"least-norm","converged":true,"valid":true' "$BODY"
+curl -s -o "$T/moved.json" "$URL/v1/jobs/$ID/model?format=json"
+"$BUILD/facet" move "$MODELS/brilliant.scan-k400.json" --vertex 2000 --by 3.4e-5,0,0 -o "$T/moved_cli.json" >/dev/null
+check "the same model as facet move, byte for byte" cmp -s "$T/moved.json" "$T/moved_cli.json"
 submit brilliant.truth.json '[{"op":"move","vertex":9999,"to":[0,0,0]}]'
 expect_eq "a vertex out of range is refused at submission" 422 "$CODE"
 check "naming the op and the vertex" grep -q '"path":"pipeline\[0\].vertex","message":"9999 out of range (238 vertices)"' "$BODY"

@@ -43,9 +43,13 @@ check "vertex out of range is bad input" "[ $? -eq 1 ]"
 check "malformed --to is a usage error" "[ $? -eq 2 ]"
 
 "$FACET" move "$M/brilliant.truth.json" --vertex 100 --by 7e-4,-9e-4,1.5e-3 \
-    --fit all --force -o "$tmp/all.json" >"$tmp/all-res.json"
+    --schedule local-exp --fit all --force -o "$tmp/all.json" >"$tmp/all-res.json"
 check "--fit all reports the moved vertex's distance from its planes" \
-    "sed -n 's/.*\"fixed_residual\": \\([^,}]*\\).*/\\1/p' '$tmp/all-res.json' | awk '{exit !(\$1 > 1e-9 && \$1 < 1e-6)}'"
+    "sed -n 's/.*\"fixed_residual\": \\([^,}]*\\).*/\\1/p' '$tmp/all-res.json' | awk '{v = \$1} END {exit !(v > 1e-9 && v < 1e-6)}'"
+"$FACET" move "$M/brilliant.truth.json" --vertex 100 --by 7e-4,-9e-4,1.5e-3 \
+    --fit all -o "$tmp/x.json" 2>"$tmp/fit.err"
+check "--fit all with the default least-norm schedule is refused, saying why" \
+    "[ $? -eq 1 ] && grep -q 'fit all: the least-norm schedule' '$tmp/fit.err' && [ ! -e '$tmp/x.json' ]"
 "$FACET" move "$M/brilliant.truth.json" --vertex 100 --by 1e-4,0,0 \
     --fit loose -o "$tmp/x.json" 2>/dev/null
 check "an unknown --fit is a usage error" "[ $? -eq 2 ]"

@@ -141,7 +141,7 @@ static void test_errors_name_the_place(void **state)
     expect_error("[{\"op\":\"move\",\"vertex\":1,\"to\":[0,0,0],"
                  "\"schedule\":\"fast\"}]",
                  "pipeline[0].schedule: expected one of \"local-exp\", "
-                 "\"scaled\", \"global-exp\"");
+                 "\"scaled\", \"global-exp\", \"least-norm\"");
     expect_error("[{\"op\":\"merge\",\"groups\":[[1]]}]",
                  "pipeline[0].groups[0]: expected an array of at least 2 "
                  "facet indices");

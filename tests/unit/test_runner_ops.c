@@ -132,7 +132,7 @@ static void test_move_vertex_places_it_and_logs_the_run(void **state)
     assert_true(json_is_true(json_object_get(res, "converged")));
     assert_true(json_is_true(json_object_get(res, "valid")));
     assert_string_equal(json_string_value(json_object_get(res, "schedule")),
-                        "local-exp");
+                        "least-norm");
     json_t *log = json_object_get(rep, "log");
     assert_true(json_array_size(log) == num(res, "steps"));
     assert_true(json_array_size(log) > 0);
