@@ -467,6 +467,27 @@ static void solve_vertex(const run *r, uint32_t v, const double x0[3],
     geo_vadd(x0, y, ret);
 }
 
+/* S2 and S2sum over the incidences of the active free vertices with the
+ * current planes. */
+static void plane_errors(run *r)
+{
+    const geo_replanar_prep *pr = r->prep;
+    double s2 = 0, s2sum = 0;
+    for (uint32_t i = 0; i < r->nav; i++) {
+        uint32_t v = r->av[i];
+        if (r->vflag[v] & V_FIXED)
+            continue;
+        for (uint32_t j = pr->vstart[v]; j < pr->vstart[v + 1]; j++) {
+            double e = geo_plane_eval(r->pl[pr->vfacets[j]], r->x[v]);
+            s2sum += e * e;
+            if (fabs(e) > s2 || isnan(e))
+                s2 = isnan(e) ? INFINITY : fabs(e);
+        }
+    }
+    r->s2 = s2;
+    r->s2sum = s2sum;
+}
+
 /* One step: refit the active planes, move every active free vertex
  * (Jacobi: all read the same planes), measure Δ, S1, S2, S2sum, then grow
  * the active region by the facets of vertices that left their start by
@@ -509,27 +530,13 @@ static void step(run *r, double k, bool local)
     }
     /* every incidence that may differ from the start touches an active
      * vertex: an active facet's vertices are all active */
-    double s2 = 0, s2sum = 0;
-    const geo_replanar_prep *pr = r->prep;
-    for (uint32_t i = 0; i < r->nav; i++) {
-        uint32_t v = r->av[i];
-        if (r->vflag[v] & V_FIXED)
-            continue;
-        for (uint32_t j = pr->vstart[v]; j < pr->vstart[v + 1]; j++) {
-            double e = geo_plane_eval(r->pl[pr->vfacets[j]], r->x[v]);
-            s2sum += e * e;
-            if (fabs(e) > s2 || isnan(e))
-                s2 = isnan(e) ? INFINITY : fabs(e);
-        }
-    }
+    plane_errors(r);
     for (uint32_t i = 0; i < r->nwake; i++) {
         r->fwake[r->wake[i]] = 0;
         activate_facet(r, r->wake[i]);
     }
     r->delta = delta;
     r->s1 = s1;
-    r->s2 = s2;
-    r->s2sum = s2sum;
 }
 
 /* ---- the schedules ---- */
@@ -830,7 +837,6 @@ static double fixed_residual(const run *r, uint32_t nfixed,
 static void ln_account(run *r, const double (*prev)[3])
 {
     const geo_poly *p = r->p0;
-    const geo_replanar_prep *pr = r->prep;
     const uint8_t *fixflag = r->fit_all ? NULL : r->vflag;
     double delta = 0, s1 = 0;
     for (uint32_t v = 0; v < p->nverts; v++) {
@@ -857,22 +863,9 @@ static void ln_account(run *r, const double (*prev)[3])
             memcpy(r->pl[f], p->planes[f], sizeof r->pl[f]);
         }
     }
-    double s2 = 0, s2sum = 0;
-    for (uint32_t i = 0; i < r->nav; i++) {
-        uint32_t v = r->av[i];
-        if (r->vflag[v] & V_FIXED)
-            continue;
-        for (uint32_t j = pr->vstart[v]; j < pr->vstart[v + 1]; j++) {
-            double e = geo_plane_eval(r->pl[pr->vfacets[j]], r->x[v]);
-            s2sum += e * e;
-            if (fabs(e) > s2 || isnan(e))
-                s2 = isnan(e) ? INFINITY : fabs(e);
-        }
-    }
+    plane_errors(r);
     r->delta = delta;
     r->s1 = s1;
-    r->s2 = s2;
-    r->s2sum = s2sum;
 }
 
 /* The region of a least-norm solve: the facets within `rings` rings (by
