@@ -302,6 +302,20 @@ static double outside_allow(const geo_convex_planes *cp, double max_dev)
                                  fmax(max_dev, roof_max) / 2);
 }
 
+/* How far the result q reaches outside the scan p: the largest value of
+ * a scan facet's plane at a vertex of q. */
+static double reach_outside(const geo_poly *p, const geo_poly *q)
+{
+    double out = 0;
+    for (uint32_t v = 0; v < q->nverts; v++)
+        for (uint32_t f = 0; f < p->nfacets; f++) {
+            double d = geo_plane_eval(p->planes[f], q->verts[v]);
+            if (d > out)
+                out = d;
+        }
+    return out;
+}
+
 /* Where the result q reaches outside the scan p beyond outside_allow,
  * the silhouettes it crosses are measured bounds of the stone: their
  * planes join cp's (as the stone lies inside every silhouette) and the
@@ -404,13 +418,7 @@ static int check_result(const geo_poly *p, const geo_poly *q,
      * girdle corner) a plane's error of a noise moves the vertex by many:
      * the bound there is the merge's own deviation bound or the largest
      * roof, whichever is more */
-    double out = 0, allow = outside_allow(cp, max_dev);
-    for (uint32_t v = 0; v < q->nverts; v++)
-        for (uint32_t f = 0; f < p->nfacets; f++) {
-            double d = geo_plane_eval(p->planes[f], q->verts[v]);
-            if (d > out)
-                out = d;
-        }
+    double out = reach_outside(p, q), allow = outside_allow(cp, max_dev);
     rep->bound = allow;
     rep->deviation = out;
     if (out > allow)
@@ -479,6 +487,152 @@ static int finish(const geo_poly *p, geo_convex_planes *cp, double max_dev,
     return r;
 }
 
+/* Intersects cp without the planes marked in gone (NaN offsets): 0 with
+ * *ret_q, *ret_src and *ret_cp (a copy) when the intersection exists and
+ * reaches no farther outside the scan p than allow; 1 when not (nothing
+ * returned); -ENOMEM. */
+static int without(const geo_poly *p, const geo_convex_planes *cp,
+                   const uint8_t *gone, double allow, double tol,
+                   geo_convex_planes *ret_cp, geo_poly **ret_q,
+                   uint32_t **ret_src)
+{
+    geo_convex_planes t;
+    if (planes_copy(&t, cp, p->nfacets) < 0)
+        return -ENOMEM;
+    for (uint32_t i = 0; i < cp->nplanes; i++)
+        if (gone[i])
+            t.planes[i][3] = NAN;
+    if (remove_marked(&t) < 0) {
+        geo_convex_planes_clear(&t);
+        return -ENOMEM;
+    }
+    geo_poly *q = NULL;
+    uint32_t *src = NULL;
+    enum geo_halfspace_status st;
+    geo_err perr;
+    int r = geo_halfspace_intersect(&t.planes[0][0], t.nplanes, tol, &q,
+                                    &src, &st, &perr);
+    if (r == -ENOMEM) {
+        geo_convex_planes_clear(&t);
+        return r;
+    }
+    if (r < 0 || reach_outside(p, q) > allow) {
+        geo_poly_free(q);
+        free(src);
+        geo_convex_planes_clear(&t);
+        return 1;
+    }
+    *ret_cp = t;
+    *ret_q = q;
+    *ret_src = src;
+    return 0;
+}
+
+/* cp, q and src become t, qt and st (the old ones are released). */
+static void adopt(geo_convex_planes *cp, geo_poly **q, uint32_t **src,
+                  geo_convex_planes *t, geo_poly *qt, uint32_t *st)
+{
+    geo_convex_planes_clear(cp);
+    *cp = *t;
+    geo_poly_free(*q);
+    free(*src);
+    *q = qt;
+    *src = st;
+}
+
+/* Marks in width[i] (else INFINITY) the planes of cp whose facet in q is
+ * narrower (twice the area over the perimeter) than wmin; returns how
+ * many. */
+static uint32_t narrow_planes(const geo_convex_planes *cp, const geo_poly *q,
+                              const uint32_t *src, double wmin, double *width)
+{
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < cp->nplanes; i++)
+        width[i] = INFINITY;
+    for (uint32_t f = 0; f < q->nfacets; f++) {
+        uint32_t k = geo_poly_facet_size(q, f);
+        const uint32_t *fv = geo_poly_facet(q, f);
+        double per = 0;
+        for (uint32_t i = 0; i < k; i++)
+            per += geo_vdist(q->verts[fv[i]], q->verts[fv[(i + 1) % k]]);
+        double w = per > 0 ? 2 * geo_poly_facet_area(q, f) / per : INFINITY;
+        if (w < wmin && w < width[src[f]]) {
+            n += width[src[f]] == INFINITY;
+            width[src[f]] = w;
+        }
+    }
+    return n;
+}
+
+/* A facet narrower than the scan can resolve (NARROW noise bounds) is
+ * usually a bevel the support test let through at a corner where many
+ * planes meet: its plane goes and the rest are intersected again, up to
+ * NARROW_ROUNDS rounds — but only where the stone without it still lies
+ * within the scan's bound (outside_allow, the check's own). A true narrow
+ * facet (a step cut's corner) is needed by the silhouettes: without it
+ * its neighbours' planes meet beyond the scan, and the whole correction
+ * used to be declined for it. A round's narrow planes go all at once when
+ * that passes, else each alone, narrowest first. 0 or -ENOMEM. */
+static int drop_narrow(const geo_poly *p, geo_convex_planes *cp,
+                       double max_dev, double tol, geo_poly **q,
+                       uint32_t **src, geo_convex_report *rep, geo_err *err)
+{
+    uint8_t *gone = calloc((size_t)cp->nplanes + 1, 1);
+    double *width = malloc(((size_t)cp->nplanes + 1) * sizeof *width);
+    int r = gone && width ? 0 : -ENOMEM;
+    for (int round = 0; round < NARROW_ROUNDS && r == 0; round++) {
+        double wmin = NARROW * fmax(cp->dev0, cp->hinge_noise);
+        uint32_t ncand = narrow_planes(cp, *q, *src, wmin, width);
+        if (ncand == 0)
+            break;
+        double allow = outside_allow(cp, max_dev);
+        geo_convex_planes t;
+        geo_poly *qt;
+        uint32_t *st;
+        for (uint32_t i = 0; i < cp->nplanes; i++)
+            gone[i] = width[i] < INFINITY;
+        r = without(p, cp, gone, allow, tol, &t, &qt, &st);
+        if (r == 0) {
+            adopt(cp, q, src, &t, qt, st);
+            rep->narrow += ncand;
+            continue;
+        }
+        if (r < 0)
+            break;
+        uint32_t taken = 0;
+        for (r = 0; r == 0 || r == 1;) {
+            uint32_t best = GEO_NONE;
+            for (uint32_t i = 0; i < cp->nplanes; i++)
+                if (width[i] < INFINITY &&
+                    (best == GEO_NONE || width[i] < width[best]))
+                    best = i;
+            if (best == GEO_NONE) {
+                r = 0;
+                break;
+            }
+            width[best] = INFINITY;
+            memset(gone, 0, cp->nplanes);
+            gone[best] = 1;
+            r = without(p, cp, gone, allow, tol, &t, &qt, &st);
+            if (r != 0)
+                continue;
+            /* the planes past best move down by one */
+            memmove(width + best, width + best + 1,
+                    (cp->nplanes - best - 1) * sizeof *width);
+            adopt(cp, q, src, &t, qt, st);
+            taken++;
+        }
+        rep->narrow += taken;
+        if (taken == 0)
+            break;
+    }
+    free(gone);
+    free(width);
+    if (r < 0)
+        return geo_err_set(err, r, "out of memory");
+    return 0;
+}
+
 int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
                        double max_dev, enum geo_convex_fit fit,
                        const geo_ctx *ctx, geo_poly **ret,
@@ -516,35 +670,9 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
                   err);
     if (r != 0)
         goto done;
-    /* a facet narrower than the scan can resolve (NARROW noise bounds)
-     * is a bevel the support test let through at a corner where many
-     * planes meet: its plane goes and the rest are intersected again */
-    for (int round = 0; round < NARROW_ROUNDS; round++) {
-        double wmin = NARROW * fmax(cp.dev0, cp.hinge_noise);
-        uint32_t gone = 0;
-        for (uint32_t f = 0; f < q->nfacets; f++) {
-            uint32_t n = geo_poly_facet_size(q, f);
-            const uint32_t *fv = geo_poly_facet(q, f);
-            double per = 0;
-            for (uint32_t i = 0; i < n; i++)
-                per += geo_vdist(q->verts[fv[i]], q->verts[fv[(i + 1) % n]]);
-            if (per > 0 && 2 * geo_poly_facet_area(q, f) / per < wmin) {
-                cp.planes[src[f]][3] = NAN; /* marked */
-                gone++;
-            }
-        }
-        if (gone == 0)
-            break;
-        if (remove_marked(&cp) < 0) {
-            r = geo_err_set(err, -ENOMEM, "out of memory");
-            goto done;
-        }
-        rep->narrow += gone;
-        r = intersect(&cp, merge_tol, "the recovered planes without the "
-                      "narrow ones", 150, &q, &src, rep, err);
-        if (r != 0)
-            goto done;
-    }
+    r = drop_narrow(p, &cp, max_dev, merge_tol, &q, &src, rep, err);
+    if (r != 0)
+        goto done;
     if (fit == GEO_CONVEX_FIT_SILHOUETTE) {
         /* the adjusted planes replace the fitted ones only when their
          * intersection passes the checks: an adjustment that took a

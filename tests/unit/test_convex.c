@@ -225,6 +225,30 @@ static void test_correct_takes_the_convex_path_by_default(void **state)
     geo_poly_free(stone);
 }
 
+/* A step cut's corner facets are narrow but true: without one, its
+ * neighbours' planes meet beyond the scan. This emerald (K = 400, 1 µm)
+ * had its whole correction declined for it ("the result reaches 0.032 mm
+ * outside the scan"); the narrow planes now go only where the stone
+ * without them stays within the scan's bound. */
+static void test_a_true_narrow_facet_is_kept(void **state)
+{
+    (void)state;
+    geo_poly *stone = sim_stone(SIM_EMERALD, 1);
+    geo_poly *scan = sim_scan(stone, 400, 1e-3, 1);
+    assert_non_null(scan);
+    geo_convex_report rep;
+    geo_poly *q = convex_correct(scan, GEO_CONVEX_FIT_SILHOUETTE, &rep);
+    assert_valid_convex(q);
+    assert_true(rep.deviation <= rep.bound);
+    double hs = sim_hausdorff(scan, stone, 2000), hq = sim_hausdorff(q, stone, 2000);
+    if (hq > 0.9 * hs)
+        fail_msg("Hausdorff to the stone %.2f µm, the scan's %.2f µm", hq * 1e3,
+                 hs * 1e3);
+    geo_poly_free(q);
+    geo_poly_free(scan);
+    geo_poly_free(stone);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -234,6 +258,7 @@ int main(void)
         cmocka_unit_test(test_a_bevel_within_the_noise_is_no_facet),
         cmocka_unit_test(test_non_convex_model_is_declined_untouched),
         cmocka_unit_test(test_correct_takes_the_convex_path_by_default),
+        cmocka_unit_test(test_a_true_narrow_facet_is_kept),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
