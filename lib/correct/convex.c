@@ -424,36 +424,38 @@ static int check_result(const geo_poly *p, const geo_poly *q,
     if (out > allow)
         return decline(rep, "the result reaches %.2g mm outside the scan "
                        "(bound %.2g mm)", out, allow);
-    /* each scan vertex's distance outside the result (the largest of its
-     * planes' values), once per vertex: its facets only differ in the
-     * allowance */
-    double *outside = malloc(((size_t)p->nverts + 1) * sizeof *outside);
-    if (!outside)
+    /* how far a scan vertex may lie outside a result plane: by the
+     * allowance (noise bound and roof) of its own facets' groups — the
+     * least of them — or of that plane, whichever is more: a vertex near
+     * an edge lies on the slivers of either facet, and the slivers of the
+     * plane's own facet rise above it by that plane's roof */
+    double *own = malloc(((size_t)p->nverts + 1) * sizeof *own);
+    if (!own)
         return -ENOMEM;
-    for (uint32_t v = 0; v < p->nverts; v++) {
-        double d = -INFINITY;
-        for (uint32_t g = 0; g < q->nfacets; g++) {
-            double e = geo_plane_eval(q->planes[g], p->verts[v]);
-            if (e > d)
-                d = e;
-        }
-        outside[v] = d;
-    }
-    double worst = 0, worst_allow = 0;
+    for (uint32_t v = 0; v < p->nverts; v++)
+        own[v] = INFINITY;
     for (uint32_t f = 0; f < p->nfacets; f++) {
         uint32_t k = cp->kept[cp->group[f]];
         double a = k == GEO_NONE ? cp->dev0 + cp->cut_min : cp->allow[k];
         uint32_t n = geo_poly_facet_size(p, f);
         const uint32_t *fv = geo_poly_facet(p, f);
-        for (uint32_t i = 0; i < n; i++) {
-            double d = outside[fv[i]];
-            if (d - ROOF_FACTOR * a > worst - worst_allow) {
-                worst = d;
+        for (uint32_t i = 0; i < n; i++)
+            own[fv[i]] = fmin(own[fv[i]], a);
+    }
+    double worst = 0, worst_allow = 0;
+    for (uint32_t v = 0; v < p->nverts; v++) {
+        if (own[v] == INFINITY)
+            continue;
+        for (uint32_t g = 0; g < q->nfacets; g++) {
+            double e = geo_plane_eval(q->planes[g], p->verts[v]);
+            double a = fmax(own[v], cp->allow[src[g]]);
+            if (e - ROOF_FACTOR * a > worst - worst_allow) {
+                worst = e;
                 worst_allow = ROOF_FACTOR * a;
             }
         }
     }
-    free(outside);
+    free(own);
     if (worst > worst_allow)
         return decline(rep, "the scan lies %.2g mm outside the result "
                        "(bound %.2g mm)", worst, worst_allow);
