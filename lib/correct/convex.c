@@ -12,6 +12,7 @@
 
 #include "halfspace.h"
 #include "plane.h"
+#include "replanar.h"
 #include "topo.h"
 #include "vec.h"
 
@@ -466,6 +467,29 @@ static int check_result(const geo_poly *p, const geo_poly *q,
     return 0;
 }
 
+/* Where four or more planes nearly meet, the half-space kernel contracts
+ * a short edge and the merged vertex lies off one of the planes by up to
+ * the contraction length (1e-9 mm here and there, above the model's
+ * planarity tolerance): the vertices are moved as little as can be until
+ * every facet is planar (lib/replanar, least-norm), each by about that
+ * much. A run that does not get there leaves q to the planarity check.
+ * 0, or -ENOMEM. */
+static int planarize(geo_poly *q, geo_err *err)
+{
+    if (geo_poly_max_nonplanarity(q) <= geo_poly_eps(q))
+        return 0;
+    geo_replanar_opts o;
+    geo_replanar_opts_default(&o, GEO_REPLANAR_LEAST_NORM);
+    o.check = false; /* the result's checks follow */
+    geo_replanar_result res;
+    geo_err perr;
+    int r = geo_replanarize(q, NULL, 0, GEO_REPLANAR_LEAST_NORM, &o, NULL,
+                            NULL, &res, &perr);
+    if (r == -ENOMEM)
+        return geo_err_set(err, r, "out of memory");
+    return 0;
+}
+
 /* The last steps on the intersection q of cp's planes: the planes the
  * scan does not need go, the silhouettes q crosses clip it, and the
  * result is checked. 0 (passed), 1 (declined), -ENOMEM. */
@@ -475,13 +499,17 @@ static int finish(const geo_poly *p, geo_convex_planes *cp, double max_dev,
 {
     int r = drop_unneeded(p, cp, need, tol, q, src, rep, err);
     if (r == 0)
+        r = planarize(*q, err);
+    if (r == 0)
         r = check_result(p, *q, *src, cp, max_dev, rep);
     if (r == 1 && rep->deviation > outside_allow(cp, max_dev)) {
         /* declined for reaching outside the scan: clipped, checked again */
         r = clip_to_scan(p, cp, max_dev, tol, q, src, rep, err);
         if (r == 0 && rep->clipped > 0) {
             rep->reason[0] = 0;
-            r = check_result(p, *q, *src, cp, max_dev, rep);
+            r = planarize(*q, err);
+            if (r == 0)
+                r = check_result(p, *q, *src, cp, max_dev, rep);
         } else if (r == 0) {
             r = 1;
         }
@@ -703,6 +731,7 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
                            err);
             if (r == 0) {
                 *rep = ra;
+                rep->adjusted = true;
                 geo_poly_free(q);
                 free(src);
                 q = qa;

@@ -116,6 +116,9 @@ typedef struct geo_convex_report {
                             them */
     uint32_t clipped;    /* silhouette planes added where the result
                             reached outside the scan */
+    bool adjusted;       /* the planes are the ones adjusted to the
+                            silhouettes (else the fitted ones: the
+                            adjusted did not pass the checks) */
     double concavity;  /* the scan's deepest local concavity, mm */
     double bound;      /* the deviation the result may have from the
                           scan, mm */
