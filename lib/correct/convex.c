@@ -449,7 +449,7 @@ static int check_result(const geo_poly *p, const geo_poly *q,
             continue;
         for (uint32_t g = 0; g < q->nfacets; g++) {
             double e = geo_plane_eval(q->planes[g], p->verts[v]);
-            double a = fmax(own[v], cp->allow[src[g]]);
+            double a = cp->allow[src[g]] > own[v] ? cp->allow[src[g]] : own[v];
             if (e - ROOF_FACTOR * a > worst - worst_allow) {
                 worst = e;
                 worst_allow = ROOF_FACTOR * a;
