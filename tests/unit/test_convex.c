@@ -225,6 +225,26 @@ static void test_correct_takes_the_convex_path_by_default(void **state)
     geo_poly_free(stone);
 }
 
+/* An emerald (seed, K views, 1 µm) corrected by the convex path with the
+ * silhouette fit: valid, convex, its report in *rep, and no farther from
+ * the stone than factor × the scan. */
+static void check_emerald(unsigned seed, uint32_t k, double factor,
+                          geo_convex_report *rep, geo_poly **ret)
+{
+    geo_poly *stone = sim_stone(SIM_EMERALD, seed);
+    geo_poly *scan = sim_scan(stone, k, 1e-3, seed);
+    assert_non_null(scan);
+    geo_poly *q = convex_correct(scan, GEO_CONVEX_FIT_SILHOUETTE, rep);
+    assert_valid_convex(q);
+    double hs = sim_hausdorff(scan, stone, 2000), hq = sim_hausdorff(q, stone, 2000);
+    if (hq > factor * hs)
+        fail_msg("Hausdorff to the stone %.2f µm, the scan's %.2f µm", hq * 1e3,
+                 hs * 1e3);
+    geo_poly_free(scan);
+    geo_poly_free(stone);
+    *ret = q;
+}
+
 /* A step cut's corner facets are narrow but true: without one, its
  * neighbours' planes meet beyond the scan. This emerald (K = 400, 1 µm)
  * had its whole correction declined for it ("the result reaches 0.032 mm
@@ -233,20 +253,11 @@ static void test_correct_takes_the_convex_path_by_default(void **state)
 static void test_a_true_narrow_facet_is_kept(void **state)
 {
     (void)state;
-    geo_poly *stone = sim_stone(SIM_EMERALD, 1);
-    geo_poly *scan = sim_scan(stone, 400, 1e-3, 1);
-    assert_non_null(scan);
     geo_convex_report rep;
-    geo_poly *q = convex_correct(scan, GEO_CONVEX_FIT_SILHOUETTE, &rep);
-    assert_valid_convex(q);
+    geo_poly *q;
+    check_emerald(1, 400, 0.9, &rep, &q);
     assert_true(rep.deviation <= rep.bound);
-    double hs = sim_hausdorff(scan, stone, 2000), hq = sim_hausdorff(q, stone, 2000);
-    if (hq > 0.9 * hs)
-        fail_msg("Hausdorff to the stone %.2f µm, the scan's %.2f µm", hq * 1e3,
-                 hs * 1e3);
     geo_poly_free(q);
-    geo_poly_free(scan);
-    geo_poly_free(stone);
 }
 
 /* A scan vertex near an edge lies on the slivers of either facet: how
@@ -258,19 +269,10 @@ static void test_a_true_narrow_facet_is_kept(void **state)
 static void test_a_vertex_may_stand_on_either_facets_slivers(void **state)
 {
     (void)state;
-    geo_poly *stone = sim_stone(SIM_EMERALD, 5);
-    geo_poly *scan = sim_scan(stone, 100, 1e-3, 5);
-    assert_non_null(scan);
     geo_convex_report rep;
-    geo_poly *q = convex_correct(scan, GEO_CONVEX_FIT_SILHOUETTE, &rep);
-    assert_valid_convex(q);
-    double hs = sim_hausdorff(scan, stone, 2000), hq = sim_hausdorff(q, stone, 2000);
-    if (hq > 0.8 * hs)
-        fail_msg("Hausdorff to the stone %.2f µm, the scan's %.2f µm", hq * 1e3,
-                 hs * 1e3);
+    geo_poly *q;
+    check_emerald(5, 100, 0.8, &rep, &q);
     geo_poly_free(q);
-    geo_poly_free(scan);
-    geo_poly_free(stone);
 }
 
 /* Where four or more adjusted planes nearly meet, the half-space kernel
@@ -284,21 +286,12 @@ static void test_a_vertex_may_stand_on_either_facets_slivers(void **state)
 static void test_adjusted_planes_survive_a_contracted_vertex(void **state)
 {
     (void)state;
-    geo_poly *stone = sim_stone(SIM_EMERALD, 3);
-    geo_poly *scan = sim_scan(stone, 100, 1e-3, 3);
-    assert_non_null(scan);
     geo_convex_report rep;
-    geo_poly *q = convex_correct(scan, GEO_CONVEX_FIT_SILHOUETTE, &rep);
-    assert_valid_convex(q);
+    geo_poly *q;
+    check_emerald(3, 100, 1.5, &rep, &q);
     assert_true(rep.adjusted);
     assert_true(geo_poly_max_nonplanarity(q) <= geo_poly_eps(q));
-    double hs = sim_hausdorff(scan, stone, 2000), hq = sim_hausdorff(q, stone, 2000);
-    if (hq > 1.5 * hs)
-        fail_msg("Hausdorff to the stone %.2f µm, the scan's %.2f µm", hq * 1e3,
-                 hs * 1e3);
     geo_poly_free(q);
-    geo_poly_free(scan);
-    geo_poly_free(stone);
 }
 
 int main(void)
