@@ -13,6 +13,7 @@
 
 #include "correct.h"
 #include "cut_shapes.h"
+#include "gen_garbage.h"
 #include "replanar.h"
 #include "tu_load.h"
 #include "vec.h"
@@ -667,6 +668,31 @@ static void test_least_norm_on_triangles_moves_nothing_else(void **state)
     geo_poly_free(tri);
 }
 
+/* Least-norm on random garbage (non-manifold edges, repeated and
+ * collinear points, self-intersecting and non-planar facets): an answer
+ * or a refusal, never a crash or a hang; a converged one has the moved
+ * vertex where it was put. */
+static void test_least_norm_on_garbage_answers_or_refuses(void **state)
+{
+    (void)state;
+    uint64_t rng = 0x5eed1e55;
+    for (int i = 0; i < 300; i++) {
+        geo_poly *p = gen_garbage_model(&rng);
+        assert_non_null(p);
+        double t[3];
+        geo_vadd(p->verts[0], (const double[3]){1e-3, -2e-3, 5e-4}, t);
+        geo_replanar_result res;
+        geo_err err = {{0}};
+        int r = geo_move(p, 0, t, GEO_REPLANAR_LEAST_NORM, NULL, NULL, NULL,
+                         &res, &err);
+        if (r != 0 && r != -EINVAL && r != -EDOM && r != -ERANGE)
+            fail_msg("model %d: %d (%s)", i, r, err.msg);
+        if (r == 0 && res.converged)
+            assert_memory_equal(p->verts[0], t, sizeof t);
+        geo_poly_free(p);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -693,6 +719,7 @@ int main(void)
         cmocka_unit_test(test_cancel_stops_with_ecanceled),
         cmocka_unit_test(test_least_norm_keeps_a_local_edit_local),
         cmocka_unit_test(test_least_norm_on_triangles_moves_nothing_else),
+        cmocka_unit_test(test_least_norm_on_garbage_answers_or_refuses),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
