@@ -174,10 +174,7 @@ check "a re-plugged scanner scans again" test $? -eq 0
 # --- two at once -------------------------------------------------------------
 nb=$(njobs SN-B1)
 nh=$(njobs SN-H1)
-# the 100-contour scan on both: the step is about two sessions at once,
-# and half the bytes over HID keep it well inside its time under ASan
-mock_cmd model SN-B1 "$K100" >/dev/null
-mock_cmd model SN-H1 "$K100" >/dev/null
+mock_cmd model SN-B1 "$K400" >/dev/null
 JB=; JH=
 mock_cmd scan SN-B1 >/dev/null && mock_cmd scan SN-H1 >/dev/null
 new_job SN-B1 "$nb" && JB=$ID && new_job SN-H1 "$nh" && JH=$ID &&

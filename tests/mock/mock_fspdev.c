@@ -46,6 +46,9 @@ struct mock_fspdev {
     uint8_t *model;
     size_t model_len;
     uint8_t format;
+    /* one MODEL payload being built: per device, as two devices stream
+     * at once from different threads */
+    uint8_t chunk[8 + PROTO_FSP_MODEL_CHUNK_MAX];
     bool scanning, done_sent;
     uint8_t mode;
     size_t next_off;
@@ -209,7 +212,7 @@ static void progress(mock_fspdev *d, uint64_t now)
 /* Sends MODEL chunks while the window allows, then SCAN_DONE. */
 static void stream(mock_fspdev *d, uint64_t now)
 {
-    static uint8_t p[8 + PROTO_FSP_MODEL_CHUNK_MAX];
+    uint8_t *p = d->chunk;
     while (d->scanning && !d->wants_unplug &&
            d->inflight < PROTO_FSP_MODEL_WINDOW &&
            d->next_off < d->model_len) {
