@@ -874,13 +874,15 @@ static void ln_account(run *r, const double (*prev)[3])
  * is the ring of facet f, or UINT32_MAX outside; hold[v] is set for the
  * fixed vertices and for every vertex of a facet of four or more vertices
  * outside the region, which must not move. Returns whether the region is
- * every facet. */
+ * all the seeds' part of the model: no facet's neighbours were left out
+ * for the ring limit (a model in several pieces never fills up). */
 static bool ln_region(const run *r, uint32_t rings, uint32_t *ring,
                       uint32_t *queue, uint8_t *in, uint8_t *hold)
 {
     const geo_poly *p = r->p0;
     const geo_replanar_prep *pr = r->prep;
     uint32_t head = 0, tail = 0;
+    bool limited = false;
     for (uint32_t f = 0; f < p->nfacets; f++)
         ring[f] = UINT32_MAX;
     for (uint32_t i = 0; i < r->naf; i++) {
@@ -889,8 +891,10 @@ static bool ln_region(const run *r, uint32_t rings, uint32_t *ring,
     }
     while (head < tail) {
         uint32_t f = queue[head++];
-        if (ring[f] + 1 >= rings)
+        if (ring[f] + 1 >= rings) {
+            limited = true;
             continue;
+        }
         const uint32_t *fv = geo_poly_facet(p, f);
         for (uint32_t i = 0, n = geo_poly_facet_size(p, f); i < n; i++)
             for (uint32_t j = pr->vstart[fv[i]]; j < pr->vstart[fv[i] + 1];
@@ -912,7 +916,7 @@ static bool ln_region(const run *r, uint32_t rings, uint32_t *ring,
         for (uint32_t i = 0, n = geo_poly_facet_size(p, f); i < n; i++)
             hold[fv[i]] = 1;
     }
-    return tail == p->nfacets;
+    return !limited;
 }
 
 /* The largest move from the start of a free vertex of the region's outer

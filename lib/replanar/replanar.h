@@ -146,8 +146,10 @@ void geo_replanar_opts_default(geo_replanar_opts *o,
 /* One row of the iteration log (the paper's tables). */
 typedef struct geo_replanar_step {
     uint32_t step;    /* 0-based step number (the paper's "цикл 2") */
-    uint32_t outer;   /* local-exp round; for the others equal to step */
-    uint32_t inner;   /* step within the round (local-exp), else step */
+    uint32_t outer;   /* local-exp round; least-norm: the region's rings;
+                         for the others equal to step */
+    uint32_t inner;   /* step within the round (local-exp) or the region
+                         (least-norm), else step */
     double delta;     /* Δ, mm² */
     double s1;        /* S1, mm² */
     double s2;        /* S2, mm */
