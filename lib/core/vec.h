@@ -85,6 +85,19 @@ static inline double geo_vnormalize(double a[3])
     return l;
 }
 
+/* Two unit vectors completing the unit vector u to an orthonormal basis
+ * (u, e1, e2), e1 ⟂ the axis along which u is shortest. */
+static inline void geo_vbasis(const double u[3], double e1[3], double e2[3])
+{
+    double t[3] = {0, 0, 0};
+    int k = fabs(u[0]) <= fabs(u[1]) ? (fabs(u[0]) <= fabs(u[2]) ? 0 : 2)
+                                     : (fabs(u[1]) <= fabs(u[2]) ? 1 : 2);
+    t[k] = 1;
+    geo_vcross(u, t, e1);
+    geo_vnormalize(e1);
+    geo_vcross(u, e1, e2);
+}
+
 /* Signed distance-like value of p to plane (a,b,c,d): a·x+b·y+c·z+d. */
 static inline double geo_plane_eval(const double plane[4], const double p[3])
 {

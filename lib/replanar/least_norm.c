@@ -49,15 +49,6 @@ static void sys_free(sys *s)
     free(s->b);
 }
 
-static void tangent_basis(const double n[3], double t1[3], double t2[3])
-{
-    double a[3] = {0, 0, 0};
-    a[fabs(n[0]) < 0.6 ? 0 : fabs(n[1]) < 0.6 ? 1 : 2] = 1;
-    geo_vcross(n, a, t1);
-    geo_vnormalize(t1);
-    geo_vcross(n, t1, t2);
-}
-
 /* Rows, their vertex lists and the per-row coefficients at x. */
 static int build_rows(sys *s, const geo_poly *p, const uint8_t *in,
                       const double (*planes)[4], const double (*x)[3])
@@ -91,7 +82,7 @@ static int build_rows(sys *s, const geo_poly *p, const uint8_t *in,
         for (uint32_t c = c0; c < c1; c++)
             geo_vadd(m, x[p->fidx[c]], m);
         geo_vscale(m, 1.0 / (c1 - c0), m);
-        tangent_basis(planes[f], t1, t2);
+        geo_vbasis(planes[f], t1, t2);
         for (uint32_t c = c0; c < c1; c++) {
             uint32_t r = (uint32_t)s->crow[c];
             double d[3];

@@ -290,18 +290,6 @@ static void small_eigvec2(double a, double b, double c, double ret[2])
     }
 }
 
-/* Two unit vectors completing the unit vector u to an orthonormal basis. */
-static void complete_basis(const double u[3], double e1[3], double e2[3])
-{
-    double t[3] = {0, 0, 0};
-    int k = fabs(u[0]) <= fabs(u[1]) ? (fabs(u[0]) <= fabs(u[2]) ? 0 : 2)
-                                     : (fabs(u[1]) <= fabs(u[2]) ? 1 : 2);
-    t[k] = 1;
-    geo_vcross(u, t, e1);
-    geo_vnormalize(e1);
-    geo_vcross(u, e1, e2);
-}
-
 /* The unit eigenvector of the smallest eigenvalue of the symmetric PSD
  * matrix m (upper triangle), near the unit vector guess. A fitted facet
  * is nearly planar, so λ1 ≪ λ2: two steps of inverse iteration from the
@@ -393,7 +381,7 @@ static void fit_plane(const geo_poly *p, double (*x)[3], const uint8_t *vflag,
     }
     if (nfix == 2 && geo_vnormalize(line) > 0) {
         double e1[3], e2[3], me1[3], me2[3];
-        complete_basis(line, e1, e2);
+        geo_vbasis(line, e1, e2);
         for (int a = 0; a < 3; a++) {
             me1[a] = me2[a] = 0;
             for (int b = 0; b < 3; b++) {
