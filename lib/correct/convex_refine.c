@@ -54,17 +54,6 @@
  * highest (before the first residuals: the cluster radius). */
 #define SPAN_SCALES 6.0
 
-static void tangents(const double n[3], double t1[3], double t2[3])
-{
-    double e[3] = {0, 0, 0};
-    int k = fabs(n[0]) < fabs(n[1]) ? (fabs(n[0]) < fabs(n[2]) ? 0 : 2)
-                                    : (fabs(n[1]) < fabs(n[2]) ? 1 : 2);
-    e[k] = 1;
-    geo_vcross(n, e, t1);
-    geo_vnormalize(t1);
-    geo_vcross(n, t1, t2);
-}
-
 static int cmp_double(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
@@ -440,7 +429,7 @@ int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
         if (it > 0)
             scale_prev = scale;
         for (uint32_t i = 0; i < nplanes; i++)
-            tangents(pl[i], t1[i], t2[i]);
+            geo_vbasis(pl[i], t1[i], t2[i]);
         memset(B.v, 0, (size_t)nb * sizeof *B.v);
         memset(rhs, 0, (size_t)n * sizeof *rhs);
         /* each scan facet's spanning vertices, and the residual scale */
