@@ -1,7 +1,7 @@
 /* replanar.c — vertex move and re-planarisation (Palachev 2012, §4.2.3, §4.3.1–3):
  * alternating least-squares planes and penalised per-vertex 3×3 solves over
  * a growing active region (see replanar.h for the quantities and the
- * schedules).
+ * schedules); the least-norm schedule's driver is replanar_least_norm.c.
  *
  * Invariants of a run: fixed vertices never move and, with the default
  * fit, every plane of a facet through a fixed vertex passes through it (up
@@ -18,21 +18,11 @@
 #include <string.h>
 
 #include "grow.h"
-#include "least_norm.h"
+#include "replanar_run.h"
 #include "bvh.h"
 #include "plane.h"
 #include "selfint.h"
 #include "vec.h"
-
-struct geo_replanar_prep {
-    geo_poly *poly;    /* start positions, fitted planes */
-    uint32_t *vstart;  /* nverts + 1 offsets into vfacets */
-    uint32_t *vfacets; /* facets of each vertex (one entry per corner) */
-    double *resid;     /* per facet: max |plane(v)| at the start */
-    double eps;        /* geo_poly_eps of the start */
-    double volume;     /* signed volume of the start */
-    geo_bvh *fbvh;     /* facet boxes of the start */
-};
 
 /* The names of each option enum, indexed by its values (0, 1, ...). */
 static const char *const SCHEDULE_NAMES[] = {"local-exp", "scaled",
@@ -134,9 +124,6 @@ bool geo_replanar_result_valid(const geo_replanar_result *r)
 
 /* ---- preparation ---- */
 
-static void fit_plane(const geo_poly *p, double (*x)[3], const uint8_t *vflag,
-                      uint32_t f, double prev[4]);
-
 static double facet_residual(const geo_poly *p, uint32_t f,
                              const double plane[4])
 {
@@ -216,7 +203,7 @@ geo_replanar_prep *geo_replanar_prepare(const geo_poly *p, geo_err *err)
         if (!(geo_vnormalize(pl) > 0))
             geo_poly_facet_fit_plane(q, f, GEO_PLANE_UNWEIGHTED, pl);
         else
-            fit_plane(q, q->verts, NULL, f, pl);
+            rp_fit_plane(q, q->verts, NULL, f, pl);
         prep->resid[f] = facet_residual(q, f, pl);
     }
     prep->eps = geo_poly_eps(q);
@@ -229,31 +216,7 @@ geo_replanar_prep *geo_replanar_prepare(const geo_poly *p, geo_err *err)
 
 /* ---- one run ---- */
 
-enum { V_ACTIVE = 1, V_FIXED = 2 };
-
-typedef struct run {
-    const geo_replanar_prep *prep;
-    const geo_poly *p0;           /* prep->poly: facets, start positions */
-    double (*x)[3];               /* current positions */
-    double (*pl)[4];              /* current planes */
-    double (*xn)[3];              /* new positions, by active-list slot */
-    uint8_t *vflag;               /* V_ACTIVE | V_FIXED */
-    uint8_t *fact;                /* facet active */
-    uint32_t *av, nav;            /* active vertices (fixed ones included) */
-    uint32_t *af, naf;            /* active facets */
-    uint32_t *wake, nwake;        /* facets to activate after this step */
-    uint8_t *fwake;               /* facet queued in wake */
-    double wake_abs;              /* mm */
-    bool fit_all;                 /* GEO_REPLANAR_FIT_ALL */
-    double s1, s2, s2sum, delta;  /* of the last step */
-} run;
-
-static const double *start_pos(const run *r, uint32_t v)
-{
-    return r->p0->verts[v];
-}
-
-static void activate_facet(run *r, uint32_t f)
+void rp_activate_facet(run *r, uint32_t f)
 {
     if (r->fact[f])
         return;
@@ -340,7 +303,7 @@ static bool smallest_eigvec(double m[3][3], const double guess[3],
  * two, or of the fixed vertices alone (three or more). The normal keeps
  * the side of the previous one; a degenerate facet (all points on a line)
  * keeps its previous normal. */
-static void fit_plane(const geo_poly *p, double (*x)[3], const uint8_t *vflag,
+void rp_fit_plane(const geo_poly *p, double (*x)[3], const uint8_t *vflag,
                       uint32_t f, double prev[4])
 {
     const uint32_t *v = geo_poly_facet(p, f);
@@ -457,7 +420,7 @@ static void solve_vertex(const run *r, uint32_t v, const double x0[3],
 
 /* S2 and S2sum over the incidences of the active free vertices with the
  * current planes. */
-static void plane_errors(run *r)
+void rp_plane_errors(run *r)
 {
     const geo_replanar_prep *pr = r->prep;
     double s2 = 0, s2sum = 0;
@@ -485,12 +448,12 @@ static void step(run *r, double k, bool local)
 {
     const uint8_t *fixflag = r->fit_all ? NULL : r->vflag;
     for (uint32_t i = 0; i < r->naf; i++)
-        fit_plane(r->p0, r->x, fixflag, r->af[i], r->pl[r->af[i]]);
+        rp_fit_plane(r->p0, r->x, fixflag, r->af[i], r->pl[r->af[i]]);
     for (uint32_t i = 0; i < r->nav; i++) {
         uint32_t v = r->av[i];
         if (r->vflag[v] & V_FIXED)
             continue;
-        solve_vertex(r, v, local ? r->x[v] : start_pos(r, v), k, r->xn[i]);
+        solve_vertex(r, v, local ? r->x[v] : rp_start_pos(r, v), k, r->xn[i]);
     }
     double delta = 0, s1 = 0;
     r->nwake = 0;
@@ -502,7 +465,7 @@ static void step(run *r, double k, bool local)
         geo_vsub(r->xn[i], r->x[v], d);
         delta += geo_vdot(d, d);
         memcpy(r->x[v], r->xn[i], sizeof r->x[v]);
-        geo_vsub(r->x[v], start_pos(r, v), d);
+        geo_vsub(r->x[v], rp_start_pos(r, v), d);
         double dd = geo_vdot(d, d);
         s1 += dd;
         if (dd > r->wake_abs * r->wake_abs) {
@@ -518,10 +481,10 @@ static void step(run *r, double k, bool local)
     }
     /* every incidence that may differ from the start touches an active
      * vertex: an active facet's vertices are all active */
-    plane_errors(r);
+    rp_plane_errors(r);
     for (uint32_t i = 0; i < r->nwake; i++) {
         r->fwake[r->wake[i]] = 0;
-        activate_facet(r, r->wake[i]);
+        rp_activate_facet(r, r->wake[i]);
     }
     r->delta = delta;
     r->s1 = s1;
@@ -529,7 +492,7 @@ static void step(run *r, double k, bool local)
 
 /* ---- the schedules ---- */
 
-static int log_row(geo_replanar_log *log, const run *r, uint32_t stepno,
+int rp_log_row(geo_replanar_log *log, const run *r, uint32_t stepno,
                    uint32_t outer, uint32_t inner, double eps, double k,
                    int64_t nselfint)
 {
@@ -605,10 +568,10 @@ static int run_init(run *r, const geo_replanar_prep *prep, uint32_t nfixed,
     for (uint32_t i = 0; i < nfixed; i++)
         for (uint32_t j = prep->vstart[fixed[i]];
              j < prep->vstart[fixed[i] + 1]; j++)
-            activate_facet(r, prep->vfacets[j]);
+            rp_activate_facet(r, prep->vfacets[j]);
     for (uint32_t f = 0; f < p->nfacets; f++)
         if (prep->resid[f] > r->wake_abs)
-            activate_facet(r, f);
+            rp_activate_facet(r, f);
     /* a facet with three or more fixed vertices is fitted to them alone:
      * they must be coplanar */
     for (uint32_t i = 0; i < r->naf && !fit_all; i++) {
@@ -619,7 +582,7 @@ static int run_init(run *r, const geo_replanar_prep *prep, uint32_t nfixed,
             nfix += (r->vflag[v[j]] & V_FIXED) != 0;
         if (nfix < 3)
             continue;
-        fit_plane(p, r->x, r->vflag, f, r->pl[f]);
+        rp_fit_plane(p, r->x, r->vflag, f, r->pl[f]);
         for (uint32_t j = 0; j < n; j++)
             if ((r->vflag[v[j]] & V_FIXED) &&
                 !(fabs(geo_plane_eval(r->pl[f], r->x[v[j]])) <= prep->eps))
@@ -690,7 +653,7 @@ static void facet_box(const geo_poly *p, uint32_t f, double (*x)[3],
  * active–inactive pairs (the start's facet BVH, queried with current boxes
  * grown by wake_abs). Exact tests of lib/inspect/selfint.h. Count in *ret; 0 or
  * -ENOMEM. */
-static int count_selfint(const run *r, int64_t *ret)
+int rp_count_selfint(const run *r, int64_t *ret)
 {
     const geo_poly *p0 = r->p0;
     geo_poly view = *p0;
@@ -800,272 +763,6 @@ static double fixed_residual(const run *r, uint32_t nfixed,
     return m;
 }
 
-/* ---- the least-norm schedule ---- */
-
-/* Steps of least_norm.h are capped here: Gauss–Newton converges in a few
- * or not at all. */
-#define LN_MAX_STEPS 50
-/* Entries of one factor (12 bytes each: about 200 MB). */
-#define LN_MAX_NNZ (UINT64_C(1) << 24)
-/* Steps aimed at the least-norm point from the start; the later ones only
- * restore planarity nearest the current positions (Gauss–Newton on the
- * constraints alone, quadratic), instead of creeping on to the exact
- * least-norm point at a linear rate where slivers turn far. */
-#define LN_FROM_START 2
-/* The first region's rings, and the share of the largest move its outer
- * ring may keep before the region grows. */
-#define LN_RINGS 4
-#define LN_EDGE 1e-2
-/* Steps of one region before it counts as stalled. */
-#define LN_ATTEMPT_STEPS 12
-
-/* Refits the planes of the facets with a vertex off its start or fixed
- * (the others keep their start planes exactly), activates them, and sets
- * r's step figures against the positions before the step (prev). */
-static void ln_account(run *r, const double (*prev)[3])
-{
-    const geo_poly *p = r->p0;
-    const uint8_t *fixflag = r->fit_all ? NULL : r->vflag;
-    double delta = 0, s1 = 0;
-    for (uint32_t v = 0; v < p->nverts; v++) {
-        if (r->vflag[v] & V_FIXED)
-            continue;
-        double d[3];
-        geo_vsub(r->x[v], prev[v], d);
-        delta += geo_vdot(d, d);
-        geo_vsub(r->x[v], start_pos(r, v), d);
-        s1 += geo_vdot(d, d);
-    }
-    for (uint32_t f = 0; f < p->nfacets; f++) {
-        const uint32_t *fv = geo_poly_facet(p, f);
-        uint32_t n = geo_poly_facet_size(p, f);
-        bool off = false;
-        for (uint32_t i = 0; i < n && !off; i++)
-            off = (r->vflag[fv[i]] & V_FIXED) ||
-                  memcmp(r->x[fv[i]], start_pos(r, fv[i]),
-                         sizeof r->x[0]) != 0;
-        if (off) {
-            activate_facet(r, f);
-            fit_plane(p, r->x, fixflag, f, r->pl[f]);
-        } else {
-            memcpy(r->pl[f], p->planes[f], sizeof r->pl[f]);
-        }
-    }
-    plane_errors(r);
-    r->delta = delta;
-    r->s1 = s1;
-}
-
-/* The region of a least-norm solve: the facets within `rings` rings (by
- * shared vertices) of the seeds, which are the run's first active facets
- * (those of the fixed vertices and any not planar at the start). ring[f]
- * is the ring of facet f, or UINT32_MAX outside; hold[v] is set for the
- * fixed vertices and for every vertex of a facet of four or more vertices
- * outside the region, which must not move. Returns whether the region is
- * all the seeds' part of the model: no facet's neighbours were left out
- * for the ring limit (a model in several pieces never fills up). */
-static bool ln_region(const run *r, uint32_t rings, uint32_t *ring,
-                      uint32_t *queue, uint8_t *in, uint8_t *hold)
-{
-    const geo_poly *p = r->p0;
-    const geo_replanar_prep *pr = r->prep;
-    uint32_t head = 0, tail = 0;
-    bool limited = false;
-    for (uint32_t f = 0; f < p->nfacets; f++)
-        ring[f] = UINT32_MAX;
-    for (uint32_t i = 0; i < r->naf; i++) {
-        ring[r->af[i]] = 0;
-        queue[tail++] = r->af[i];
-    }
-    while (head < tail) {
-        uint32_t f = queue[head++];
-        if (ring[f] + 1 >= rings) {
-            limited = true;
-            continue;
-        }
-        const uint32_t *fv = geo_poly_facet(p, f);
-        for (uint32_t i = 0, n = geo_poly_facet_size(p, f); i < n; i++)
-            for (uint32_t j = pr->vstart[fv[i]]; j < pr->vstart[fv[i] + 1];
-                 j++) {
-                uint32_t g = pr->vfacets[j];
-                if (ring[g] == UINT32_MAX) {
-                    ring[g] = ring[f] + 1;
-                    queue[tail++] = g;
-                }
-            }
-    }
-    for (uint32_t v = 0; v < p->nverts; v++)
-        hold[v] = (r->vflag[v] & V_FIXED) != 0;
-    for (uint32_t f = 0; f < p->nfacets; f++) {
-        in[f] = ring[f] != UINT32_MAX;
-        if (in[f] || geo_poly_facet_size(p, f) <= 3)
-            continue;
-        const uint32_t *fv = geo_poly_facet(p, f);
-        for (uint32_t i = 0, n = geo_poly_facet_size(p, f); i < n; i++)
-            hold[fv[i]] = 1;
-    }
-    return !limited;
-}
-
-/* The largest move from the start of a free vertex of the region's outer
- * ring, and of any free vertex. */
-static void ln_reach(const run *r, const uint32_t *ring, uint32_t rings,
-                     double *ret_outer, double *ret_all)
-{
-    const geo_poly *p = r->p0;
-    double outer = 0, all = 0;
-    for (uint32_t f = 0; f < p->nfacets; f++) {
-        if (ring[f] == UINT32_MAX)
-            continue;
-        const uint32_t *fv = geo_poly_facet(p, f);
-        for (uint32_t i = 0, n = geo_poly_facet_size(p, f); i < n; i++) {
-            if (r->vflag[fv[i]] & V_FIXED)
-                continue;
-            double d = geo_vdist(r->x[fv[i]], start_pos(r, fv[i]));
-            if (d > all)
-                all = d;
-            if (ring[f] + 1 == rings && d > outer)
-                outer = d;
-        }
-    }
-    *ret_outer = outer;
-    *ret_all = all;
-}
-
-/* Gauss–Newton steps of the least-norm problem until S2 < eps_final, on a
- * region around the fixed vertices that grows (rings ×2) until the move
- * has died out at its edge — below LN_EDGE of the largest move there —
- * or the region is everything. A region that stalls (its held edge bends
- * the facets across it) grows too. The rest of the model is held where
- * it is, so a local edit costs a local solve. A free vertex left within
- * eps_final / 100 of its start (rounding of a solve that reaches every
- * vertex of the region) is put back there, so the result differs from the
- * start only where the move reached. */
-static int least_norm_run(run *r, const geo_replanar_opts *o,
-                          const geo_ctx *ctx, geo_replanar_log *log,
-                          uint32_t *ret_steps, bool *ret_converged,
-                          int64_t *nsi, geo_replanar_result *ret,
-                          geo_err *err)
-{
-    const geo_poly *p = r->p0;
-    size_t nv = (size_t)p->nverts + 1, nf = (size_t)p->nfacets + 1;
-    uint8_t *hold = malloc(nv), *in = malloc(nf);
-    uint32_t *ring = malloc(nf * sizeof *ring),
-             *queue = malloc(nf * sizeof *queue);
-    if (!hold || !in || !ring || !queue) {
-        free(hold);
-        free(in);
-        free(ring);
-        free(queue);
-        return geo_err_set(err, -ENOMEM, "out of memory");
-    }
-    const uint8_t *fixflag = r->fit_all ? NULL : r->vflag;
-    uint32_t budget = o->max_steps < LN_MAX_STEPS ? o->max_steps
-                                                   : LN_MAX_STEPS;
-    uint32_t stepno = 0, rings = LN_RINGS;
-    bool converged = false;
-    int rc = 0;
-    for (;;) {
-        bool whole = ln_region(r, rings, ring, queue, in, hold);
-        /* every attempt starts from the start, the planes through the
-         * fixed vertices first: the first linearisation is then about
-         * planes the result can keep */
-        for (uint32_t v = 0; v < p->nverts; v++)
-            if (!(r->vflag[v] & V_FIXED))
-                memcpy(r->x[v], start_pos(r, v), sizeof r->x[v]);
-        memcpy(r->pl, p->planes, (size_t)p->nfacets * sizeof *r->pl);
-        for (uint32_t i = 0; i < r->naf; i++)
-            fit_plane(p, r->x, fixflag, r->af[i], r->pl[r->af[i]]);
-        uint32_t worse = 0, first = stepno;
-        double best = INFINITY;
-        converged = false;
-        while (stepno < budget && stepno - first < LN_ATTEMPT_STEPS) {
-            rc = geo_ctx_progress(ctx, (double)stepno / budget);
-            if (rc < 0) {
-                geo_err_set(err, rc, "canceled");
-                break;
-            }
-            memcpy(r->xn, r->x, (size_t)p->nverts * sizeof *r->x);
-            rc = geo_least_norm_step(p, hold, in, (const double(*)[4])r->pl,
-                                     r->x, stepno - first < LN_FROM_START,
-                                     LN_MAX_NNZ, ctx);
-            if (rc < 0) {
-                if (rc == -ERANGE)
-                    geo_err_set(err, rc, "least-norm: the region is too "
-                                "large for one sparse factor (over %llu "
-                                "entries); use the local-exp schedule",
-                                (unsigned long long)LN_MAX_NNZ);
-                else if (rc == -EDOM)
-                    geo_err_set(err, rc, "least-norm: the planarity system "
-                                "is singular (facets whose fixed vertices "
-                                "are not coplanar?)");
-                else
-                    geo_err_set(err, rc, rc == -ECANCELED ? "canceled"
-                                                          : "out of memory");
-                break;
-            }
-            ln_account(r, (const double(*)[3])r->xn);
-            if (o->count_selfint) {
-                rc = count_selfint(r, nsi);
-                if (rc < 0) {
-                    geo_err_set(err, rc, "out of memory");
-                    break;
-                }
-                if (*nsi > 0 && ret->first_selfint_step < 0)
-                    ret->first_selfint_step = stepno;
-            }
-            rc = log_row(log, r, stepno, rings, stepno - first, o->eps_final,
-                         0, o->count_selfint ? *nsi : -1);
-            if (rc < 0) {
-                geo_err_set(err, rc, "out of memory for the log");
-                break;
-            }
-            stepno++;
-            if (!isfinite(r->s2) || !isfinite(r->s1))
-                break; /* diverged */
-            if (r->s2 < o->eps_final) {
-                converged = true;
-                break;
-            }
-            /* Gauss–Newton that does not improve twice in a row is stuck */
-            worse = r->s2 < best ? 0 : worse + 1;
-            if (r->s2 < best)
-                best = r->s2;
-            if (worse == 2)
-                break;
-        }
-        if (rc < 0 || whole || stepno >= budget)
-            break;
-        /* a region too tight for the move stalls (its held edge bends the
-         * facets across it) or still moves at its edge: grow it */
-        double outer, all;
-        ln_reach(r, ring, rings, &outer, &all);
-        if (converged && outer <= LN_EDGE * all)
-            break;
-        rings *= 2;
-    }
-    if (rc == 0 && converged) {
-        double snap = o->eps_final / 100;
-        memcpy(r->xn, r->x, (size_t)p->nverts * sizeof *r->x);
-        for (uint32_t v = 0; v < p->nverts; v++)
-            if (!(r->vflag[v] & V_FIXED) &&
-                geo_vdist(r->x[v], start_pos(r, v)) <= snap)
-                memcpy(r->x[v], start_pos(r, v), sizeof r->x[v]);
-        /* the figures of the result as written (delta: the last step's) */
-        double delta = r->delta;
-        ln_account(r, (const double(*)[3])r->xn);
-        r->delta = delta;
-        converged = r->s2 < o->eps_final;
-    }
-    free(hold);
-    free(in);
-    free(ring);
-    free(queue);
-    *ret_steps = stepno;
-    *ret_converged = converged;
-    return rc;
-}
-
 int geo_replanar_solve(const geo_replanar_prep *prep, uint32_t nfixed,
                        const uint32_t *fixed, const double (*targets)[3],
                        enum geo_replanar_schedule schedule,
@@ -1117,7 +814,7 @@ int geo_replanar_solve(const geo_replanar_prep *prep, uint32_t nfixed,
     bool converged = false;
     int64_t nsi = -1;
     if (schedule == GEO_REPLANAR_LEAST_NORM) {
-        rc = least_norm_run(&r, &o, ctx, log, &stepno, &converged, &nsi,
+        rc = rp_least_norm_run(&r, &o, ctx, log, &stepno, &converged, &nsi,
                             ret, err);
         k = 0;
     } else {
@@ -1132,7 +829,7 @@ int geo_replanar_solve(const geo_replanar_prep *prep, uint32_t nfixed,
             step(&r, k, local);
             bool below = r.s2 < eps;
             if (o.count_selfint) {
-                rc = count_selfint(&r, &nsi);
+                rc = rp_count_selfint(&r, &nsi);
                 if (rc < 0) {
                     geo_err_set(err, rc, "out of memory");
                     break;
@@ -1140,7 +837,7 @@ int geo_replanar_solve(const geo_replanar_prep *prep, uint32_t nfixed,
                 if (nsi > 0 && ret->first_selfint_step < 0)
                     ret->first_selfint_step = stepno;
             }
-            rc = log_row(log, &r, stepno, schedule == GEO_REPLANAR_LOCAL_EXP
+            rc = rp_log_row(log, &r, stepno, schedule == GEO_REPLANAR_LOCAL_EXP
                                               ? outer : stepno,
                          schedule == GEO_REPLANAR_LOCAL_EXP ? inner : stepno, eps,
                          k, nsi);
@@ -1195,7 +892,7 @@ int geo_replanar_solve(const geo_replanar_prep *prep, uint32_t nfixed,
         if (o.check) {
             inspect_orientation(&r, ret);
             if (nsi < 0)
-                rc = count_selfint(&r, &nsi);
+                rc = rp_count_selfint(&r, &nsi);
             if (rc < 0)
                 geo_err_set(err, rc, "out of memory");
             ret->nselfint = nsi;
