@@ -22,6 +22,7 @@
 #include <string.h>
 
 #include "predicates.h"
+#include "uf.h"
 
 typedef struct hs_face {
     uint32_t *v;   /* vertex ids, counter-clockwise seen from outside */
@@ -409,13 +410,6 @@ static int place(hs_out *o, const double (*unit)[4])
     return 0;
 }
 
-static uint32_t find(uint32_t *up, uint32_t v)
-{
-    while (up[v] != v)
-        v = up[v] = up[up[v]];
-    return v;
-}
-
 /* Contracts the edges of o shorter than tol: the rounding of the input
  * planes (trigonometric normals of a symmetric design) turns a point where
  * four planes meet in exact geometry into two vertices some 1e-16 mm
@@ -445,7 +439,7 @@ static int contract(hs_out *o, double tol)
             for (int q = 0; q < 3; q++)
                 d2 += (o->x[a][q] - o->x[b][q]) * (o->x[a][q] - o->x[b][q]);
             if (d2 <= tol * tol) {
-                uint32_t ra = find(up, a), rb = find(up, b);
+                uint32_t ra = geo_uf_find(up, a), rb = geo_uf_find(up, b);
                 if (ra != rb)
                     up[ra < rb ? rb : ra] = ra < rb ? ra : rb, any = true;
             }
@@ -459,7 +453,7 @@ static int contract(hs_out *o, double tol)
     for (uint32_t f = 0; f < o->nf; f++) {
         uint32_t a0 = o->start[f], n = o->start[f + 1] - a0, first = m;
         for (uint32_t k = 0; k < n; k++) {
-            uint32_t r = find(up, o->idx[a0 + k]);
+            uint32_t r = geo_uf_find(up, o->idx[a0 + k]);
             if (m > first && idx[m - 1] == r)
                 continue;
             idx[m++] = r;

@@ -13,6 +13,7 @@
 #include "replanar.h"
 #include "stats.h"
 #include "topo.h"
+#include "uf.h"
 #include "vec.h"
 
 void geo_collapse_opts_default(geo_collapse_opts *o)
@@ -33,15 +34,6 @@ void geo_collapse_report_clear(geo_collapse_report *r)
     free(r->cnew);
     free(r->vmap);
     memset(r, 0, sizeof *r);
-}
-
-static uint32_t find(uint32_t *parent, uint32_t v)
-{
-    while (parent[v] != v) {
-        parent[v] = parent[parent[v]];
-        v = parent[v];
-    }
-    return v;
 }
 
 /* The clusters of p: CSR lists, each sorted, clusters ordered by their
@@ -65,14 +57,14 @@ static int find_clusters(const geo_poly *p, const geo_topo *t, double radius,
             continue;
         uint32_t a = p->fidx[c], b = p->fidx[geo_topo_next(p, t, c)];
         if (geo_vdist(p->verts[a], p->verts[b]) < radius) {
-            uint32_t ra = find(parent, a), rb = find(parent, b);
+            uint32_t ra = geo_uf_find(parent, a), rb = geo_uf_find(parent, b);
             if (ra != rb)
                 parent[ra > rb ? ra : rb] = ra < rb ? ra : rb;
         }
     }
     uint32_t ncl = 0, total = 0;
     for (uint32_t v = 0; v < nv; v++)
-        size[find(parent, v)]++;
+        size[geo_uf_find(parent, v)]++;
     for (uint32_t v = 0; v < nv; v++) {
         idx[v] = GEO_NONE;
         if (parent[v] == v && size[v] >= 2) {
@@ -88,7 +80,7 @@ static int find_clusters(const geo_poly *p, const geo_topo *t, double radius,
         return -ENOMEM;
     }
     for (uint32_t v = 0; v < nv; v++) {
-        uint32_t r = find(parent, v);
+        uint32_t r = geo_uf_find(parent, v);
         if (idx[r] != GEO_NONE)
             rep->cstart[idx[r] + 1]++;
     }
@@ -97,7 +89,7 @@ static int find_clusters(const geo_poly *p, const geo_topo *t, double radius,
     uint32_t *fill = size; /* reused as per-cluster fill counters */
     memset(fill, 0, ((size_t)nv + 1) * sizeof *fill);
     for (uint32_t v = 0; v < nv; v++) {
-        uint32_t r = find(parent, v);
+        uint32_t r = geo_uf_find(parent, v);
         if (idx[r] == GEO_NONE)
             continue;
         uint32_t c = idx[r];

@@ -15,6 +15,7 @@
 
 #include "plane.h"
 #include "topo.h"
+#include "uf.h"
 #include "vec.h"
 
 /* Grouping criterion (why: merge_groups.c, whose criterion this is): the
@@ -324,13 +325,6 @@ static int cmp_gpair(const void *x, const void *y)
     return (s->b > t->b) - (s->b < t->b);
 }
 
-static uint32_t uf_find(uint32_t *par, uint32_t x)
-{
-    while (par[x] != x)
-        x = par[x] = par[par[x]];
-    return x;
-}
-
 static double angle_of(const double a[3], const double b[3])
 {
     double c[3];
@@ -370,8 +364,8 @@ static int join_groups(finder *f, uint32_t *ng)
             uint32_t h = geo_topo_neighbor(t, c);
             if (h == GEO_NONE)
                 continue;
-            uint32_t a = uf_find(par, f->group[t->corner_facet[c]]);
-            uint32_t b = uf_find(par, f->group[h]);
+            uint32_t a = geo_uf_find(par, f->group[t->corner_facet[c]]);
+            uint32_t b = geo_uf_find(par, f->group[h]);
             if (a >= b)
                 continue;
             double ang = angle_of(pl[a], pl[b]);
@@ -389,7 +383,7 @@ static int join_groups(finder *f, uint32_t *ng)
         uint32_t joined = 0;
         for (uint32_t i = 0; i < np; i++) {
             uint32_t a = pr[i].a, b = pr[i].b;
-            if (touched[a] || touched[b] || uf_find(par, a) != a || uf_find(par, b) != b)
+            if (touched[a] || touched[b] || geo_uf_find(par, a) != a || geo_uf_find(par, b) != b)
                 continue;
             touched[a] = touched[b] = 1;
             par[b] = a;
@@ -408,9 +402,9 @@ static int join_groups(finder *f, uint32_t *ng)
         goto done;
     uint32_t m = 0;
     for (uint32_t g = 0; g < n; g++)
-        id[g] = uf_find(par, g) == g ? m++ : GEO_NONE;
+        id[g] = geo_uf_find(par, g) == g ? m++ : GEO_NONE;
     for (uint32_t h = 0; h < p->nfacets; h++)
-        f->group[h] = id[uf_find(par, f->group[h])];
+        f->group[h] = id[geo_uf_find(par, f->group[h])];
     free(id);
     *ng = m;
     r = 0;

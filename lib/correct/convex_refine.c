@@ -39,6 +39,7 @@
 
 #include "spchol.h"
 #include "topo.h"
+#include "uf.h"
 #include "vec.h"
 
 #define REFINE_ITERS 3
@@ -64,15 +65,6 @@ static int cmp_u64(const void *a, const void *b)
 {
     uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
     return (x > y) - (x < y);
-}
-
-static uint32_t uf_find(uint32_t *par, uint32_t v)
-{
-    while (par[v] != v) {
-        par[v] = par[par[v]];
-        v = par[v];
-    }
-    return v;
 }
 
 /* The normal equations as 3×3 blocks: block (i, j) of unknowns' triples
@@ -284,17 +276,17 @@ int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
             uint32_t b = est->fidx[k + 1 < est->fstart[f + 1] ? k + 1
                                                               : est->fstart[f]];
             if (geo_vdist(est->verts[a], est->verts[b]) < cluster)
-                par[uf_find(par, a)] = uf_find(par, b);
+                par[geo_uf_find(par, a)] = geo_uf_find(par, b);
         }
     uint32_t ncl = 0;
     for (uint32_t v = 0; v < nv; v++)
-        if (uf_find(par, v) == v)
+        if (geo_uf_find(par, v) == v)
             cl[v] = ncl++;
     uint32_t *cnt = calloc((size_t)ncl + 1, sizeof *cnt);
     if (!cnt)
         goto done;
     for (uint32_t v = 0; v < nv; v++) {
-        uint32_t c = cl[uf_find(par, v)];
+        uint32_t c = cl[geo_uf_find(par, v)];
         cl[v] = c;
         cnt[c]++;
         for (int k = 0; k < 3; k++)

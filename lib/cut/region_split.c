@@ -58,6 +58,7 @@
 
 #include "grow.h"
 #include "predicates.h"
+#include "uf.h"
 
 #define NONE UINT32_MAX
 
@@ -849,15 +850,6 @@ static uint32_t across(const ring *r, uint32_t t, uint32_t sl, uint32_t *ret_w)
     return u;
 }
 
-static uint32_t find(uint32_t *parent, uint32_t x)
-{
-    while (parent[x] != x) {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    return x;
-}
-
 /* Merges the triangles into simple pieces and emits them. */
 static int merge_and_emit(splitter *s, ring *r, uint32_t part, uint32_t loop)
 {
@@ -914,8 +906,8 @@ static int merge_and_emit(splitter *s, ring *r, uint32_t part, uint32_t loop)
     for (bool changed = true; changed;) {
         changed = false;
         for (uint32_t sl = 0; sl < r->nslot; sl++) {
-            uint32_t A = find(parent, piece[r->slot[sl][0]]);
-            uint32_t B = find(parent, piece[r->slot[sl][1]]);
+            uint32_t A = geo_uf_find(parent, piece[r->slot[sl][0]]);
+            uint32_t B = geo_uf_find(parent, piece[r->slot[sl][1]]);
             if (A == B)
                 continue;
             uint32_t ea = new_epoch(s), eb = new_epoch(s), shared = 0;
@@ -939,14 +931,14 @@ static int merge_and_emit(splitter *s, ring *r, uint32_t part, uint32_t loop)
     }
     /* each piece's boundary: its triangles' edges not shared inside it */
     for (uint32_t q = 0; q < np; q++) {
-        if (find(parent, q) != q)
+        if (geo_uf_find(parent, q) != q)
             continue;
         uint32_t ep = new_epoch(s), nb = 0, start = NONE;
         for (uint32_t t = head[q]; t != NONE; t = tnext[t])
             for (int e = 0; e < 3; e++) {
                 uint32_t sl = r->tslot[t][e], w;
                 if (sl != NONE &&
-                    find(parent, piece[across(r, t, sl, &w)]) == q)
+                    geo_uf_find(parent, piece[across(r, t, sl, &w)]) == q)
                     continue;
                 uint32_t x = r->tri[t][e], y = r->tri[t][(e + 1) % 3];
                 if (s->stamp[x] == ep) {

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "topo.h"
+#include "uf.h"
 #include "vec.h"
 
 void geo_inspect_opts_default(geo_inspect_opts *o)
@@ -241,15 +242,6 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
     return 0;
 }
 
-static uint32_t uf_find(uint32_t *parent, uint32_t x)
-{
-    while (parent[x] != x) {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    return x;
-}
-
 /* Union-find over edges shorter than the radius, each edge once (from
  * its lower corner; the union of the two lower roots keeps every root the
  * smallest vertex of its set, so the order of the unions does not
@@ -286,15 +278,15 @@ static int clusters(const geo_poly *p, const geo_topo *t, geo_stats *s)
             if (geo_vdot(d, d) > r2)
                 continue;
             if (geo_vdist(p->verts[a], p->verts[b]) < r) {
-                a = uf_find(parent, a);
-                b = uf_find(parent, b);
+                a = geo_uf_find(parent, a);
+                b = geo_uf_find(parent, b);
                 if (a != b)
                     parent[a < b ? b : a] = a < b ? a : b;
             }
         }
     }
     for (uint32_t v = 0; v < nv; v++)
-        size[uf_find(parent, v)]++;
+        size[geo_uf_find(parent, v)]++;
     for (uint32_t v = 0; v < nv; v++)
         if (size[v] >= 2) {
             s->short_edge_clusters++;
