@@ -162,3 +162,30 @@ bool geo_spd3_solve(double m[3][3], const double b[3], double x[3])
     }
     return true;
 }
+
+void geo_fan_moments(const double (*verts)[3], const uint32_t *fv, uint32_t n,
+                     const double o[3], double *a, double s[3],
+                     double ss[3][3])
+{
+    double p0[3];
+    geo_vsub(verts[fv[0]], o, p0);
+    for (uint32_t i = 1; i + 1 < n; i++) {
+        double p1[3], p2[3], u[3], v[3], c[3], m[3];
+        geo_vsub(verts[fv[i]], o, p1);
+        geo_vsub(verts[fv[i + 1]], o, p2);
+        geo_vsub(p1, p0, u);
+        geo_vsub(p2, p0, v);
+        geo_vcross(u, v, c);
+        double ar = 0.5 * geo_vlen(c);
+        for (int k = 0; k < 3; k++)
+            m[k] = (p0[k] + p1[k] + p2[k]) / 3;
+        *a += ar;
+        /* ∫ x xᵀ over a triangle = A/12 (Σ pᵢ pᵢᵀ + 9 m mᵀ) */
+        for (int k = 0; k < 3; k++) {
+            s[k] += ar * m[k];
+            for (int l = k; l < 3; l++)
+                ss[k][l] += ar / 12 * (p0[k] * p0[l] + p1[k] * p1[l] +
+                                       p2[k] * p2[l] + 9 * m[k] * m[l]);
+        }
+    }
+}

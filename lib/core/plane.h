@@ -1,11 +1,13 @@
 /* plane.h — planes a·x+b·y+c·z+d = 0 with (a,b,c) a unit normal: least
  * squares fits (Palachev 2012, §2.5), three-plane intersection, and the
- * symmetric 3×3 eigen-solver behind the fit. Pure functions, thread-safe. */
+ * symmetric 3×3 eigen-solver behind the fit, the area moments of a
+ * polygon behind the area-weighted fits. Pure functions, thread-safe. */
 #ifndef GEO_PLANE_H
 #define GEO_PLANE_H
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 /* Least-squares plane of n points (pts: 3·n doubles x,y,z,…) (Palachev 2012, §2.5.1): minimises
  * Σ wᵢ (a·xᵢ+b·yᵢ+c·zᵢ+d)² with |(a,b,c)| = 1, i.e. the eigenvector of the
@@ -33,6 +35,13 @@ bool geo_plane_intersect3(const double p1[4], const double p2[4],
  * ret_vectors[k] the unit eigenvector of ret_values[k]. */
 void geo_sym3_eigen(double m[3][3], double ret_values[3],
                     double ret_vectors[3][3]);
+
+/* Adds the area moments of polygon v[0..n) of verts about the point o, as
+ * the fan from v[0] (exact for a convex planar polygon): its area to *a,
+ * ∫(x − o) dA to s, ∫(x − o)(x − o)ᵀ dA to ss (upper triangle). */
+void geo_fan_moments(const double (*verts)[3], const uint32_t *v, uint32_t n,
+                     const double o[3], double *a, double s[3],
+                     double ss[3][3]);
 
 /* Solves the symmetric positive-definite 3×3 system m x = b by Cholesky.
  * m is not modified. Returns false when m is not positive definite (x unchanged). */

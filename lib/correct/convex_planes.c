@@ -69,29 +69,8 @@ static void mom_add(mom *m, const mom *x)
 static void facet_mom(const geo_poly *p, uint32_t f, const double o[3], mom *m)
 {
     memset(m, 0, sizeof *m);
-    uint32_t n = geo_poly_facet_size(p, f);
-    const uint32_t *v = geo_poly_facet(p, f);
-    double p0[3];
-    geo_vsub(p->verts[v[0]], o, p0);
-    for (uint32_t i = 1; i + 1 < n; i++) {
-        double p1[3], p2[3], u[3], w[3], c[3], mid[3];
-        geo_vsub(p->verts[v[i]], o, p1);
-        geo_vsub(p->verts[v[i + 1]], o, p2);
-        geo_vsub(p1, p0, u);
-        geo_vsub(p2, p0, w);
-        geo_vcross(u, w, c);
-        double ar = 0.5 * geo_vlen(c);
-        for (int k = 0; k < 3; k++)
-            mid[k] = (p0[k] + p1[k] + p2[k]) / 3;
-        m->a += ar;
-        /* ∫ x xᵀ over a triangle = A/12 (Σ pᵢ pᵢᵀ + 9 m mᵀ) */
-        for (int k = 0; k < 3; k++) {
-            m->s[k] += ar * mid[k];
-            for (int l = k; l < 3; l++)
-                m->ss[k][l] += ar / 12 * (p0[k] * p0[l] + p1[k] * p1[l] +
-                                          p2[k] * p2[l] + 9 * mid[k] * mid[l]);
-        }
-    }
+    geo_fan_moments((const double(*)[3])p->verts, geo_poly_facet(p, f),
+                    geo_poly_facet_size(p, f), o, &m->a, m->s, m->ss);
 }
 
 /* Length moments of the segment a–b about o: ∫ x ds, ∫ x xᵀ ds. */

@@ -129,29 +129,8 @@ static void moments_add(grower *g, const double x[3])
 void geo_mw_facet_moments(const geo_edit *e, uint32_t f, const double o[3],
                           double *a, double s[3], double ss[3][3])
 {
-    uint32_t n = geo_edit_fn(e, f);
-    const uint32_t *fv = geo_edit_fv(e, f);
-    double p0[3];
-    geo_vsub(e->verts[fv[0]], o, p0);
-    for (uint32_t i = 1; i + 1 < n; i++) {
-        double p1[3], p2[3], u[3], v[3], c[3], m[3];
-        geo_vsub(e->verts[fv[i]], o, p1);
-        geo_vsub(e->verts[fv[i + 1]], o, p2);
-        geo_vsub(p1, p0, u);
-        geo_vsub(p2, p0, v);
-        geo_vcross(u, v, c);
-        double ar = 0.5 * geo_vlen(c);
-        for (int k = 0; k < 3; k++)
-            m[k] = (p0[k] + p1[k] + p2[k]) / 3;
-        *a += ar;
-        /* ∫ x xᵀ over a triangle = A/12 (Σ pᵢ pᵢᵀ + 9 m mᵀ) */
-        for (int k = 0; k < 3; k++) {
-            s[k] += ar * m[k];
-            for (int l = k; l < 3; l++)
-                ss[k][l] += ar / 12 * (p0[k] * p0[l] + p1[k] * p1[l] +
-                                       p2[k] * p2[l] + 9 * m[k] * m[l]);
-        }
-    }
+    geo_fan_moments((const double(*)[3])e->verts, geo_edit_fv(e, f),
+                    geo_edit_fn(e, f), o, a, s, ss);
 }
 
 /* Area RMS distance of facet f from plane pl. */
