@@ -36,10 +36,10 @@ bool geo_plane_intersect3(const double p1[4], const double p2[4],
 void geo_sym3_eigen(double m[3][3], double ret_values[3],
                     double ret_vectors[3][3]);
 
-/* Adds the area moments of polygon v[0..n) of verts about the point o, as
- * the fan from v[0] (exact for a convex planar polygon): its area to *a,
+/* Adds the area moments of polygon fv[0..n) of verts about the point o, as
+ * the fan from fv[0] (exact for a convex planar polygon): its area to *a,
  * ∫(x − o) dA to s, ∫(x − o)(x − o)ᵀ dA to ss (upper triangle). */
-void geo_fan_moments(const double (*verts)[3], const uint32_t *v, uint32_t n,
+void geo_fan_moments(const double (*verts)[3], const uint32_t *fv, uint32_t n,
                      const double o[3], double *a, double s[3],
                      double ss[3][3]);
 

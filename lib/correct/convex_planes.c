@@ -362,7 +362,8 @@ static int join_groups(finder *f, uint32_t *ng)
         uint32_t joined = 0;
         for (uint32_t i = 0; i < np; i++) {
             uint32_t a = pr[i].a, b = pr[i].b;
-            if (touched[a] || touched[b] || geo_uf_find(par, a) != a || geo_uf_find(par, b) != b)
+            if (touched[a] || touched[b] || geo_uf_find(par, a) != a ||
+                geo_uf_find(par, b) != b)
                 continue;
             touched[a] = touched[b] = 1;
             par[b] = a;
