@@ -119,6 +119,7 @@ int cmd_correct(int argc, char **argv)
     if (!p)
         return cli_input_error("correct", "%s", err.msg);
     geo_correct_report rep;
+    o.input_stats = report != NULL; /* only the report prints them */
     int r = geo_correct(p, &o, NULL, &rep, &err);
     if (r < 0) {
         geo_poly_free(p);

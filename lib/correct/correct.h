@@ -47,13 +47,22 @@ typedef struct geo_correct_opts {
     enum geo_convex_fit convex_fit; /* its planes
                                        [GEO_CONVEX_FIT_SILHOUETTE] */
     uint32_t max_rounds;        /* merge + collapse rounds [4] */
+    bool input_stats;           /* report.before holds every statistic of
+                                   the input [true]; false: only what the
+                                   correction needs of it (closed,
+                                   manifold, orientation), the rest zero
+                                   — the self-intersection search of the
+                                   input is most of geo_inspect's time,
+                                   and a caller that writes no report
+                                   has no use for it */
 } geo_correct_opts;
 
 /* Fills the defaults. */
 void geo_correct_opts_default(geo_correct_opts *o);
 
 typedef struct geo_correct_report {
-    geo_stats before, after;    /* geo_inspect of the input and result */
+    geo_stats before, after;    /* geo_inspect of the input (but see
+                                   input_stats) and of the result */
     geo_merge_report merge;     /* every group of every round; facet ids
                                    as in merge.h, numbered per merge pass:
                                    pass k's ids refer to the model that
