@@ -149,16 +149,40 @@ static bool reaches_beyond(const geo_poly *p, const double pl[4],
                            const double (*ring)[4], uint32_t k, double tol,
                            double need)
 {
+    /* geo_plane_intersect3 of every triple, its cross products and
+     * lengths taken once per pair and plane (the same operations, so the
+     * same bits: cross(c, a) is −cross(a, c) exactly) */
+    double len[RING_MAX], cr[RING_MAX][RING_MAX][3];
+    for (uint32_t a = 0; a < k; a++) {
+        len[a] = geo_vlen(ring[a]);
+        for (uint32_t b = a + 1; b < k; b++)
+            geo_vcross(ring[a], ring[b], cr[a][b]);
+    }
+    uint32_t first = 0; /* the ring plane that last cut a meet off */
     for (uint32_t a = 0; a < k; a++)
         for (uint32_t b = a + 1; b < k; b++)
             for (uint32_t c = b + 1; c < k; c++) {
-                double x[3];
-                if (!geo_plane_intersect3(ring[a], ring[b], ring[c], x) ||
-                    geo_plane_eval(pl, x) <= 0)
+                const double *n23 = cr[b][c], *n12 = cr[a][b];
+                double n31[3] = {-cr[a][c][0], -cr[a][c][1], -cr[a][c][2]};
+                double det = geo_vdot(ring[a], n23);
+                double scale = len[a] * len[b] * len[c];
+                if (!(fabs(det) > 1e-12 * scale))
                     continue;
+                double x[3];
+                for (int i = 0; i < 3; i++)
+                    x[i] = -(ring[a][3] * n23[i] + ring[b][3] * n31[i] +
+                             ring[c][3] * n12[i]) / det;
+                if (geo_plane_eval(pl, x) <= 0)
+                    continue;
+                /* the planes in turn from the last one that cut: the
+                 * same answer, found sooner */
                 bool ok = true;
-                for (uint32_t m = 0; m < k && ok; m++)
+                for (uint32_t i = 0; i < k && ok; i++) {
+                    uint32_t m = first + i < k ? first + i : first + i - k;
                     ok = geo_plane_eval(ring[m], x) <= tol;
+                    if (!ok)
+                        first = m;
+                }
                 for (uint32_t f = 0; ok && f < p->nfacets; f++)
                     if (geo_plane_eval(p->planes[f], x) > need)
                         return true;

@@ -216,8 +216,14 @@ static bool fits(grower *g, uint32_t f, double ret_plane[4])
     for (uint32_t i = 0; i < g->nmem; i++)
         if (geo_vdot(e->planes[g->mem[i]], pl) < c->cosmax)
             return false;
-    double mdev = dev_bound(c, pl, extent_along(e, g->vs, g->nvs,
-                                                (const double(*)[3])extra, nx, ax));
+    /* the roof grows with the width, which the box's diagonal bounds
+     * (the margin covers rounding): only a group whose roof could pass
+     * max_dev needs its extent along the axis, O(its vertices) */
+    double mdev = c->max_dev;
+    if (dev_bound(c, pl, ext * (1 + 1e-9)) > c->max_dev)
+        mdev = dev_bound(c, pl, extent_along(e, g->vs, g->nvs,
+                                             (const double(*)[3])extra, nx,
+                                             ax));
     for (uint32_t i = 0; i < nx; i++)
         if (fabs(geo_plane_eval(pl, extra[i])) > mdev)
             return false;
