@@ -21,6 +21,13 @@ struct geo_spchol {
     uint64_t *Lp;
     uint32_t *Li;
     double *Lx;
+    /* the symbolic part, kept for geo_spchol_refactor: C = P·A·P''s
+     * upper triangle by columns (Cp, Ci; cmap: each entry's index in A's
+     * values), the elimination tree, and A's own pattern to check a
+     * refactored matrix against */
+    uint64_t *Cp;
+    uint32_t *Ci, *cmap, *parent;
+    uint32_t *arp, *aci;
 };
 
 /* ---- ordering ---- */
@@ -216,6 +223,8 @@ geo_spchol *geo_spchol_free(geo_spchol *f)
 {
     if (f) {
         free(f->perm), free(f->Lp), free(f->Li), free(f->Lx);
+        free(f->Cp), free(f->Ci), free(f->cmap), free(f->parent);
+        free(f->arp), free(f->aci);
         free(f);
     }
     return NULL;
@@ -224,6 +233,55 @@ geo_spchol *geo_spchol_free(geo_spchol *f)
 uint64_t geo_spchol_nnz(const geo_spchol *f)
 {
     return f->Lp[f->n];
+}
+
+/* The numeric factorisation of f's symbolic part with A's values v:
+ * 0, -EDOM (not positive definite), -ENOMEM or -ECANCELED. */
+static int numeric(geo_spchol *f, const double *v, const geo_ctx *ctx)
+{
+    uint32_t n = f->n;
+    uint32_t *s = malloc(((size_t)n + 1) * sizeof *s);
+    uint32_t *w = calloc((size_t)n + 1, sizeof *w);
+    uint64_t *next = malloc(((size_t)n + 1) * sizeof *next);
+    double *x = calloc((size_t)n + 1, sizeof *x);
+    int rc = -ENOMEM;
+    if (!s || !w || !next || !x)
+        goto out;
+    for (uint32_t k = 0; k < n; k++)
+        next[k] = f->Lp[k];
+    for (uint32_t k = 0; k < n; k++) {
+        if ((k & 4095) == 4095 && geo_ctx_canceled(ctx)) {
+            rc = -ECANCELED;
+            goto out;
+        }
+        uint32_t top = ereach(f->Cp, f->Ci, k, f->parent, s, w, k + 1, n);
+        for (uint64_t p = f->Cp[k]; p < f->Cp[k + 1]; p++)
+            x[f->Ci[p]] = v[f->cmap[p]];
+        double d = x[k];
+        x[k] = 0;
+        for (; top < n; top++) {
+            uint32_t i = s[top];
+            double lki = x[i] / f->Lx[f->Lp[i]];
+            x[i] = 0;
+            for (uint64_t p = f->Lp[i] + 1; p < next[i]; p++)
+                x[f->Li[p]] -= f->Lx[p] * lki;
+            d -= lki * lki;
+            uint64_t p = next[i]++;
+            f->Li[p] = k;
+            f->Lx[p] = lki;
+        }
+        if (!(d > 0)) {
+            rc = -EDOM;
+            goto out;
+        }
+        uint64_t p = next[k]++;
+        f->Li[p] = k;
+        f->Lx[p] = sqrt(d);
+    }
+    rc = 0;
+out:
+    free(s), free(w), free(next), free(x);
+    return rc;
 }
 
 int geo_spchol_factor(uint32_t n, const uint32_t *rp, const uint32_t *ci,
@@ -236,21 +294,26 @@ int geo_spchol_factor(uint32_t n, const uint32_t *rp, const uint32_t *ci,
             return -EINVAL;
     geo_spchol *f = calloc(1, sizeof *f);
     uint32_t *pinv = malloc(((size_t)n + 1) * sizeof *pinv);
-    uint64_t *Cp = malloc(((size_t)n + 2) * sizeof *Cp);
-    uint32_t *Ci = NULL, *parent = NULL, *s = NULL, *w = NULL;
-    double *Cx = NULL, *x = NULL;
+    uint32_t *s = NULL, *w = NULL;
     uint64_t *next = NULL;
     int rc = -ENOMEM;
-    if (!f || !pinv || !Cp)
+    if (!f || !pinv)
         goto out;
     f->n = n;
     f->perm = malloc(((size_t)n + 1) * sizeof *f->perm);
     f->Lp = malloc(((size_t)n + 1) * sizeof *f->Lp);
-    if (!f->perm || !f->Lp || nd_order(n, rp, ci, f->perm) < 0)
+    f->Cp = malloc(((size_t)n + 2) * sizeof *f->Cp);
+    f->arp = malloc(((size_t)n + 1) * sizeof *f->arp);
+    f->aci = malloc(((size_t)(n ? rp[n] : 0) + 1) * sizeof *f->aci);
+    if (!f->perm || !f->Lp || !f->Cp || !f->arp || !f->aci ||
+        nd_order(n, rp, ci, f->perm) < 0)
         goto out;
+    memcpy(f->arp, rp, ((size_t)n + 1) * sizeof *rp);
+    memcpy(f->aci, ci, (size_t)(n ? rp[n] : 0) * sizeof *ci);
     for (uint32_t k = 0; k < n; k++)
         pinv[f->perm[k]] = k;
     /* C = P·A·P', its upper triangle by columns */
+    uint64_t *Cp = f->Cp;
     Cp[0] = 0;
     for (uint32_t k = 0; k < n; k++) {
         uint32_t r = f->perm[k], c = 0;
@@ -258,22 +321,22 @@ int geo_spchol_factor(uint32_t n, const uint32_t *rp, const uint32_t *ci,
             c += pinv[ci[q]] <= k;
         Cp[k + 1] = Cp[k] + c;
     }
-    Ci = malloc((Cp[n] + 1) * sizeof *Ci);
-    Cx = malloc((Cp[n] + 1) * sizeof *Cx);
-    parent = malloc(((size_t)n + 1) * sizeof *parent);
+    f->Ci = malloc((Cp[n] + 1) * sizeof *f->Ci);
+    f->cmap = malloc((Cp[n] + 1) * sizeof *f->cmap);
+    f->parent = malloc(((size_t)n + 1) * sizeof *f->parent);
     s = malloc(((size_t)n + 1) * sizeof *s);
     w = calloc((size_t)n + 1, sizeof *w);
     next = malloc(((size_t)n + 1) * sizeof *next);
-    x = calloc((size_t)n + 1, sizeof *x);
-    if (!Ci || !Cx || !parent || !s || !w || !next || !x)
+    if (!f->Ci || !f->cmap || !f->parent || !s || !w || !next)
         goto out;
+    uint32_t *Ci = f->Ci, *parent = f->parent;
     for (uint32_t k = 0; k < n; k++) {
         uint32_t r = f->perm[k];
         uint64_t p = Cp[k];
         for (uint32_t q = rp[r]; q < rp[r + 1]; q++)
             if (pinv[ci[q]] <= k) {
                 Ci[p] = pinv[ci[q]];
-                Cx[p++] = v[q];
+                f->cmap[p++] = q;
             }
     }
     /* elimination tree (with path compression through next[]) */
@@ -308,46 +371,26 @@ int geo_spchol_factor(uint32_t n, const uint32_t *rp, const uint32_t *ci,
     f->Lx = malloc((f->Lp[n] + 1) * sizeof *f->Lx);
     if (!f->Li || !f->Lx)
         goto out;
-    memset(w, 0, ((size_t)n + 1) * sizeof *w);
-    for (uint32_t k = 0; k < n; k++)
-        next[k] = f->Lp[k];
-    for (uint32_t k = 0; k < n; k++) {
-        if ((k & 4095) == 4095 && geo_ctx_canceled(ctx)) {
-            rc = -ECANCELED;
-            goto out;
-        }
-        uint32_t top = ereach(Cp, Ci, k, parent, s, w, k + 1, n);
-        for (uint64_t p = Cp[k]; p < Cp[k + 1]; p++)
-            x[Ci[p]] = Cx[p];
-        double d = x[k];
-        x[k] = 0;
-        for (; top < n; top++) {
-            uint32_t i = s[top];
-            double lki = x[i] / f->Lx[f->Lp[i]];
-            x[i] = 0;
-            for (uint64_t p = f->Lp[i] + 1; p < next[i]; p++)
-                x[f->Li[p]] -= f->Lx[p] * lki;
-            d -= lki * lki;
-            uint64_t p = next[i]++;
-            f->Li[p] = k;
-            f->Lx[p] = lki;
-        }
-        if (!(d > 0)) {
-            rc = -EDOM;
-            goto out;
-        }
-        uint64_t p = next[k]++;
-        f->Li[p] = k;
-        f->Lx[p] = sqrt(d);
-    }
+    if ((rc = numeric(f, v, ctx)) < 0)
+        goto out;
     *ret = f;
     f = NULL;
     rc = 0;
 out:
     geo_spchol_free(f);
-    free(pinv), free(Cp), free(Ci), free(Cx), free(parent), free(s), free(w);
-    free(next), free(x);
+    free(pinv), free(s), free(w), free(next);
     return rc;
+}
+
+int geo_spchol_refactor(geo_spchol *f, uint32_t n, const uint32_t *rp,
+                        const uint32_t *ci, const double *v,
+                        const geo_ctx *ctx)
+{
+    if (n != f->n ||
+        memcmp(rp, f->arp, ((size_t)n + 1) * sizeof *rp) != 0 ||
+        memcmp(ci, f->aci, (size_t)(n ? rp[n] : 0) * sizeof *ci) != 0)
+        return -EINVAL;
+    return numeric(f, v, ctx);
 }
 
 int geo_spchol_solve3(const geo_spchol *f, double (*b)[3])

@@ -41,6 +41,16 @@ int geo_spchol_factor(uint32_t n, const uint32_t *rp, const uint32_t *ci,
                       const double *v, uint64_t max_nnz, const geo_ctx *ctx,
                       geo_spchol **ret);
 
+/* Factors again, into f, a matrix of the same pattern as the one f was
+ * made from (n, rp and ci equal) with new values v: the ordering and the
+ * symbolic analysis are reused, so the factor is the one
+ * geo_spchol_factor would give, bit for bit. Returns 0; -EINVAL when the
+ * pattern differs (f unchanged); -EDOM, -ENOMEM or -ECANCELED, after
+ * which f may only be freed or factored again. */
+int geo_spchol_refactor(geo_spchol *f, uint32_t n, const uint32_t *rp,
+                        const uint32_t *ci, const double *v,
+                        const geo_ctx *ctx);
+
 /* Entries of L (diagonal included). */
 uint64_t geo_spchol_nnz(const geo_spchol *f);
 

@@ -528,8 +528,13 @@ int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
                     }
             }
         rp[np3] = z;
-        fac = geo_spchol_free(fac);
-        if ((r = geo_spchol_factor(np3, rp, ci, val, 0, NULL, &fac)) < 0) {
+        /* every step has the same pattern: its analysis is reused */
+        r = fac ? geo_spchol_refactor(fac, np3, rp, ci, val, NULL) : -EINVAL;
+        if (r == -EINVAL) {
+            fac = geo_spchol_free(fac);
+            r = geo_spchol_factor(np3, rp, ci, val, 0, NULL, &fac);
+        }
+        if (r < 0) {
             r = r == -ENOMEM ? r : -EINVAL;
             goto done;
         }

@@ -191,6 +191,68 @@ static void test_bad_input_and_limits_are_reported(void **state)
     assert_null(geo_spchol_free(NULL));
 }
 
+/* A refactored matrix of the same pattern gives the factor a fresh one
+ * does, bit for bit (the same solution); a matrix of another pattern is
+ * refused and the factor kept; one that is not positive definite is
+ * reported. */
+static void test_refactor_reuses_the_analysis(void **state)
+{
+    (void)state;
+    csr a, b;
+    grid_laplacian(&a, 13, 11, 0.5, false);
+    csr_pack(&a);
+    grid_laplacian(&b, 13, 11, 0.5, false);
+    csr_pack(&b);
+    uint64_t seed = 3;
+    for (uint32_t q = 0; q < b.rp[b.n]; q++)
+        b.v[q] *= 1 + 0.1 * geo_rand_unit(&seed);
+    /* symmetric again: the lower triangle copies the upper */
+    for (uint32_t i = 0; i < b.n; i++)
+        for (uint32_t q = b.rp[i]; q < b.rp[i + 1]; q++) {
+            uint32_t j = b.ci[q];
+            for (uint32_t t = b.rp[j]; t < b.rp[j + 1]; t++)
+                if (b.ci[t] == i && j < i)
+                    b.v[q] = b.v[t];
+        }
+    geo_spchol *fresh = NULL, *re = NULL;
+    assert_int_equal(geo_spchol_factor(b.n, b.rp, b.ci, b.v, 0, NULL, &fresh),
+                     0);
+    assert_int_equal(geo_spchol_factor(a.n, a.rp, a.ci, a.v, 0, NULL, &re), 0);
+    assert_int_equal(geo_spchol_refactor(re, b.n, b.rp, b.ci, b.v, NULL), 0);
+    double(*x1)[3] = malloc(b.n * sizeof *x1), (*x2)[3] = malloc(b.n * sizeof *x2);
+    assert_non_null(x1);
+    assert_non_null(x2);
+    for (uint32_t i = 0; i < b.n; i++)
+        for (int c = 0; c < 3; c++)
+            x1[i][c] = x2[i][c] = geo_rand_unit(&seed) - 0.5;
+    assert_int_equal(geo_spchol_solve3(fresh, x1), 0);
+    assert_int_equal(geo_spchol_solve3(re, x2), 0);
+    assert_memory_equal(x1, x2, b.n * sizeof *x1);
+    /* another pattern: refused, the factor still the one of b */
+    csr c;
+    grid_laplacian(&c, 13, 11, 0.5, true);
+    csr_pack(&c);
+    assert_int_equal(geo_spchol_refactor(re, c.n, c.rp, c.ci, c.v, NULL),
+                     -EINVAL);
+    for (uint32_t i = 0; i < b.n; i++)
+        for (int c2 = 0; c2 < 3; c2++)
+            x2[i][c2] = x1[i][c2];
+    assert_int_equal(geo_spchol_solve3(fresh, x1), 0);
+    assert_int_equal(geo_spchol_solve3(re, x2), 0);
+    assert_memory_equal(x1, x2, b.n * sizeof *x1);
+    /* not positive definite */
+    for (uint32_t i = 0; i < b.n; i++)
+        for (uint32_t q = b.rp[i]; q < b.rp[i + 1]; q++)
+            if (b.ci[q] == i && i == b.n / 2)
+                b.v[q] = -1;
+    assert_int_equal(geo_spchol_refactor(re, b.n, b.rp, b.ci, b.v, NULL),
+                     -EDOM);
+    geo_spchol_free(fresh);
+    geo_spchol_free(re);
+    free(x1), free(x2);
+    csr_free(&a), csr_free(&b), csr_free(&c);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -198,6 +260,7 @@ int main(void)
         cmocka_unit_test(test_grid_bilaplacian_is_solved_with_little_fill),
         cmocka_unit_test(test_disconnected_and_tiny_systems_are_solved),
         cmocka_unit_test(test_bad_input_and_limits_are_reported),
+        cmocka_unit_test(test_refactor_reuses_the_analysis),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
