@@ -5,7 +5,8 @@
  * another. The state is purely combinatorial: a vertex is a triple of
  * plane indices, a face is the cycle of its vertices with, for each edge,
  * the face across it (its label). Clipping by plane l decides the side of
- * every vertex exactly (geo_plane_meet_sign), keeps the vertices on the
+ * every vertex exactly (geo_plane_meet_sign, through the vertex's
+ * prepared cofactors: geo_meet_side), keeps the vertices on the
  * inner side or on l, creates one vertex (f, g, l) on each edge between
  * faces f and g whose ends lie strictly on opposite sides, and builds l's
  * face from the edges on l of the faces that survive. Invariant after
@@ -36,6 +37,7 @@ typedef struct hs {
     uint32_t np;
     hs_face *face;          /* np faces, indexed by plane */
     uint32_t (*vert)[3];    /* vertex id → its three planes */
+    geo_meet *meet;         /* vertex id → its point, for the sides */
     uint32_t nv, cap_v;
     int8_t *sign;           /* per vertex: side of the current plane */
     uint32_t *stamp;        /* per vertex: the round sign was set in */
@@ -93,11 +95,16 @@ static int add_vertex(hs *h, uint32_t a, uint32_t b, uint32_t c,
         if (!ch)
             return -ENOMEM;
         h->chain = ch;
+        geo_meet *mt = realloc(h->meet, (size_t)cap * sizeof *mt);
+        if (!mt)
+            return -ENOMEM;
+        h->meet = mt;
         memset(h->stamp + old, 0, (size_t)(cap - old) * sizeof *h->stamp);
         h->cap_v = cap;
     }
     uint32_t id = h->nv++;
     h->vert[id][0] = a, h->vert[id][1] = b, h->vert[id][2] = c;
+    geo_meet_prepare(h->pl[a], h->pl[b], h->pl[c], &h->meet[id]);
     *ret = id;
     return 0;
 }
@@ -162,9 +169,7 @@ static int init_box(hs *h)
 
 static int vertex_side(const hs *h, uint32_t v, uint32_t l)
 {
-    const uint32_t *t = h->vert[v];
-    return geo_plane_meet_sign(h->pl[t[0]], h->pl[t[1]], h->pl[t[2]],
-                               h->pl[l]);
+    return geo_meet_side(&h->meet[v], h->pl[l]);
 }
 
 static uint64_t edge_key(uint32_t a, uint32_t b)
@@ -655,6 +660,7 @@ out:
     free(h.sign);
     free(h.stamp);
     free(h.chain);
+    free(h.meet);
     free(h.hkey);
     free(h.hval);
     free(h.edges);

@@ -508,3 +508,48 @@ int geo_plane_meet_sign(const double a[4], const double b[4],
     const double *rows[4] = {a, b, c, q};
     return s3 * det4_sign(rows);
 }
+
+/* The 3 × 3 determinant of rows a, b, c on columns p, q, r, and its
+ * permanent (the sum of its monomials' magnitudes). */
+static double det3_cols(const double *a, const double *b, const double *c,
+                        int p, int q, int r, double *per)
+{
+    double m0 = b[q] * c[r] - b[r] * c[q];
+    double m1 = b[p] * c[r] - b[r] * c[p];
+    double m2 = b[p] * c[q] - b[q] * c[p];
+    *per = fabs(a[p]) * (fabs(b[q] * c[r]) + fabs(b[r] * c[q])) +
+           fabs(a[q]) * (fabs(b[p] * c[r]) + fabs(b[r] * c[p])) +
+           fabs(a[r]) * (fabs(b[p] * c[q]) + fabs(b[q] * c[p]));
+    return a[p] * m0 - a[q] * m1 + a[r] * m2;
+}
+
+void geo_meet_prepare(const double a[4], const double b[4],
+                      const double c[4], geo_meet *m)
+{
+    static const double zero[3] = {0.0, 0.0, 0.0};
+    m->a = a, m->b = b, m->c = c;
+    m->s3 = geo_orient3d(zero, a, b, c);
+    /* expansion along the last row: det = Σ q[j] (−1)^(3+j) M_j, M_j
+     * the minor of a, b, c without column j */
+    m->cof[0] = -det3_cols(a, b, c, 1, 2, 3, &m->per[0]);
+    m->cof[1] = det3_cols(a, b, c, 0, 2, 3, &m->per[1]);
+    m->cof[2] = -det3_cols(a, b, c, 0, 1, 3, &m->per[2]);
+    m->cof[3] = det3_cols(a, b, c, 0, 1, 2, &m->per[3]);
+}
+
+int geo_meet_side(const geo_meet *m, const double q[4])
+{
+    if (m->s3 == 0)
+        return 0;
+    /* each cofactor is off by at most 6u of its permanent (five
+     * roundings a monomial), the sum of the four products by 5u of the
+     * terms, which the permanents bound: 16u of Σ |q_j| · per_j covers
+     * both and the rounding of the bound itself */
+    double det = q[0] * m->cof[0] + q[1] * m->cof[1] + q[2] * m->cof[2] +
+                 q[3] * m->cof[3];
+    double bound = fabs(q[0]) * m->per[0] + fabs(q[1]) * m->per[1] +
+                   fabs(q[2]) * m->per[2] + fabs(q[3]) * m->per[3];
+    if (fabs(det) > 16.0 * EPS * bound && fabs(det) > TINY)
+        return m->s3 * sign_of(det);
+    return geo_plane_meet_sign(m->a, m->b, m->c, q);
+}

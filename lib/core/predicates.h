@@ -173,4 +173,24 @@ int geo_normal_sign(const double p0[3], const double n[3], const double p[3]);
 int geo_plane_meet_sign(const double a[4], const double b[4],
                         const double c[4], const double q[4]);
 
+/* The point where planes a, b and c meet, prepared for many sides
+ * (geo_meet_side) against other planes: det[a; b; c; q] is linear in q,
+ * so its cofactors along q's row and their error bounds are taken once,
+ * and the sign of the normals' determinant is decided once, exactly. a, b
+ * and c must stay in place while m is used. */
+typedef struct geo_meet {
+    const double *a, *b, *c;
+    double cof[4]; /* det[a; b; c; q] = Σ q[j] · cof[j] */
+    double per[4]; /* the permanents bounding each cofactor's error */
+    int s3;        /* sign of det of the normals of a, b, c */
+} geo_meet;
+
+void geo_meet_prepare(const double a[4], const double b[4],
+                      const double c[4], geo_meet *m);
+
+/* geo_plane_meet_sign(m->a, m->b, m->c, q), always the same answer: a
+ * filtered sum of four products, the full predicate when the filter
+ * cannot decide. */
+int geo_meet_side(const geo_meet *m, const double q[4]);
+
 #endif

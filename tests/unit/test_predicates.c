@@ -6,6 +6,7 @@
 #include <math.h>
 
 #include "ctx.h"
+#include "plane.h"
 #include "predicates.h"
 
 __extension__ typedef __int128 i128;
@@ -337,6 +338,9 @@ static void test_plane_meet_sign_exact(void **state)
         int want = (delta > 0) - (delta < 0);
         assert_int_equal(geo_plane_meet_sign(pl[0], pl[1], pl[2], pl[3]),
                          want);
+        geo_meet m;
+        geo_meet_prepare(pl[0], pl[1], pl[2], &m);
+        assert_int_equal(geo_meet_side(&m, pl[3]), want);
         assert_int_equal(geo_plane_meet_sign(pl[2], pl[0], pl[1], pl[3]),
                          want);
         assert_int_equal(geo_plane_meet_sign(pl[1], pl[0], pl[2], pl[3]),
@@ -357,6 +361,48 @@ static void test_plane_meet_sign_exact(void **state)
     assert_int_equal(geo_plane_meet_sign(a, b, c, q), 0);
 }
 
+/* geo_meet_side answers as geo_plane_meet_sign does: on random planes
+ * of unit-ish normals and millimetre offsets, with a fourth plane far
+ * from the meet, through it as nearly as doubles allow (its offset from
+ * the rounded meet point: the sign is then a matter of the last bits),
+ * and through it exactly (a sum of two of the three planes). */
+static void test_meet_side_matches_plane_meet_sign(void **state)
+{
+    (void)state;
+    uint64_t rng = 5;
+    static const double zero[3] = {0, 0, 0};
+    int near_zero = 0;
+    for (int round = 0; round < 100000; round++) {
+        double pl[3][4], q[4];
+        for (int i = 0; i < 3; i++) {
+            for (int k = 0; k < 4; k++)
+                pl[i][k] = (geo_rand_unit(&rng) - 0.5) * (k == 3 ? 20 : 2);
+        }
+        if (geo_orient3d(zero, pl[0], pl[1], pl[2]) == 0)
+            continue;
+        geo_meet m;
+        geo_meet_prepare(pl[0], pl[1], pl[2], &m);
+        for (int k = 0; k < 3; k++)
+            q[k] = geo_rand_unit(&rng) - 0.5;
+        int kind = round % 3;
+        if (kind == 0) {
+            q[3] = (geo_rand_unit(&rng) - 0.5) * 20;
+        } else if (kind == 1) {
+            double x[3];
+            if (!geo_plane_intersect3(pl[0], pl[1], pl[2], x))
+                continue;
+            q[3] = -(q[0] * x[0] + q[1] * x[1] + q[2] * x[2]);
+        } else {
+            for (int k = 0; k < 4; k++)
+                q[k] = pl[0][k] + pl[2][k];
+        }
+        int want = geo_plane_meet_sign(pl[0], pl[1], pl[2], q);
+        assert_int_equal(geo_meet_side(&m, q), want);
+        near_zero += kind > 0 && want == 0;
+    }
+    assert_true(near_zero > 1000); /* the exact zeros were reached */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -370,6 +416,7 @@ int main(void)
         cmocka_unit_test(test_orient2d_proj_and_normal_sign_exact),
         cmocka_unit_test(test_orient2d_line_matches_orient2d_proj),
         cmocka_unit_test(test_plane_meet_sign_exact),
+        cmocka_unit_test(test_meet_side_matches_plane_meet_sign),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
