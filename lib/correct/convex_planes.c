@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "plane.h"
+#include "select.h"
 #include "topo.h"
 #include "uf.h"
 #include "vec.h"
@@ -409,12 +410,6 @@ static int cmp_seg_group(const void *x, const void *y)
     return (s->a > t->a) - (s->a < t->a);
 }
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
 static int cmp_u64(const void *a, const void *b)
 {
     uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
@@ -447,8 +442,7 @@ static void hinge_fit(const geo_poly *p, const seg *sg, uint32_t n,
             for (uint32_t i = 0; i < n; i++)
                 if (use[i])
                     tmp[k++] = fabs(res[i]);
-            qsort(tmp, k, sizeof *tmp, cmp_double);
-            *ret_scale = k ? 1.4826 * tmp[k / 2] : 0;
+            *ret_scale = k ? 1.4826 * geo_select_kth(tmp, k, k / 2) : 0;
             scale = fmax(*ret_scale, scale_floor);
         }
         uint32_t kept = 0;
@@ -752,8 +746,7 @@ int geo_convex_planes_find(const geo_poly *p, uint32_t views, double noise,
             memcpy(gpl[g], apl[g], sizeof gpl[0]);
     }
     if (nsc) {
-        qsort(scales, nsc, sizeof *scales, cmp_double);
-        ret->hinge_noise = scales[nsc / 2];
+        ret->hinge_noise = geo_select_kth(scales, nsc, nsc / 2);
     }
     free(scales);
     /* the scan contains the stone: a hinge plane with the group's own

@@ -37,6 +37,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "select.h"
 #include "spchol.h"
 #include "topo.h"
 #include "uf.h"
@@ -54,12 +55,6 @@
 /* A spanning vertex lies at most this many residual scales below the
  * highest (before the first residuals: the cluster radius). */
 #define SPAN_SCALES 6.0
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
 
 static int cmp_u64(const void *a, const void *b)
 {
@@ -437,8 +432,7 @@ int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
                 if (pair[j][e] != GEO_NONE)
                     res[nr++] = fabs(geo_vdot(mj, x[pair[j][e]]) + mj[3]);
         }
-        qsort(res, nr, sizeof *res, cmp_double);
-        scale = fmax(1.4826 * res[nr / 2], 1e-7);
+        scale = fmax(nr ? 1.4826 * geo_select_kth(res, nr, nr / 2) : 0, 1e-7);
         *ret_scale = scale;
         double dmax = 0;
         for (uint32_t j = 0; j < scan->nfacets; j++) {
