@@ -48,7 +48,8 @@ typedef struct hs {
     /* crossing vertices of the current round, by edge (open addressing) */
     uint64_t *hkey;
     uint32_t *hval;
-    uint32_t hcap;
+    uint32_t *hused; /* the slots filled this round, to empty them */
+    uint32_t hcap, nused;
     /* scratch for the new face's edges: from, to, label */
     uint32_t (*edges)[3];
     uint32_t nedges, cap_edges;
@@ -197,6 +198,7 @@ static int crossing(hs *h, uint32_t a, uint32_t b, uint32_t f, uint32_t g,
     h->stamp[*ret] = h->round;
     h->hkey[i] = key;
     h->hval[i] = *ret;
+    h->hused[h->nused++] = i;
     return 0;
 }
 
@@ -275,9 +277,19 @@ static int clip(hs *h, uint32_t l, enum geo_halfspace_status *ret_status)
         if (!v)
             return -ENOMEM;
         h->hval = v;
+        uint32_t *u = realloc(h->hused, (size_t)need * sizeof *u);
+        if (!u)
+            return -ENOMEM;
+        h->hused = u;
         h->hcap = need;
+        memset(h->hkey, 0, (size_t)h->hcap * sizeof *h->hkey);
+        h->nused = 0;
     }
-    memset(h->hkey, 0, (size_t)h->hcap * sizeof *h->hkey);
+    /* the table holds a round's few crossings: only their slots are
+     * emptied, not the whole table for every plane */
+    for (uint32_t i = 0; i < h->nused; i++)
+        h->hkey[h->hused[i]] = 0;
+    h->nused = 0;
     h->nedges = 0;
 
     hs_face tmp = {0};
@@ -663,6 +675,7 @@ out:
     free(h.meet);
     free(h.hkey);
     free(h.hval);
+    free(h.hused);
     free(h.edges);
     free(pl);
     return rc;

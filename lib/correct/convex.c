@@ -190,18 +190,17 @@ static bool reaches_beyond(const geo_poly *p, const double pl[4],
     return false;
 }
 
-/* The planes of facet f's neighbours in q and of a far box, into ring
- * (at most RING_MAX; more make the test unsure: *ret_k = 0). */
+/* The planes of facet f's neighbours in q and of a far box (q's box lo,
+ * hi padded by pad), into ring (at most RING_MAX; more make the test
+ * unsure: *ret_k = 0). */
 static void ring_of(const geo_poly *q, const geo_topo *t, uint32_t f,
+                    const double lo[3], const double hi[3], double pad,
                     uint32_t *mark, uint32_t stamp, double (*ring)[4],
                     uint32_t *ret_k)
 {
     /* a box far around q closes the region where the neighbours do not
      * (the facet's plane then bounds the model alone): its corners lie
      * far outside the scan, so such a plane is always needed */
-    double lo[3], hi[3];
-    geo_poly_bbox(q, lo, hi);
-    double pad = 10 * geo_poly_size(q);
     uint32_t k = 0;
     for (int a = 0; a < 3; a++) {
         double n[3] = {0, 0, 0};
@@ -259,11 +258,14 @@ static int drop_unneeded(const geo_poly *p, geo_convex_planes *cp,
                 area[f] = geo_poly_facet_area(g, f);
             }
             qsort_r(order, nf, sizeof *order, cmp_area_asc, area);
+            double lo[3], hi[3];
+            geo_poly_bbox(g, lo, hi);
+            double pad = 10 * geo_poly_size(g);
             for (uint32_t i = 0; i < nf; i++) {
                 uint32_t f = order[i], k;
                 if (near[f])
                     continue;
-                ring_of(g, t, f, mark, i + 1, ring, &k);
+                ring_of(g, t, f, lo, hi, pad, mark, i + 1, ring, &k);
                 if (k < 9 || reaches_beyond(p, g->planes[f],
                                             (const double(*)[4])ring, k,
                                             tol, need))
