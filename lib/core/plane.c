@@ -3,6 +3,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "vec.h"
@@ -128,6 +129,54 @@ bool geo_plane_intersect3(const double p1[4], const double p2[4],
     for (int k = 0; k < 3; k++)
         ret[k] = -(p1[3] * n23[k] + p2[3] * n31[k] + p3[3] * n12[k]) / det;
     return true;
+}
+
+int geo_plane_triples_set(geo_plane_triples *t, const double (*pl)[4],
+                          uint32_t k)
+{
+    if (k > t->cap) {
+        free(t->len), free(t->cr);
+        t->len = malloc((size_t)k * sizeof *t->len);
+        t->cr = malloc((size_t)k * k * sizeof *t->cr);
+        t->cap = t->len && t->cr ? k : 0;
+        if (!t->cap) {
+            free(t->len), free(t->cr);
+            t->len = NULL, t->cr = NULL, t->k = 0;
+            return -ENOMEM;
+        }
+    }
+    t->pl = pl;
+    t->k = k;
+    for (uint32_t a = 0; a < k; a++) {
+        t->len[a] = geo_vlen(pl[a]);
+        for (uint32_t b = a + 1; b < k; b++)
+            geo_vcross(pl[a], pl[b], t->cr[(size_t)a * k + b]);
+    }
+    return 0;
+}
+
+bool geo_plane_triples_meet(const geo_plane_triples *t, uint32_t a,
+                            uint32_t b, uint32_t c, double ret[3])
+{
+    /* geo_plane_intersect3(p1, p2, p3) with p1, p2, p3 = a, b, c */
+    const double *p1 = t->pl[a], *p2 = t->pl[b], *p3 = t->pl[c];
+    const double *n23 = t->cr[(size_t)b * t->k + c];
+    const double *n12 = t->cr[(size_t)a * t->k + b];
+    const double *n13 = t->cr[(size_t)a * t->k + c];
+    double n31[3] = {-n13[0], -n13[1], -n13[2]};
+    double det = geo_vdot(p1, n23);
+    double scale = t->len[a] * t->len[b] * t->len[c];
+    if (!(fabs(det) > 1e-12 * scale))
+        return false;
+    for (int k = 0; k < 3; k++)
+        ret[k] = -(p1[3] * n23[k] + p2[3] * n31[k] + p3[3] * n12[k]) / det;
+    return true;
+}
+
+void geo_plane_triples_free(geo_plane_triples *t)
+{
+    free(t->len), free(t->cr);
+    memset(t, 0, sizeof *t);
 }
 
 bool geo_spd3_solve(double m[3][3], const double b[3], double x[3])

@@ -30,6 +30,31 @@ int geo_plane_from_point_normal(const double p[3], const double n[3],
 bool geo_plane_intersect3(const double p1[4], const double p2[4],
                           const double p3[4], double ret[3]);
 
+/* The meets of many triples of k planes (the vertices of their
+ * arrangement, searched by the convex correction): each pair's cross
+ * product and each plane's length taken once, so a meet costs a
+ * determinant and a solve. geo_plane_triples_meet(t, a, b, c) gives
+ * geo_plane_intersect3(pl[a], pl[b], pl[c]) bit for bit (the same
+ * operations; cross(c, a) is −cross(a, c) exactly). The planes must
+ * stay in place while t is used; t's arrays are reused by the next
+ * geo_plane_triples_set. */
+typedef struct geo_plane_triples {
+    const double (*pl)[4];
+    uint32_t k, cap;
+    double *len;     /* |normal| of each plane */
+    double (*cr)[3]; /* cross(pl[a], pl[b]) at a·k + b, a < b */
+} geo_plane_triples;
+
+/* 0, or -ENOMEM (t then holds no planes). */
+int geo_plane_triples_set(geo_plane_triples *t, const double (*pl)[4],
+                          uint32_t k);
+
+/* For a < b < c < k: as geo_plane_intersect3 of the three planes. */
+bool geo_plane_triples_meet(const geo_plane_triples *t, uint32_t a,
+                            uint32_t b, uint32_t c, double ret[3]);
+
+void geo_plane_triples_free(geo_plane_triples *t);
+
 /* Eigen-decomposition of the symmetric 3×3 matrix m (row-major, only the
  * upper triangle read, m not modified) by cyclic Jacobi rotations: ret_values ascending,
  * ret_vectors[k] the unit eigenvector of ret_values[k]. */

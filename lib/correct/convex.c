@@ -147,32 +147,19 @@ static int remove_marked(geo_convex_planes *cp)
  * never no. ring: the neighbours' planes, k of them. */
 static bool reaches_beyond(const geo_poly *p, const double pl[4],
                            const double (*ring)[4], uint32_t k, double tol,
-                           double need)
+                           double need, geo_plane_triples *tr, int *err)
 {
-    /* geo_plane_intersect3 of every triple, its cross products and
-     * lengths taken once per pair and plane (the same operations, so the
-     * same bits: cross(c, a) is −cross(a, c) exactly) */
-    double len[RING_MAX], cr[RING_MAX][RING_MAX][3];
-    for (uint32_t a = 0; a < k; a++) {
-        len[a] = geo_vlen(ring[a]);
-        for (uint32_t b = a + 1; b < k; b++)
-            geo_vcross(ring[a], ring[b], cr[a][b]);
+    if (geo_plane_triples_set(tr, ring, k) < 0) {
+        *err = -ENOMEM;
+        return true;
     }
     uint32_t first = 0; /* the ring plane that last cut a meet off */
     for (uint32_t a = 0; a < k; a++)
         for (uint32_t b = a + 1; b < k; b++)
             for (uint32_t c = b + 1; c < k; c++) {
-                const double *n23 = cr[b][c], *n12 = cr[a][b];
-                double n31[3] = {-cr[a][c][0], -cr[a][c][1], -cr[a][c][2]};
-                double det = geo_vdot(ring[a], n23);
-                double scale = len[a] * len[b] * len[c];
-                if (!(fabs(det) > 1e-12 * scale))
-                    continue;
                 double x[3];
-                for (int i = 0; i < 3; i++)
-                    x[i] = -(ring[a][3] * n23[i] + ring[b][3] * n31[i] +
-                             ring[c][3] * n12[i]) / det;
-                if (geo_plane_eval(pl, x) <= 0)
+                if (!geo_plane_triples_meet(tr, a, b, c, x) ||
+                    geo_plane_eval(pl, x) <= 0)
                     continue;
                 /* the planes in turn from the last one that cut: the
                  * same answer, found sooner */
@@ -240,6 +227,7 @@ static int drop_unneeded(const geo_poly *p, geo_convex_planes *cp,
                          geo_err *err)
 {
     int r = 0;
+    geo_plane_triples tr = {0};
     for (int round = 0; round < UNNEEDED_ROUNDS; round++) {
         geo_poly *g = *q;
         uint32_t nf = g->nfacets, ngone = 0;
@@ -266,10 +254,16 @@ static int drop_unneeded(const geo_poly *p, geo_convex_planes *cp,
                 if (near[f])
                     continue;
                 ring_of(g, t, f, lo, hi, pad, mark, i + 1, ring, &k);
+                int terr = 0;
                 if (k < 9 || reaches_beyond(p, g->planes[f],
                                             (const double(*)[4])ring, k,
-                                            tol, need))
+                                            tol, need, &tr, &terr)) {
+                    if (terr < 0) {
+                        r = geo_err_set(err, terr, "out of memory");
+                        break;
+                    }
                     continue;
+                }
                 cp->planes[(*src)[f]][3] = NAN;
                 ngone++;
                 for (uint32_t c = g->fstart[f]; c < g->fstart[f + 1]; c++) {
@@ -293,6 +287,7 @@ static int drop_unneeded(const geo_poly *p, geo_convex_planes *cp,
         if (r != 0)
             break;
     }
+    geo_plane_triples_free(&tr);
     return r;
 }
 

@@ -491,14 +491,14 @@ static void hinge_fit(const geo_poly *p, const seg *sg, uint32_t n,
  * The caller closes the polytope with a far box, so a region beyond pl
  * the neighbours leave open reaches the box and counts as deep. */
 static double cut_depth(const double pl[4], const double (*nb)[4], uint32_t k,
-                        double tol)
+                        double tol, const geo_plane_triples *tr)
 {
     double best = -INFINITY;
     for (uint32_t i = 0; i < k; i++)
         for (uint32_t j = i + 1; j < k; j++)
             for (uint32_t l = j + 1; l < k; l++) {
                 double x[3];
-                if (!geo_plane_intersect3(nb[i], nb[j], nb[l], x))
+                if (!geo_plane_triples_meet(tr, i, j, l, x))
                     continue;
                 double d = geo_plane_eval(pl, x);
                 if (d <= best)
@@ -576,6 +576,7 @@ static int support(const geo_convex_planes *r, const double (*gpl)[4],
     uint32_t cap = 64, k;
     double (*nb)[4] = malloc(cap * sizeof *nb);
     uint32_t *ids = malloc(cap * sizeof *ids);
+    geo_plane_triples tr = {0};
     if (!order || !nb || !ids) {
         free(order), free(nb), free(ids);
         return -ENOMEM;
@@ -615,17 +616,24 @@ static int support(const geo_convex_planes *r, const double (*gpl)[4],
             double (*nb2)[4] = realloc(nb, (k + 6) * sizeof *nb);
             if (!nb2) {
                 free(order), free(nb), free(ids);
+                geo_plane_triples_free(&tr);
                 return -ENOMEM;
             }
             nb = nb2;
             cap = k + 6;
         }
         memcpy(nb[k], box, 6 * sizeof nb[0]);
-        if (cut_depth(gpl[g], (const double(*)[4])nb, k + 6, tol) <=
+        if (geo_plane_triples_set(&tr, (const double(*)[4])nb, k + 6) < 0) {
+            free(order), free(nb), free(ids);
+            geo_plane_triples_free(&tr);
+            return -ENOMEM;
+        }
+        if (cut_depth(gpl[g], (const double(*)[4])nb, k + 6, tol, &tr) <=
             cut_min + roof)
             drop[g] = 1;
     }
     free(order), free(nb), free(ids);
+    geo_plane_triples_free(&tr);
     return 0;
 }
 

@@ -314,10 +314,44 @@ static void test_lean_topology_is_the_same(void **state)
     }
 }
 
+/* geo_plane_triples_meet answers as geo_plane_intersect3, bit for bit,
+ * on random planes (normals of any length), parallel ones and repeated
+ * sets of another size (the arrays reused). */
+static void test_plane_triples_meet_as_intersect3(void **state)
+{
+    (void)state;
+    uint64_t rng = 23;
+    geo_plane_triples t = {0};
+    double pl[40][4];
+    for (int round = 0; round < 60; round++) {
+        uint32_t k = 3 + (uint32_t)(geo_rand_next(&rng) % 38);
+        for (uint32_t i = 0; i < k; i++)
+            for (int c = 0; c < 4; c++)
+                pl[i][c] = (geo_rand_unit(&rng) - 0.5) * (c == 3 ? 10 : 3);
+        /* a parallel pair and a repeated plane */
+        for (int c = 0; c < 4; c++)
+            pl[1][c] = pl[0][c] * (c == 3 ? 1.5 : 2.0), pl[2][c] = pl[0][c];
+        assert_int_equal(geo_plane_triples_set(&t, (const double(*)[4])pl, k),
+                         0);
+        for (uint32_t a = 0; a < k; a++)
+            for (uint32_t b = a + 1; b < k; b++)
+                for (uint32_t c = b + 1; c < k; c++) {
+                    double x[3] = {7, 7, 7}, y[3] = {7, 7, 7};
+                    bool u = geo_plane_intersect3(pl[a], pl[b], pl[c], x);
+                    bool v = geo_plane_triples_meet(&t, a, b, c, y);
+                    assert_int_equal(u, v);
+                    for (int i = 0; i < 3; i++)
+                        assert_true(x[i] == y[i]);
+                }
+    }
+    geo_plane_triples_free(&t);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_box_measures),
+        cmocka_unit_test(test_plane_triples_meet_as_intersect3),
         cmocka_unit_test(test_notch_cube_volume),
         cmocka_unit_test(test_from_arrays_rejects_bad_index_naming_place),
         cmocka_unit_test(test_topo_box_is_closed_manifold),
