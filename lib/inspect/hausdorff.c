@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "edgemap.h"
 #include "surface.h"
 #include "vec.h"
 
@@ -32,7 +33,12 @@ static int directed(const geo_poly *a, const geo_poly *b, const geo_ctx *ctx,
     double worst = 0;
     uint32_t hint = UINT32_MAX;
     uint8_t *seen = calloc((size_t)a->nverts + 1, 1);
-    if (!seen) {
+    /* an edge of two facets is sampled once: the same midpoint queried
+     * again cannot raise the maximum (the result does not depend on the
+     * order or the repeats of the samples) */
+    geo_edgemap edges = {0};
+    if (!seen || geo_edgemap_init(&edges, geo_poly_ncorners(a) / 2 + 1) < 0) {
+        free(seen);
         geo_surface_free(s);
         return geo_err_set(err, -ENOMEM, "out of memory");
     }
@@ -47,21 +53,32 @@ static int directed(const geo_poly *a, const geo_poly *b, const geo_ctx *ctx,
         double c[3] = {0, 0, 0};
         for (uint32_t i = 0; i < n; i++) {
             double m[3];
-            geo_vadd(c, a->verts[vs[i]], c);
-            geo_vadd(a->verts[vs[i]], a->verts[vs[(i + 1) % n]], m);
-            geo_vscale(m, 0.5, m);
-            if (!seen[vs[i]]) {
-                seen[vs[i]] = 1;
-                worst = above(s, a->verts[vs[i]], worst, &hint);
+            uint32_t u = vs[i], w = vs[(i + 1) % n];
+            geo_vadd(c, a->verts[u], c);
+            if (!seen[u]) {
+                seen[u] = 1;
+                worst = above(s, a->verts[u], worst, &hint);
             }
+            uint64_t key = geo_edge_ukey(u, w);
+            if (geo_edgemap_get(&edges, key) != UINT32_MAX)
+                continue;
+            if (geo_edgemap_put(&edges, key, 1) < 0) {
+                rc = geo_err_set(err, -ENOMEM, "out of memory");
+                break;
+            }
+            geo_vadd(a->verts[u], a->verts[w], m);
+            geo_vscale(m, 0.5, m);
             worst = above(s, m, worst, &hint);
         }
+        if (rc < 0)
+            break;
         if (n) {
             geo_vscale(c, 1.0 / n, c);
             worst = above(s, c, worst, &hint);
         }
     }
     free(seen);
+    geo_edgemap_destroy(&edges);
     geo_surface_free(s);
     *ret = sqrt(worst);
     return rc;
