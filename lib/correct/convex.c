@@ -696,15 +696,20 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
     if (!t)
         return -ENOMEM;
     rep->concavity = concavity(p, t);
-    geo_topo_free(t);
-    if (rep->concavity > max_dev)
+    if (rep->concavity > max_dev) {
+        geo_topo_free(t);
         return decline(rep, "not convex: a concavity %.2g mm deep (bound "
                        "%.2g mm)", rep->concavity, max_dev);
-    if (geo_ctx_canceled(ctx))
+    }
+    if (geo_ctx_canceled(ctx)) {
+        geo_topo_free(t);
         return geo_err_set(err, -ECANCELED, "correction canceled");
+    }
     geo_convex_planes cp;
     geo_err perr;
-    int r = geo_convex_planes_find(p, views, noise, fit, ctx, &cp, &perr);
+    int r = geo_convex_planes_find_topo(p, t, views, noise, fit, ctx, &cp,
+                                        &perr);
+    geo_topo_free(t);
     if (r == -EINVAL)
         return decline(rep, "not a closed manifold");
     if (r < 0)

@@ -39,6 +39,7 @@
 
 #include "ctx.h"
 #include "poly.h"
+#include "topo.h"
 
 typedef struct geo_convex_planes {
     uint32_t nplanes;     /* kept planes */
@@ -87,6 +88,13 @@ enum geo_convex_fit {
 int geo_convex_planes_find(const geo_poly *p, uint32_t views, double noise,
                            enum geo_convex_fit fit, const geo_ctx *ctx,
                            geo_convex_planes *ret, geo_err *err);
+
+/* The same with p's topology t (geo_topo_build) given, for a caller that
+ * has it already. */
+int geo_convex_planes_find_topo(const geo_poly *p, const geo_topo *t,
+                                uint32_t views, double noise,
+                                enum geo_convex_fit fit, const geo_ctx *ctx,
+                                geo_convex_planes *ret, geo_err *err);
 
 /* Adjusts planes[0..nplanes) (unit outward, in place) to every
  * silhouette plane of scan: each scan facet measures the two vertices

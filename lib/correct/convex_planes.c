@@ -645,11 +645,21 @@ int geo_convex_planes_find(const geo_poly *p, uint32_t views, double noise,
     geo_topo *t = geo_topo_build(p, err);
     if (!t)
         return -ENOMEM;
-    if (!geo_topo_is_closed_manifold(t)) {
-        geo_topo_free(t);
+    int r = geo_convex_planes_find_topo(p, t, views, noise, fit, ctx, ret,
+                                        err);
+    geo_topo_free(t);
+    return r;
+}
+
+int geo_convex_planes_find_topo(const geo_poly *p, const geo_topo *t,
+                                uint32_t views, double noise,
+                                enum geo_convex_fit fit, const geo_ctx *ctx,
+                                geo_convex_planes *ret, geo_err *err)
+{
+    memset(ret, 0, sizeof *ret);
+    if (!geo_topo_is_closed_manifold(t))
         return geo_err_set(err, -EINVAL, "the model is not a closed, "
                            "consistently oriented manifold");
-    }
     uint32_t nf = p->nfacets, nv = p->nverts, nc = geo_poly_ncorners(p);
     finder f;
     memset(&f, 0, sizeof f);
@@ -851,6 +861,5 @@ done:
     free(f.mem), free(f.vs), free(f.cand), free(order), free(sg), free(res);
     free(use), free(nstart), free(nlist), free(gpl), free(garea), free(gm);
     free(drop);
-    geo_topo_free(t);
     return r;
 }
