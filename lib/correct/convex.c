@@ -328,14 +328,28 @@ static double outside_allow(const geo_convex_planes *cp, double max_dev)
  * a scan facet's plane at a vertex of q. */
 static double reach_outside(const geo_poly *p, const geo_poly *q)
 {
-    double out = 0;
-    for (uint32_t v = 0; v < q->nverts; v++)
-        for (uint32_t f = 0; f < p->nfacets; f++) {
-            double d = geo_plane_eval(p->planes[f], q->verts[v]);
-            if (d > out)
-                out = d;
+    /* two running maxima, even and odd planes: the same largest value,
+     * without every comparison waiting on the one before */
+    double out0 = 0, out1 = 0;
+    uint32_t nf = p->nfacets;
+    for (uint32_t v = 0; v < q->nverts; v++) {
+        const double *x = q->verts[v];
+        uint32_t f = 0;
+        for (; f + 1 < nf; f += 2) {
+            double d0 = geo_plane_eval(p->planes[f], x);
+            double d1 = geo_plane_eval(p->planes[f + 1], x);
+            if (d0 > out0)
+                out0 = d0;
+            if (d1 > out1)
+                out1 = d1;
         }
-    return out;
+        if (f < nf) {
+            double d = geo_plane_eval(p->planes[f], x);
+            if (d > out0)
+                out0 = d;
+        }
+    }
+    return out1 > out0 ? out1 : out0;
 }
 
 /* Where the result q reaches outside the scan p beyond outside_allow,
@@ -464,20 +478,31 @@ static int check_result(const geo_poly *p, const geo_poly *q,
         for (uint32_t i = 0; i < n; i++)
             own[fv[i]] = fmin(own[fv[i]], a);
     }
-    double worst = 0, worst_allow = 0;
+    double *ag = malloc(((size_t)q->nfacets + 1) * sizeof *ag);
+    if (!ag) {
+        free(own);
+        return -ENOMEM;
+    }
+    for (uint32_t g = 0; g < q->nfacets; g++)
+        ag[g] = cp->allow[src[g]];
+    double worst = 0, worst_allow = 0, margin = 0;
     for (uint32_t v = 0; v < p->nverts; v++) {
-        if (own[v] == INFINITY)
+        double ov = own[v];
+        if (ov == INFINITY)
             continue;
+        const double *x = p->verts[v];
         for (uint32_t g = 0; g < q->nfacets; g++) {
-            double e = geo_plane_eval(q->planes[g], p->verts[v]);
-            double a = cp->allow[src[g]] > own[v] ? cp->allow[src[g]] : own[v];
-            if (e - ROOF_FACTOR * a > worst - worst_allow) {
+            double e = geo_plane_eval(q->planes[g], x);
+            double a = ag[g] > ov ? ag[g] : ov;
+            if (e - ROOF_FACTOR * a > margin) {
                 worst = e;
                 worst_allow = ROOF_FACTOR * a;
+                margin = worst - worst_allow;
             }
         }
     }
     free(own);
+    free(ag);
     if (worst > worst_allow)
         return decline(rep, "the scan lies %.2g mm outside the result "
                        "(bound %.2g mm)", worst, worst_allow);
