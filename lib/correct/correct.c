@@ -14,34 +14,6 @@
 #include "topo.h"
 #include "vec.h"
 
-/* Of the input's statistics, what the correction decides on: closed,
- * manifold, orientation (geo_inspect's own steps); the rest zero. */
-static int input_topology(const geo_poly *p, geo_stats *ret, geo_err *err)
-{
-    memset(ret, 0, sizeof *ret);
-    int rc;
-    geo_topo *t = geo_topo_build_lean(p, &rc, err);
-    if (!t)
-        return rc;
-    ret->vertices = p->nverts;
-    ret->facets = p->nfacets;
-    ret->edges = t->nedges;
-    ret->boundary_edges = t->nboundary_edges;
-    ret->nonmanifold_edges = t->nnonmanifold_edges;
-    ret->nonmanifold_vertices = t->nnonmanifold_vertices;
-    ret->closed = t->nboundary_edges == 0 && t->nnonmanifold_edges == 0;
-    geo_orient_report orep;
-    rc = geo_orient_analyze(p, t, NULL, &orep, err);
-    geo_topo_free(t);
-    if (rc < 0)
-        return rc;
-    ret->orientation = orep.orientation;
-    ret->inconsistent_facets = orep.ninconsistent;
-    ret->shells = orep.nshells;
-    ret->orientable = orep.orientable;
-    return 0;
-}
-
 void geo_correct_opts_default(geo_correct_opts *o)
 {
     geo_merge_opts_default(&o->merge);
@@ -131,7 +103,7 @@ int geo_correct(geo_poly *p, const geo_correct_opts *opts,
     rep->facets_before = p->nfacets;
     rep->volume_before = geo_poly_volume(p);
     if ((r = o.input_stats ? geo_inspect(p, NULL, ctx, &rep->before, err)
-                           : input_topology(p, &rep->before, err)) < 0)
+                           : geo_inspect_topology(p, &rep->before, err)) < 0)
         goto done;
     if (p->nfacets == 0) {
         r = geo_err_set(err, -EINVAL, "the model has no facets: nothing to "

@@ -308,6 +308,43 @@ static int sub_report(void *user, double fraction)
     return geo_ctx_progress(sp->outer, sp->lo + (1.0 - sp->lo) * fraction);
 }
 
+/* The counts of p and of its topology t, and its orientation. 0, or
+ * geo_orient_analyze's error. */
+static int topology_stats(const geo_poly *p, const geo_topo *t,
+                          geo_stats *ret, geo_err *err)
+{
+    ret->vertices = p->nverts;
+    ret->facets = p->nfacets;
+    ret->edges = t->nedges;
+    ret->boundary_edges = t->nboundary_edges;
+    ret->nonmanifold_edges = t->nnonmanifold_edges;
+    ret->nonmanifold_vertices = t->nnonmanifold_vertices;
+    ret->closed = t->nboundary_edges == 0 && t->nnonmanifold_edges == 0;
+    geo_orient_report orep;
+    int rc = geo_orient_analyze(p, t, NULL, &orep, err);
+    if (rc < 0)
+        return rc;
+    ret->orientation = orep.orientation;
+    ret->inconsistent_facets = orep.ninconsistent;
+    ret->shells = orep.nshells;
+    ret->orientable = orep.orientable;
+    return 0;
+}
+
+int geo_inspect_topology(const geo_poly *p, geo_stats *ret, geo_err *err)
+{
+    memset(ret, 0, sizeof *ret);
+    int rc;
+    geo_topo *t = geo_topo_build_lean(p, &rc, err);
+    if (!t)
+        return rc;
+    rc = topology_stats(p, t, ret, err);
+    geo_topo_free(t);
+    if (rc < 0)
+        memset(ret, 0, sizeof *ret);
+    return rc;
+}
+
 int geo_inspect(const geo_poly *p, const geo_inspect_opts *opts,
                 const geo_ctx *ctx, geo_stats *ret, geo_err *err)
 {
@@ -322,27 +359,14 @@ int geo_inspect(const geo_poly *p, const geo_inspect_opts *opts,
     if (!t)
         return rc;
 
-    ret->vertices = p->nverts;
-    ret->facets = p->nfacets;
-    ret->edges = t->nedges;
-    ret->boundary_edges = t->nboundary_edges;
-    ret->nonmanifold_edges = t->nnonmanifold_edges;
-    ret->nonmanifold_vertices = t->nnonmanifold_vertices;
-    ret->closed = t->nboundary_edges == 0 && t->nnonmanifold_edges == 0;
+    if ((rc = topology_stats(p, t, ret, err)) < 0)
+        goto fail;
     uint32_t *lstart = NULL, *lcorners = NULL, nloops = 0;
     rc = geo_topo_boundary_loops(p, t, &lstart, &lcorners, &nloops);
     free(lstart), free(lcorners);
     if (rc < 0)
         goto oom;
     ret->holes = nloops;
-
-    geo_orient_report orep;
-    if ((rc = geo_orient_analyze(p, t, NULL, &orep, err)) < 0)
-        goto fail;
-    ret->orientation = orep.orientation;
-    ret->inconsistent_facets = orep.ninconsistent;
-    ret->shells = orep.nshells;
-    ret->orientable = orep.orientable;
 
     ret->volume = geo_poly_volume(p);
     ret->max_nonplanarity = geo_poly_max_nonplanarity(p);

@@ -504,11 +504,45 @@ static void test_json_has_every_key(void **state)
     geo_poly_free(p);
 }
 
+/* geo_inspect_topology gives geo_inspect's counts, topology and
+ * orientation (and nothing else) on closed, inverted and open models. */
+static void test_topology_only_matches_inspect(void **state)
+{
+    (void)state;
+    static const char *const names[] = {
+        "notch-cube.json", "notch-cube.flipped.json", "brilliant.holes.json",
+        "brilliant.scan-k100.json", "l-prism.json"};
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
+        geo_poly *p = load(names[i]);
+        geo_stats full = inspect(p, NULL), top;
+        geo_err err = {{0}};
+        assert_int_equal(geo_inspect_topology(p, &top, &err), 0);
+        assert_int_equal(top.vertices, full.vertices);
+        assert_int_equal(top.facets, full.facets);
+        assert_int_equal(top.edges, full.edges);
+        assert_int_equal(top.boundary_edges, full.boundary_edges);
+        assert_int_equal(top.nonmanifold_edges, full.nonmanifold_edges);
+        assert_int_equal(top.nonmanifold_vertices, full.nonmanifold_vertices);
+        assert_int_equal(top.closed, full.closed);
+        assert_int_equal(top.orientation, full.orientation);
+        assert_int_equal(top.inconsistent_facets, full.inconsistent_facets);
+        assert_int_equal(top.shells, full.shells);
+        assert_int_equal(top.orientable, full.orientable);
+        /* the rest is not computed */
+        assert_int_equal(top.selfint.count, 0);
+        assert_false(top.valid);
+        geo_stats_clear(&top);
+        geo_stats_clear(&full);
+        geo_poly_free(p);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_valid_sample_models),
         cmocka_unit_test(test_broken_sample_models),
+        cmocka_unit_test(test_topology_only_matches_inspect),
         cmocka_unit_test(test_box_measures_and_histogram),
         cmocka_unit_test(test_short_edge_clusters_follow_radius),
         cmocka_unit_test(test_pyramid_degrees),
