@@ -391,8 +391,10 @@ typedef struct session {
     uint32_t nin;
 } session;
 
+/* Opens a session on a copy of p; world: with the index of its facets
+ * that merges are checked against (geo_mw_world_build). */
 static int session_open(session *s, const geo_poly *p, const geo_merge_opts *o,
-                        geo_merge_report *rep, geo_err *err)
+                        bool world, geo_merge_report *rep, geo_err *err)
 {
     memset(s, 0, sizeof *s);
     int r;
@@ -420,7 +422,7 @@ static int session_open(session *s, const geo_poly *p, const geo_merge_opts *o,
     rep->vertices_before = p->nverts;
     rep->facets_before = p->nfacets;
     rep->volume_before = geo_poly_volume(p);
-    if ((r = geo_mw_world_build(s->w, err)) < 0) {
+    if (world && (r = geo_mw_world_build(s->w, err)) < 0) {
         geo_mw_free(s->w);
         geo_edit_free(s->e);
         free(s->in_verts);
@@ -490,7 +492,7 @@ static int session_end(session *s, int r, geo_poly *p, geo_merge_report *rep,
  * nothing is left open and *rep holds nothing. */
 static int session_begin(session *s, const geo_poly *p,
                          const geo_merge_opts *opts, bool automatic,
-                         geo_merge_opts *o, geo_merge_report *rep,
+                         bool world, geo_merge_opts *o, geo_merge_report *rep,
                          geo_group_crit *c, geo_err *err)
 {
     if (opts)
@@ -504,7 +506,7 @@ static int session_begin(session *s, const geo_poly *p,
          isnan(o->noise)))
         return geo_err_set(err, -EINVAL, "max_angle_deg must be in (0, 90) "
                            "and the deviations non-negative");
-    int r = session_open(s, p, o, rep, err);
+    int r = session_open(s, p, o, world, rep, err);
     if (r < 0 || !automatic) {
         if (r < 0)
             geo_merge_report_clear(rep);
@@ -536,7 +538,7 @@ int geo_merge_groups(geo_poly *p, uint32_t ngroups, const uint32_t *gstart,
     geo_merge_opts o;
     geo_merge_report local = {0}, *rep = report ? report : &local;
     session s;
-    int r = session_begin(&s, p, opts, false, &o, rep, NULL, err);
+    int r = session_begin(&s, p, opts, false, true, &o, rep, NULL, err);
     if (r < 0)
         return r;
     for (uint32_t g = 0; g < ngroups && r == 0; g++) {
@@ -589,7 +591,8 @@ int geo_merge_surface_noise(const geo_poly *p, const geo_merge_opts *opts,
     geo_merge_report rep;
     session s;
     geo_group_crit c;
-    int r = session_begin(&s, p, opts, true, &o, &rep, &c, err);
+    /* the groups only: no merge, so no index of the facets to check one */
+    int r = session_begin(&s, p, opts, true, false, &o, &rep, &c, err);
     if (r < 0)
         return r;
     r = geo_mw_surface_noise(s.w, &c, ctx, ret);
@@ -608,7 +611,7 @@ int geo_merge_auto(geo_poly *p, const geo_merge_opts *opts,
     geo_merge_report local = {0}, *rep = report ? report : &local;
     session s;
     geo_group_crit c;
-    int r = session_begin(&s, p, opts, true, &o, rep, &c, err);
+    int r = session_begin(&s, p, opts, true, true, &o, rep, &c, err);
     if (r < 0)
         return r;
     if (o.noise > 0)
