@@ -1,5 +1,5 @@
-/* spchol.c — sparse Cholesky with a nested-dissection ordering (see
- * spchol.h).
+/* spchol.c — sparse Cholesky with a nested-dissection or a
+ * minimum-degree ordering (see spchol.h).
  *
  * Invariants: perm is a permutation of 0 … n−1 (perm[k] is the unknown
  * eliminated k-th); column j of L holds its diagonal first, then its
@@ -195,6 +195,156 @@ out:
     return rc;
 }
 
+/* ---- minimum degree ---- */
+
+/* The elimination graph is kept as it is: each unknown's neighbours not
+ * yet eliminated, a sorted array. Eliminating p joins its neighbours
+ * into a clique; the next is one of least degree (the bucket lists give
+ * it in O(1); ties go to the unknown whose degree changed last). The
+ * work is about the entries of L times the degrees, so the count of
+ * entries is checked against max_nnz as it goes. */
+typedef struct md_work {
+    uint32_t **adj, *len, *cap;
+    uint32_t *head, *next, *prev, *deg;
+    uint32_t *buf;
+} md_work;
+
+static void md_unlink(md_work *M, uint32_t v)
+{
+    if (M->prev[v] != NONE)
+        M->next[M->prev[v]] = M->next[v];
+    else
+        M->head[M->deg[v]] = M->next[v];
+    if (M->next[v] != NONE)
+        M->prev[M->next[v]] = M->prev[v];
+}
+
+static void md_link(md_work *M, uint32_t v)
+{
+    uint32_t d = M->deg[v];
+    M->prev[v] = NONE;
+    M->next[v] = M->head[d];
+    if (M->head[d] != NONE)
+        M->prev[M->head[d]] = v;
+    M->head[d] = v;
+}
+
+static int cmp_u32(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* perm: the elimination order. 0, -ERANGE (L would exceed max_nnz
+ * entries, max_nnz > 0), -ENOMEM or -ECANCELED. */
+static int md_order(uint32_t n, const uint32_t *rp, const uint32_t *ci,
+                    uint64_t max_nnz, const geo_ctx *ctx, uint32_t *perm)
+{
+    md_work M = {0};
+    size_t sz = (size_t)n + 1;
+    M.adj = calloc(sz, sizeof *M.adj);
+    M.len = calloc(sz, sizeof *M.len);
+    M.cap = calloc(sz, sizeof *M.cap);
+    M.head = malloc(sz * sizeof *M.head);
+    M.next = malloc(sz * sizeof *M.next);
+    M.prev = malloc(sz * sizeof *M.prev);
+    M.deg = malloc(sz * sizeof *M.deg);
+    M.buf = malloc(sz * sizeof *M.buf);
+    int rc = -ENOMEM;
+    if (!M.adj || !M.len || !M.cap || !M.head || !M.next || !M.prev ||
+        !M.deg || !M.buf)
+        goto out;
+    /* the graph of A + A' (a pattern given with one triangle missing
+     * still gives a valid order), without the diagonal */
+    for (uint32_t v = 0; v < n; v++)
+        for (uint32_t q = rp[v]; q < rp[v + 1]; q++)
+            if (ci[q] != v)
+                M.cap[v]++, M.cap[ci[q]]++;
+    for (uint32_t v = 0; v < n; v++)
+        if (!(M.adj[v] = malloc(((size_t)M.cap[v] + 1) * sizeof **M.adj)))
+            goto out;
+    for (uint32_t v = 0; v < n; v++)
+        for (uint32_t q = rp[v]; q < rp[v + 1]; q++)
+            if (ci[q] != v) {
+                M.adj[v][M.len[v]++] = ci[q];
+                M.adj[ci[q]][M.len[ci[q]]++] = v;
+            }
+    for (uint32_t v = 0; v < n; v++) {
+        qsort(M.adj[v], M.len[v], sizeof **M.adj, cmp_u32);
+        uint32_t m = 0;
+        for (uint32_t i = 0; i < M.len[v]; i++)
+            if (m == 0 || M.adj[v][i] != M.adj[v][m - 1])
+                M.adj[v][m++] = M.adj[v][i];
+        M.len[v] = m;
+    }
+    for (uint32_t d = 0; d <= n; d++)
+        M.head[d] = NONE;
+    for (uint32_t v = n; v-- > 0;) {
+        M.deg[v] = M.len[v];
+        md_link(&M, v);
+    }
+    uint64_t nnz = 0;
+    uint32_t mindeg = 0;
+    for (uint32_t k = 0; k < n; k++) {
+        if ((k & 4095) == 4095 && geo_ctx_canceled(ctx)) {
+            rc = -ECANCELED;
+            goto out;
+        }
+        while (M.head[mindeg] == NONE)
+            mindeg++;
+        uint32_t p = M.head[mindeg];
+        md_unlink(&M, p);
+        perm[k] = p;
+        const uint32_t *N = M.adj[p];
+        uint32_t d = M.len[p];
+        nnz += (uint64_t)d + 1;
+        if (max_nnz && nnz > max_nnz) {
+            rc = -ERANGE;
+            goto out;
+        }
+        /* each neighbour's list becomes (its list ∪ N) \ {itself, p} */
+        for (uint32_t a = 0; a < d; a++) {
+            uint32_t u = N[a], *L = M.adj[u], lu = M.len[u];
+            uint32_t i = 0, j = 0, m = 0;
+            while (i < lu || j < d) {
+                uint32_t x = j >= d || (i < lu && L[i] < N[j]) ? L[i++]
+                             : i < lu && L[i] == N[j]         ? (j++, L[i++])
+                                                              : N[j++];
+                if (x != u && x != p)
+                    M.buf[m++] = x;
+            }
+            if (m > M.cap[u]) {
+                uint32_t c = m + m / 2 + 1;
+                if (c > n)
+                    c = n;
+                uint32_t *t = realloc(L, (size_t)c * sizeof *t);
+                if (!t)
+                    goto out;
+                M.adj[u] = t;
+                M.cap[u] = c;
+            }
+            memcpy(M.adj[u], M.buf, (size_t)m * sizeof *M.buf);
+            M.len[u] = m;
+            md_unlink(&M, u);
+            M.deg[u] = m;
+            md_link(&M, u);
+            if (m < mindeg)
+                mindeg = m;
+        }
+        free(M.adj[p]);
+        M.adj[p] = NULL;
+        M.len[p] = 0;
+    }
+    rc = 0;
+out:
+    if (M.adj)
+        for (uint32_t v = 0; v < n; v++)
+            free(M.adj[v]);
+    free(M.adj), free(M.len), free(M.cap), free(M.head), free(M.next);
+    free(M.prev), free(M.deg), free(M.buf);
+    return rc;
+}
+
 /* ---- factorisation ---- */
 
 /* Pattern of row k of L (columns < k) in s[top .. n), topologically
@@ -285,8 +435,8 @@ out:
 }
 
 int geo_spchol_factor(uint32_t n, const uint32_t *rp, const uint32_t *ci,
-                      const double *v, uint64_t max_nnz, const geo_ctx *ctx,
-                      geo_spchol **ret)
+                      const double *v, geo_spchol_order order,
+                      uint64_t max_nnz, const geo_ctx *ctx, geo_spchol **ret)
 {
     *ret = NULL;
     for (uint64_t q = 0; q < (n ? rp[n] : 0); q++)
@@ -305,9 +455,13 @@ int geo_spchol_factor(uint32_t n, const uint32_t *rp, const uint32_t *ci,
     f->Cp = malloc(((size_t)n + 2) * sizeof *f->Cp);
     f->arp = malloc(((size_t)n + 1) * sizeof *f->arp);
     f->aci = malloc(((size_t)(n ? rp[n] : 0) + 1) * sizeof *f->aci);
-    if (!f->perm || !f->Lp || !f->Cp || !f->arp || !f->aci ||
-        nd_order(n, rp, ci, f->perm) < 0)
+    if (!f->perm || !f->Lp || !f->Cp || !f->arp || !f->aci)
         goto out;
+    if ((rc = order == GEO_SPCHOL_MIN_DEGREE
+                  ? md_order(n, rp, ci, max_nnz, ctx, f->perm)
+                  : nd_order(n, rp, ci, f->perm)) < 0)
+        goto out;
+    rc = -ENOMEM;
     memcpy(f->arp, rp, ((size_t)n + 1) * sizeof *rp);
     memcpy(f->aci, ci, (size_t)(n ? rp[n] : 0) * sizeof *ci);
     for (uint32_t k = 0; k < n; k++)

@@ -526,7 +526,8 @@ int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
         r = fac ? geo_spchol_refactor(fac, np3, rp, ci, val, NULL) : -EINVAL;
         if (r == -EINVAL) {
             fac = geo_spchol_free(fac);
-            r = geo_spchol_factor(np3, rp, ci, val, 0, NULL, &fac);
+            r = geo_spchol_factor(np3, rp, ci, val, GEO_SPCHOL_MIN_DEGREE, 0,
+                                  NULL, &fac);
         }
         if (r < 0) {
             r = r == -ENOMEM ? r : -EINVAL;

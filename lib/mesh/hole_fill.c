@@ -1533,7 +1533,8 @@ static int fair_direct(geo_poly *p, const adjacency *A, uint32_t first_free,
         rp[u + 1] = nz;
     }
 #undef DEG
-    rc = geo_spchol_factor(nu, rp, ci, val, GEO_FAIR_DIRECT_MAX_NNZ, ctx, &fac);
+    rc = geo_spchol_factor(nu, rp, ci, val, GEO_SPCHOL_DISSECTION,
+                           GEO_FAIR_DIRECT_MAX_NNZ, ctx, &fac);
     if (rc < 0)
         goto out;
     fair_rhs(p, A, S, loc, nu, m, z, b);

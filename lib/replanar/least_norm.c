@@ -209,7 +209,8 @@ int geo_least_norm_step(const geo_poly *p, const uint8_t *fixed,
         s.b[r][0] = rhs;
     }
     geo_spchol *fac = NULL;
-    rc = geo_spchol_factor(s.nrows, s.rp, s.ci, s.mv, max_nnz, ctx, &fac);
+    rc = geo_spchol_factor(s.nrows, s.rp, s.ci, s.mv, GEO_SPCHOL_DISSECTION,
+                           max_nnz, ctx, &fac);
     if (rc == 0)
         rc = geo_spchol_solve3(fac, s.b);
     geo_spchol_free(fac);

@@ -142,7 +142,7 @@ static int bound_of(const geo_poly *stone, const double (*q)[3][3],
 #undef INFO
     free(info);
     info = NULL;
-    r = geo_spchol_factor(n, rp, ci, val, 0, NULL, &fac);
+    r = geo_spchol_factor(n, rp, ci, val, GEO_SPCHOL_DISSECTION, 0, NULL, &fac);
     if (r < 0)
         goto done;
     double tol = tol_deg * M_PI / 180, sum = 0;

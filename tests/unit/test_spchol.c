@@ -1,8 +1,9 @@
-/* test_spchol.c — the sparse Cholesky solver: solutions of grid
- * Laplacians and bi-Laplacians (connected, split into pieces, a single
- * unknown) meet A·x = b to rounding level, the ordering keeps the factor
- * far below dense size, and a matrix that is not positive definite, a
- * bound on the factor and a bad index are reported as errors. */
+/* test_spchol.c — the sparse Cholesky solver, in both orderings:
+ * solutions of grid Laplacians and bi-Laplacians (connected, split into
+ * pieces, a single unknown) and of a polyhedron's plane system meet
+ * A·x = b to rounding level, each ordering keeps its factor far below
+ * dense size, and a matrix that is not positive definite, a bound on the
+ * factor and a bad index are reported as errors. */
 #include "testutil.h"
 
 #include <errno.h>
@@ -96,7 +97,10 @@ static double residual(const csr *m, const double (*x)[3],
     return worst / bmax;
 }
 
-static void solve_and_check(const csr *m, double tol)
+static const geo_spchol_order orders[] = {GEO_SPCHOL_DISSECTION,
+                                          GEO_SPCHOL_MIN_DEGREE};
+
+static void solve_and_check(const csr *m, geo_spchol_order order, double tol)
 {
     uint64_t seed = 7;
     double(*b)[3] = malloc(m->n * sizeof *b);
@@ -105,7 +109,8 @@ static void solve_and_check(const csr *m, double tol)
         for (int c = 0; c < 3; c++)
             b[i][c] = x[i][c] = geo_rand_unit(&seed) - 0.5;
     geo_spchol *f = NULL;
-    assert_int_equal(geo_spchol_factor(m->n, m->rp, m->ci, m->v, 0, NULL, &f),
+    assert_int_equal(geo_spchol_factor(m->n, m->rp, m->ci, m->v, order, 0,
+                                       NULL, &f),
                      0);
     assert_non_null(f);
     assert_int_equal(geo_spchol_solve3(f, x), 0);
@@ -121,7 +126,8 @@ static void test_grid_laplacian_is_solved_to_rounding(void **state)
     csr m;
     grid_laplacian(&m, 30, 20, 1e-3, false);
     csr_pack(&m);
-    solve_and_check(&m, 1e-10);
+    for (int o = 0; o < 2; o++)
+        solve_and_check(&m, orders[o], 1e-10);
     csr_free(&m);
 }
 
@@ -142,13 +148,19 @@ static void test_grid_bilaplacian_is_solved_with_little_fill(void **state)
                 k.dense[(size_t)i * n + l.ci[q]] += l.v[p] * l.v[q];
     }
     csr_pack(&k);
-    solve_and_check(&k, 1e-6);
-    geo_spchol *f = NULL;
-    assert_int_equal(geo_spchol_factor(n, k.rp, k.ci, k.v, 0, NULL, &f), 0);
-    /* nested dissection: 72,775 entries, below the 128,000 of the
-     * natural (banded, width 2·40) order and far below dense 1.28 M */
-    assert_true(geo_spchol_nnz(f) < 100000);
-    geo_spchol_free(f);
+    for (int o = 0; o < 2; o++) {
+        solve_and_check(&k, orders[o], 1e-6);
+        geo_spchol *f = NULL;
+        assert_int_equal(
+            geo_spchol_factor(n, k.rp, k.ci, k.v, orders[o], 0, NULL, &f), 0);
+        /* nested dissection: 72,775 entries, below the 128,000 of the
+         * natural (banded, width 2·40) order and far below dense 1.28 M */
+        if (orders[o] == GEO_SPCHOL_DISSECTION)
+            assert_true(geo_spchol_nnz(f) < 100000);
+        else
+            assert_true(geo_spchol_nnz(f) < 128000);
+        geo_spchol_free(f);
+    }
     csr_free(&l), csr_free(&k);
 }
 
@@ -158,46 +170,105 @@ static void test_disconnected_and_tiny_systems_are_solved(void **state)
     csr m;
     grid_laplacian(&m, 200, 3, 0.5, true);
     csr_pack(&m);
-    solve_and_check(&m, 1e-12);
+    for (int o = 0; o < 2; o++)
+        solve_and_check(&m, orders[o], 1e-12);
     csr_free(&m);
     csr_init(&m, 1);
     add(&m, 0, 0, 4.0);
     csr_pack(&m);
-    solve_and_check(&m, 1e-15);
+    for (int o = 0; o < 2; o++)
+        solve_and_check(&m, orders[o], 1e-15);
     csr_free(&m);
 }
 
 static void test_bad_input_and_limits_are_reported(void **state)
 {
     (void)state;
-    csr m;
-    grid_laplacian(&m, 10, 10, 0, false); /* singular: constants */
-    csr_pack(&m);
-    geo_spchol *f = (geo_spchol *)&m; /* must be reset to NULL */
-    assert_int_equal(geo_spchol_factor(m.n, m.rp, m.ci, m.v, 0, NULL, &f),
-                     -EDOM);
-    assert_null(f);
-    csr_free(&m);
-    grid_laplacian(&m, 10, 10, 1, false);
-    csr_pack(&m);
-    assert_int_equal(geo_spchol_factor(m.n, m.rp, m.ci, m.v, 50, NULL, &f),
-                     -ERANGE);
-    assert_null(f);
-    m.ci[3] = m.n;
-    assert_int_equal(geo_spchol_factor(m.n, m.rp, m.ci, m.v, 0, NULL, &f),
-                     -EINVAL);
-    assert_null(f);
-    csr_free(&m);
+    for (int o = 0; o < 2; o++) {
+        csr m;
+        grid_laplacian(&m, 10, 10, 0, false); /* singular: constants */
+        csr_pack(&m);
+        geo_spchol *f = (geo_spchol *)&m; /* must be reset to NULL */
+        assert_int_equal(
+            geo_spchol_factor(m.n, m.rp, m.ci, m.v, orders[o], 0, NULL, &f),
+            -EDOM);
+        assert_null(f);
+        csr_free(&m);
+        grid_laplacian(&m, 10, 10, 1, false);
+        csr_pack(&m);
+        assert_int_equal(
+            geo_spchol_factor(m.n, m.rp, m.ci, m.v, orders[o], 50, NULL, &f),
+            -ERANGE);
+        assert_null(f);
+        m.ci[3] = m.n;
+        assert_int_equal(
+            geo_spchol_factor(m.n, m.rp, m.ci, m.v, orders[o], 0, NULL, &f),
+            -EINVAL);
+        assert_null(f);
+        csr_free(&m);
+    }
     assert_null(geo_spchol_free(NULL));
+}
+
+/* The system of a polyhedron's planes once its vertices are eliminated:
+ * three unknowns a plane (the cells of a w × h grid), every vertex (a
+ * grid corner) coupling all the planes around it, a random positive
+ * semidefinite term of rank two per vertex plus a small shift. Minimum
+ * degree keeps the 3 × 3 blocks whole and the cliques small; it must
+ * solve to rounding and give a smaller factor than nested dissection. */
+static void test_plane_system_is_ordered_by_minimum_degree(void **state)
+{
+    (void)state;
+    uint32_t w = 16, h = 14, n = 3 * w * h;
+    csr m;
+    csr_init(&m, n);
+    uint64_t seed = 11;
+    for (uint32_t i = 0; i < n; i++)
+        add(&m, i, i, 1e-3);
+    for (uint32_t y = 0; y <= h; y++)
+        for (uint32_t x = 0; x <= w; x++) {
+            uint32_t cells[4], nc = 0, idx[12];
+            for (uint32_t dy = 0; dy < 2; dy++)
+                for (uint32_t dx = 0; dx < 2; dx++)
+                    if (x + dx >= 1 && x + dx <= w && y + dy >= 1 &&
+                        y + dy <= h)
+                        cells[nc++] = (y + dy - 1) * w + (x + dx - 1);
+            uint32_t ni = 0;
+            for (uint32_t c = 0; c < nc; c++)
+                for (uint32_t k = 0; k < 3; k++)
+                    idx[ni++] = 3 * cells[c] + k;
+            for (int r = 0; r < 2; r++) {
+                double g[12];
+                for (uint32_t i = 0; i < ni; i++)
+                    g[i] = geo_rand_unit(&seed) - 0.5;
+                for (uint32_t i = 0; i < ni; i++)
+                    for (uint32_t j = 0; j <= i; j++)
+                        add(&m, idx[i], idx[j], g[i] * g[j]);
+            }
+        }
+    csr_pack(&m);
+    uint64_t nnz[2];
+    for (int o = 0; o < 2; o++) {
+        solve_and_check(&m, orders[o], 1e-9);
+        geo_spchol *f = NULL;
+        assert_int_equal(
+            geo_spchol_factor(m.n, m.rp, m.ci, m.v, orders[o], 0, NULL, &f), 0);
+        nnz[o] = geo_spchol_nnz(f);
+        geo_spchol_free(f);
+    }
+    print_message("plane system n=%u: L entries %llu (dissection), %llu "
+                  "(minimum degree)\n",
+                  n, (unsigned long long)nnz[0], (unsigned long long)nnz[1]);
+    assert_true(nnz[1] < nnz[0]);
+    csr_free(&m);
 }
 
 /* A refactored matrix of the same pattern gives the factor a fresh one
  * does, bit for bit (the same solution); a matrix of another pattern is
  * refused and the factor kept; one that is not positive definite is
  * reported. */
-static void test_refactor_reuses_the_analysis(void **state)
+static void check_refactor(geo_spchol_order order)
 {
-    (void)state;
     csr a, b;
     grid_laplacian(&a, 13, 11, 0.5, false);
     csr_pack(&a);
@@ -215,9 +286,10 @@ static void test_refactor_reuses_the_analysis(void **state)
                     b.v[q] = b.v[t];
         }
     geo_spchol *fresh = NULL, *re = NULL;
-    assert_int_equal(geo_spchol_factor(b.n, b.rp, b.ci, b.v, 0, NULL, &fresh),
+    assert_int_equal(
+        geo_spchol_factor(b.n, b.rp, b.ci, b.v, order, 0, NULL, &fresh), 0);
+    assert_int_equal(geo_spchol_factor(a.n, a.rp, a.ci, a.v, order, 0, NULL, &re),
                      0);
-    assert_int_equal(geo_spchol_factor(a.n, a.rp, a.ci, a.v, 0, NULL, &re), 0);
     assert_int_equal(geo_spchol_refactor(re, b.n, b.rp, b.ci, b.v, NULL), 0);
     double(*x1)[3] = malloc(b.n * sizeof *x1), (*x2)[3] = malloc(b.n * sizeof *x2);
     assert_non_null(x1);
@@ -253,6 +325,13 @@ static void test_refactor_reuses_the_analysis(void **state)
     csr_free(&a), csr_free(&b), csr_free(&c);
 }
 
+static void test_refactor_reuses_the_analysis(void **state)
+{
+    (void)state;
+    for (int o = 0; o < 2; o++)
+        check_refactor(orders[o]);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -260,6 +339,7 @@ int main(void)
         cmocka_unit_test(test_grid_bilaplacian_is_solved_with_little_fill),
         cmocka_unit_test(test_disconnected_and_tiny_systems_are_solved),
         cmocka_unit_test(test_bad_input_and_limits_are_reported),
+        cmocka_unit_test(test_plane_system_is_ordered_by_minimum_degree),
         cmocka_unit_test(test_refactor_reuses_the_analysis),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
