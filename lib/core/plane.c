@@ -238,3 +238,148 @@ void geo_fan_moments(const double (*verts)[3], const uint32_t *fv, uint32_t n,
         }
     }
 }
+
+/* ---- geo_planes_reach ---- */
+
+#define REACH_LEAF 4 /* points evaluated together */
+
+typedef struct reach_work {
+    const double (*planes)[4];
+    const double (*pts)[3];
+    uint32_t *idx;   /* the finite points, reordered by the splits */
+    uint32_t **cand; /* per depth: the planes that may be highest */
+    double *val;     /* the values at a node's centre */
+    double nmax, slack;
+    int axis; /* for cmp_axis */
+} reach_work;
+
+/* The largest plane value above *out at x, every plane. */
+static void reach_all(const double (*planes)[4], uint32_t nplanes,
+                      const double x[3], double *out)
+{
+    double m = *out;
+    for (uint32_t j = 0; j < nplanes; j++) {
+        double d = geo_plane_eval(planes[j], x);
+        if (d > m)
+            m = d;
+    }
+    *out = m;
+}
+
+static int cmp_axis(const void *a, const void *b, void *arg)
+{
+    const reach_work *W = arg;
+    double x = W->pts[*(const uint32_t *)a][W->axis];
+    double y = W->pts[*(const uint32_t *)b][W->axis];
+    return (x > y) - (x < y);
+}
+
+/* The points idx[lo .. hi) against the planes cand[depth − 1][0 .. nc):
+ * those that may be highest at some point of the range go on to the
+ * halves (split at the median of the longest side of their box). */
+static void reach_node(reach_work *W, uint32_t lo, uint32_t hi, int depth,
+                       uint32_t nc, double *out)
+{
+    const uint32_t *in = W->cand[depth - 1];
+    double blo[3] = {INFINITY, INFINITY, INFINITY};
+    double bhi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t i = lo; i < hi; i++)
+        for (int k = 0; k < 3; k++) {
+            blo[k] = fmin(blo[k], W->pts[W->idx[i]][k]);
+            bhi[k] = fmax(bhi[k], W->pts[W->idx[i]][k]);
+        }
+    double c[3], r = 0;
+    for (int k = 0; k < 3; k++)
+        c[k] = blo[k] + (bhi[k] - blo[k]) / 2;
+    for (uint32_t i = lo; i < hi; i++)
+        r = fmax(r, geo_vdist(W->pts[W->idx[i]], c));
+    r *= W->nmax * (1 + 1e-9);
+    double best = -INFINITY;
+    for (uint32_t q = 0; q < nc; q++) {
+        double v = geo_plane_eval(W->planes[in[q]], c);
+        W->val[q] = v;
+        if (v > best)
+            best = v;
+    }
+    /* at a point within r of c, a plane is within r of its value at c:
+     * one below best − 2r there is below the plane of best; one below −r
+     * is below 0 */
+    double t = fmax(best - 2 * r, -r) - W->slack;
+    uint32_t *kept = W->cand[depth], nk = 0;
+    for (uint32_t q = 0; q < nc; q++)
+        if (!(W->val[q] < t))
+            kept[nk++] = in[q];
+    int axis = 0;
+    for (int k = 1; k < 3; k++)
+        if (bhi[k] - blo[k] > bhi[axis] - blo[axis])
+            axis = k;
+    if (hi - lo <= REACH_LEAF || !(bhi[axis] > blo[axis])) {
+        for (uint32_t i = lo; i < hi; i++) {
+            const double *x = W->pts[W->idx[i]];
+            double m = *out;
+            for (uint32_t q = 0; q < nk; q++) {
+                double d = geo_plane_eval(W->planes[kept[q]], x);
+                if (d > m)
+                    m = d;
+            }
+            *out = m;
+        }
+        return;
+    }
+    W->axis = axis;
+    qsort_r(W->idx + lo, hi - lo, sizeof *W->idx, cmp_axis, W);
+    uint32_t mid = lo + (hi - lo) / 2;
+    reach_node(W, lo, mid, depth + 1, nk, out);
+    reach_node(W, mid, hi, depth + 1, nk, out);
+}
+
+double geo_planes_reach(const double (*planes)[4], uint32_t nplanes,
+                        const double (*pts)[3], uint32_t npts)
+{
+    double out = 0;
+    /* the halving depth, and one more for the root's input */
+    int depth = 2;
+    for (uint32_t m = npts; m > REACH_LEAF; m = m - m / 2)
+        depth++;
+    reach_work W = {planes, pts, NULL, NULL, NULL, 0, 0, 0};
+    W.idx = malloc(((size_t)npts + 1) * sizeof *W.idx);
+    W.val = malloc(((size_t)nplanes + 1) * sizeof *W.val);
+    W.cand = calloc((size_t)depth, sizeof *W.cand);
+    bool ok = W.idx && W.val && W.cand;
+    for (int d = 0; ok && d < depth; d++)
+        ok = (W.cand[d] = malloc(((size_t)nplanes + 1) * sizeof **W.cand));
+    if (!ok) {
+        for (uint32_t v = 0; v < npts; v++)
+            reach_all(planes, nplanes, pts[v], &out);
+        goto out;
+    }
+    /* the points with a coordinate not finite against every plane */
+    uint32_t nfin = 0;
+    double scale = 0;
+    for (uint32_t v = 0; v < npts; v++) {
+        const double *x = pts[v];
+        if (!(isfinite(x[0]) && isfinite(x[1]) && isfinite(x[2]))) {
+            reach_all(planes, nplanes, x, &out);
+            continue;
+        }
+        scale = fmax(scale, fabs(x[0]) + fabs(x[1]) + fabs(x[2]));
+        W.idx[nfin++] = v;
+    }
+    double dmax = 0;
+    for (uint32_t j = 0; j < nplanes; j++) {
+        const double *pl = planes[j];
+        W.nmax = fmax(W.nmax, sqrt(pl[0] * pl[0] + pl[1] * pl[1] + pl[2] * pl[2]));
+        dmax = fmax(dmax, fabs(pl[3]));
+        W.cand[0][j] = j;
+    }
+    /* far above an evaluation's rounding, at the points or a centre */
+    W.slack = 1e-12 * (W.nmax * scale + dmax + 1);
+    if (nfin > 0)
+        reach_node(&W, 0, nfin, 1, nplanes, &out);
+out:
+    if (W.cand)
+        for (int d = 0; d < depth; d++)
+            free(W.cand[d]);
+    free(W.idx), free(W.val), free(W.cand);
+    return out;
+}

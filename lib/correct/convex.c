@@ -328,28 +328,8 @@ static double outside_allow(const geo_convex_planes *cp, double max_dev)
  * a scan facet's plane at a vertex of q. */
 static double reach_outside(const geo_poly *p, const geo_poly *q)
 {
-    /* two running maxima, even and odd planes: the same largest value,
-     * without every comparison waiting on the one before */
-    double out0 = 0, out1 = 0;
-    uint32_t nf = p->nfacets;
-    for (uint32_t v = 0; v < q->nverts; v++) {
-        const double *x = q->verts[v];
-        uint32_t f = 0;
-        for (; f + 1 < nf; f += 2) {
-            double d0 = geo_plane_eval(p->planes[f], x);
-            double d1 = geo_plane_eval(p->planes[f + 1], x);
-            if (d0 > out0)
-                out0 = d0;
-            if (d1 > out1)
-                out1 = d1;
-        }
-        if (f < nf) {
-            double d = geo_plane_eval(p->planes[f], x);
-            if (d > out0)
-                out0 = d;
-        }
-    }
-    return out1 > out0 ? out1 : out0;
+    return geo_planes_reach((const double(*)[4])p->planes, p->nfacets,
+                            (const double(*)[3])q->verts, q->nverts);
 }
 
 /* Where the result q reaches outside the scan p beyond outside_allow,
