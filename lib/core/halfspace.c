@@ -297,11 +297,18 @@ static int clip(hs *h, uint32_t l, enum geo_halfspace_status *ret_status)
     for (uint32_t i = 0; i < h->nalive; i++) {
         uint32_t fi = h->alive[i];
         hs_face *f = &h->face[fi];
-        bool any_neg = false;
-        for (uint32_t k = 0; k < f->n && !any_neg; k++)
-            any_neg = h->sign[f->v[k]] < 0;
+        bool any_neg = false, all_neg = true;
+        for (uint32_t k = 0; k < f->n; k++) {
+            bool ng = h->sign[f->v[k]] < 0;
+            any_neg |= ng;
+            all_neg &= ng;
+        }
         if (!any_neg) { /* what is left of f is at most an edge */
             face_free(f);
+            continue;
+        }
+        if (all_neg) { /* l does not touch f: clip_face would copy it */
+            h->alive[kept++] = fi;
             continue;
         }
         if (clip_face(h, fi, l, &tmp) < 0) {
