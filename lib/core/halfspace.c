@@ -5,8 +5,9 @@
  * another. The state is purely combinatorial: a vertex is a triple of
  * plane indices, a face is the cycle of its vertices with, for each edge,
  * the face across it (its label). Clipping by plane l decides the side of
- * every vertex exactly (geo_plane_meet_sign, through the vertex's
- * prepared cofactors: geo_meet_side), keeps the vertices on the
+ * the vertices of the faces l reaches exactly (geo_plane_meet_sign,
+ * through the vertex's prepared cofactors: geo_meet_side; the faces are
+ * found from one vertex outside, see clip), keeps the vertices on the
  * inner side or on l, creates one vertex (f, g, l) on each edge between
  * faces f and g whose ends lie strictly on opposite sides, and builds l's
  * face from the edges on l of the faces that survive. Invariant after
@@ -24,6 +25,8 @@
 
 #include "predicates.h"
 #include "uf.h"
+
+#define HS_NONE UINT32_MAX
 
 typedef struct hs_face {
     uint32_t *v;   /* vertex ids, counter-clockwise seen from outside */
@@ -45,6 +48,10 @@ typedef struct hs {
     uint32_t round;         /* the current plane's round, from 1 */
     uint32_t *alive;        /* ids of the live faces */
     uint32_t nalive;
+    uint32_t *apos;         /* per face: its index in alive */
+    uint32_t *fmark;        /* per face: the round it was reached in */
+    uint32_t *vis;          /* the faces a round clips, in alive order */
+    double (*unit)[3];      /* per plane: its unit normal */
     /* crossing vertices of the current round, by edge (open addressing) */
     uint64_t *hkey;
     uint32_t *hval;
@@ -163,6 +170,7 @@ static int init_box(hs *h)
                 return -ENOMEM;
         }
         h->face[b + f].alive = true;
+        h->apos[b + f] = h->nalive;
         h->alive[h->nalive++] = b + f;
     }
     return 0;
@@ -239,24 +247,138 @@ static int clip_face(hs *h, uint32_t f, uint32_t l, hs_face *out)
     return 0;
 }
 
+/* Plane l's approximate value at vertex v: det[a; b; c; q] = Σ q_j cof_j
+ * vanishes for q through the point, so cof is the point in homogeneous
+ * coordinates. It only guides the walk; every side is the exact one. */
+static double approx_value(const hs *h, uint32_t v, const double *q)
+{
+    const double *c = h->meet[v].cof;
+    return (q[0] * c[0] + q[1] * c[1] + q[2] * c[2] + q[3] * c[3]) / c[3];
+}
+
+/* The corner of face f where q is highest, approximately, and its value. */
+static void highest_corner(const hs *h, uint32_t f, const double *q,
+                           uint32_t *ret_k, double *ret_val)
+{
+    const hs_face *F = &h->face[f];
+    uint32_t bk = 0;
+    double bv = -INFINITY;
+    for (uint32_t k = 0; k < F->n; k++) {
+        double v = approx_value(h, F->v[k], q);
+        if (v > bv)
+            bv = v, bk = k;
+    }
+    *ret_k = bk;
+    *ret_val = bv;
+}
+
+static void set_sign(hs *h, uint32_t v, uint32_t l)
+{
+    if (h->stamp[v] != h->round) {
+        h->stamp[v] = h->round;
+        h->sign[v] = (int8_t)vertex_side(h, v, l);
+    }
+}
+
+/* A face through a vertex strictly outside l, or NONE: from the live
+ * face whose normal is nearest l's, up the faces across the edges at the
+ * highest corner while that corner rises (a linear function on a convex
+ * polyhedron has no other local maximum). NONE sends the caller to the
+ * full search, so a walk misled by rounding costs time, never a vertex. */
+static uint32_t walk_outside(hs *h, uint32_t l)
+{
+    const double *q = h->pl[l], *u = h->unit[l];
+    uint32_t F = HS_NONE;
+    double near = -INFINITY;
+    for (uint32_t i = 0; i < h->nalive; i++) {
+        const double *w = h->unit[h->alive[i]];
+        double c = u[0] * w[0] + u[1] * w[1] + u[2] * w[2];
+        if (c > near)
+            near = c, F = h->alive[i];
+    }
+    if (F == HS_NONE)
+        return HS_NONE;
+    uint32_t bk;
+    double bv;
+    highest_corner(h, F, q, &bk, &bv);
+    for (uint32_t step = 0; step < h->nalive; step++) {
+        const hs_face *f = &h->face[F];
+        uint32_t across[2] = {f->lab[bk], f->lab[(bk + f->n - 1) % f->n]};
+        uint32_t G = HS_NONE, gk = 0;
+        double gv = bv;
+        for (int s = 0; s < 2; s++) {
+            uint32_t k;
+            double v;
+            highest_corner(h, across[s], q, &k, &v);
+            if (v > gv)
+                gv = v, gk = k, G = across[s];
+        }
+        if (G == HS_NONE)
+            break;
+        F = G, bk = gk, bv = gv;
+    }
+    uint32_t b = h->face[F].v[bk];
+    set_sign(h, b, l);
+    return h->sign[b] > 0 ? F : HS_NONE;
+}
+
 /* Clips the polyhedron by plane l. *ret_status is set to EMPTY when
- * nothing of the interior is left. */
+ * nothing of the interior is left.
+ *
+ * The faces l changes are found from one vertex outside it: the vertices
+ * strictly outside a plane span a connected part of a convex
+ * polyhedron's edge graph, and every vertex on l is next to one of them,
+ * so crossing every edge with an end not strictly inside reaches each
+ * face with a vertex outside or an edge on l; the others stay as they
+ * are. The faces reached are clipped in the order of the live list, as a
+ * search of every face would, so the result is the same, vertex
+ * numbering and cycles included. When the walk finds no vertex outside,
+ * every vertex is tested. */
 static int clip(hs *h, uint32_t l, enum geo_halfspace_status *ret_status)
 {
     h->round++;
+    uint32_t start = walk_outside(h, l), nvis = 0, ncorners = 0;
     bool pos = false, neg = false;
-    uint32_t ncorners = 0;
-    for (uint32_t i = 0; i < h->nalive; i++) {
-        hs_face *f = &h->face[h->alive[i]];
-        ncorners += f->n;
-        for (uint32_t k = 0; k < f->n; k++) {
-            uint32_t v = f->v[k];
-            if (h->stamp[v] != h->round) {
-                h->stamp[v] = h->round;
-                h->sign[v] = (int8_t)vertex_side(h, v, l);
+    if (start != HS_NONE) {
+        pos = true;
+        h->fmark[start] = h->round;
+        h->vis[nvis++] = start;
+        for (uint32_t i = 0; i < nvis; i++) {
+            const hs_face *f = &h->face[h->vis[i]];
+            ncorners += f->n;
+            for (uint32_t k = 0; k < f->n; k++) {
+                set_sign(h, f->v[k], l);
+                neg |= h->sign[f->v[k]] < 0;
             }
-            pos |= h->sign[v] > 0;
-            neg |= h->sign[v] < 0;
+            for (uint32_t k = 0; k < f->n; k++) {
+                uint32_t g = f->lab[k];
+                if (h->fmark[g] == h->round ||
+                    (h->sign[f->v[k]] < 0 &&
+                     h->sign[f->v[(k + 1) % f->n]] < 0))
+                    continue;
+                h->fmark[g] = h->round;
+                h->vis[nvis++] = g;
+            }
+        }
+        /* an edge stopped the search: both its ends lie inside */
+        neg |= nvis < h->nalive;
+        /* in the order of the live list (few faces: insertion) */
+        for (uint32_t i = 1; i < nvis; i++) {
+            uint32_t f = h->vis[i], j = i;
+            for (; j > 0 && h->apos[h->vis[j - 1]] > h->apos[f]; j--)
+                h->vis[j] = h->vis[j - 1];
+            h->vis[j] = f;
+        }
+    } else {
+        for (uint32_t i = 0; i < h->nalive; i++) {
+            const hs_face *f = &h->face[h->alive[i]];
+            ncorners += f->n;
+            for (uint32_t k = 0; k < f->n; k++) {
+                set_sign(h, f->v[k], l);
+                pos |= h->sign[f->v[k]] > 0;
+                neg |= h->sign[f->v[k]] < 0;
+            }
+            h->vis[nvis++] = h->alive[i];
         }
     }
     if (!pos)
@@ -293,9 +415,9 @@ static int clip(hs *h, uint32_t l, enum geo_halfspace_status *ret_status)
     h->nedges = 0;
 
     hs_face tmp = {0};
-    uint32_t kept = 0;
-    for (uint32_t i = 0; i < h->nalive; i++) {
-        uint32_t fi = h->alive[i];
+    bool dropped = false;
+    for (uint32_t i = 0; i < nvis; i++) {
+        uint32_t fi = h->vis[i];
         hs_face *f = &h->face[fi];
         bool any_neg = false, all_neg = true;
         for (uint32_t k = 0; k < f->n; k++) {
@@ -305,12 +427,11 @@ static int clip(hs *h, uint32_t l, enum geo_halfspace_status *ret_status)
         }
         if (!any_neg) { /* what is left of f is at most an edge */
             face_free(f);
+            dropped = true;
             continue;
         }
-        if (all_neg) { /* l does not touch f: clip_face would copy it */
-            h->alive[kept++] = fi;
+        if (all_neg) /* l does not touch f: clip_face would copy it */
             continue;
-        }
         if (clip_face(h, fi, l, &tmp) < 0) {
             face_free(&tmp);
             return -ENOMEM;
@@ -319,9 +440,17 @@ static int clip(hs *h, uint32_t l, enum geo_halfspace_status *ret_status)
         *f = tmp;
         f->alive = true;
         tmp = swap;
-        h->alive[kept++] = fi;
     }
     face_free(&tmp);
+    uint32_t kept = h->nalive;
+    if (dropped) {
+        kept = 0;
+        for (uint32_t i = 0; i < h->nalive; i++)
+            if (h->face[h->alive[i]].alive) {
+                h->apos[h->alive[i]] = kept;
+                h->alive[kept++] = h->alive[i];
+            }
+    }
 
     /* l's face: the reversed edges on l, chained by their start vertex;
      * they form one cycle because the section of a convex polyhedron by a
@@ -336,6 +465,7 @@ static int clip(hs *h, uint32_t l, enum geo_halfspace_status *ret_status)
         e = h->chain[h->edges[e][1]];
     }
     nf->alive = true;
+    h->apos[l] = kept;
     h->alive[kept++] = l;
     h->nalive = kept;
     return 0;
@@ -633,8 +763,13 @@ int geo_halfspace_intersect(const double *planes, uint32_t n,
     double (*pl)[4] = malloc((size_t)h.np * sizeof *pl);
     h.face = calloc(h.np, sizeof *h.face);
     h.alive = malloc((size_t)h.np * sizeof *h.alive);
+    h.apos = malloc((size_t)h.np * sizeof *h.apos);
+    h.fmark = calloc(h.np, sizeof *h.fmark);
+    h.vis = malloc((size_t)h.np * sizeof *h.vis);
+    h.unit = malloc((size_t)h.np * sizeof *h.unit);
     int rc = -ENOMEM;
-    if (!pl || !h.face || !h.alive)
+    if (!pl || !h.face || !h.alive || !h.apos || !h.fmark || !h.vis ||
+        !h.unit)
         goto out;
     memcpy(pl, planes, (size_t)n * sizeof *pl);
     for (uint32_t k = 0; k < 6; k++) {
@@ -644,6 +779,12 @@ int geo_halfspace_intersect(const double *planes, uint32_t n,
         q[3] = -r;
     }
     h.pl = (const double (*)[4])pl;
+    for (uint32_t i = 0; i < h.np; i++) {
+        double len = sqrt(pl[i][0] * pl[i][0] + pl[i][1] * pl[i][1] +
+                          pl[i][2] * pl[i][2]);
+        for (int k = 0; k < 3; k++)
+            h.unit[i][k] = pl[i][k] / len;
+    }
     if (init_box(&h) < 0)
         goto out;
     for (uint32_t l = 0; l < n; l++) {
@@ -675,6 +816,10 @@ out:
         face_free(&h.face[f]);
     free(h.face);
     free(h.alive);
+    free(h.apos);
+    free(h.fmark);
+    free(h.vis);
+    free(h.unit);
     free(h.vert);
     free(h.sign);
     free(h.stamp);

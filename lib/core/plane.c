@@ -274,6 +274,54 @@ static int cmp_axis(const void *a, const void *b, void *arg)
     return (x > y) - (x < y);
 }
 
+/* Reorders idx[lo .. hi) so that the points before k are no higher on
+ * W->axis than those from k on: quickselect with a median-of-three pivot,
+ * three ways (equal keys), a sort after 2·log2(n) + 8 rounds that have
+ * not narrowed the range. */
+static void split_at(reach_work *W, uint32_t lo, uint32_t hi, uint32_t k)
+{
+    uint32_t *ix = W->idx;
+    int budget = 8, a = W->axis;
+    for (uint32_t m = hi - lo; m > 1; m >>= 1)
+        budget += 2;
+#define KEY(i) (W->pts[ix[i]][a])
+#define SWAP(i, j) (t = ix[i], ix[i] = ix[j], ix[j] = t)
+    uint32_t t;
+    while (hi - lo > 2) {
+        if (budget-- == 0) {
+            qsort_r(ix + lo, hi - lo, sizeof *ix, cmp_axis, W);
+            return;
+        }
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (KEY(mid) < KEY(lo))
+            SWAP(mid, lo);
+        if (KEY(hi - 1) < KEY(lo))
+            SWAP(hi - 1, lo);
+        if (KEY(hi - 1) < KEY(mid))
+            SWAP(hi - 1, mid);
+        double pivot = KEY(mid);
+        uint32_t lt = lo, i = lo, gt = hi;
+        while (i < gt) {
+            if (KEY(i) < pivot)
+                SWAP(lt, i), lt++, i++;
+            else if (KEY(i) > pivot)
+                gt--, SWAP(i, gt);
+            else
+                i++;
+        }
+        if (k < lt)
+            hi = lt;
+        else if (k >= gt)
+            lo = gt;
+        else
+            return;
+    }
+    if (hi - lo == 2 && KEY(lo + 1) < KEY(lo))
+        SWAP(lo, lo + 1);
+#undef KEY
+#undef SWAP
+}
+
 /* The points idx[lo .. hi) against the planes cand[depth − 1][0 .. nc):
  * those that may be highest at some point of the range go on to the
  * halves (split at the median of the longest side of their box). */
@@ -326,9 +374,9 @@ static void reach_node(reach_work *W, uint32_t lo, uint32_t hi, int depth,
         }
         return;
     }
-    W->axis = axis;
-    qsort_r(W->idx + lo, hi - lo, sizeof *W->idx, cmp_axis, W);
     uint32_t mid = lo + (hi - lo) / 2;
+    W->axis = axis;
+    split_at(W, lo, hi, mid);
     reach_node(W, lo, mid, depth + 1, nk, out);
     reach_node(W, mid, hi, depth + 1, nk, out);
 }
