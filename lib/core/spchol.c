@@ -197,15 +197,29 @@ out:
 
 /* ---- minimum degree ---- */
 
-/* The elimination graph is kept as it is: each unknown's neighbours not
- * yet eliminated, a sorted array. Eliminating p joins its neighbours
- * into a clique; the next is one of least degree (the bucket lists give
- * it in O(1); ties go to the unknown whose degree changed last). The
- * work is about the entries of L times the degrees, so the count of
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+
+/* The elimination graph is kept as it is, over supervariables: unknowns
+ * with the same closed neighbourhood in A (the three of a plane in
+ * convex_refine) are one node of their count's weight, and stay
+ * indistinguishable, so they are eliminated together (a scalar minimum
+ * degree would take them one after another too). Each node holds its
+ * neighbours not yet eliminated, a sorted array. Eliminating p joins its
+ * neighbours into a clique; the next is one of least degree (the
+ * unknowns its members are joined to; bucket lists give it in O(1), ties
+ * to the node whose degree changed last). The work is about the entries
+ * of L times the degrees over the weights squared, so the count of
  * entries is checked against max_nnz as it goes. */
 typedef struct md_work {
     uint32_t **adj, *len, *cap;
     uint32_t *head, *next, *prev, *deg;
+    uint32_t *w;     /* per node: its unknowns */
+    uint32_t *first; /* per node: its first unknown */
     uint32_t *buf;
 } md_work;
 
@@ -229,10 +243,83 @@ static void md_link(md_work *M, uint32_t v)
     M->head[d] = v;
 }
 
-static int cmp_u32(const void *a, const void *b)
+/* The graph of A + A' without the diagonal, each row sorted: the
+ * transpose of the transpose sorts A's rows, the transpose adds the
+ * entries of a pattern given with one triangle missing. 0 or -ENOMEM. */
+static int md_graph(uint32_t n, const uint32_t *rp, const uint32_t *ci,
+                    uint32_t **ret_p, uint32_t **ret_i)
 {
-    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
-    return (x > y) - (x < y);
+    size_t nz = n ? rp[n] : 0;
+    uint32_t *tp = calloc((size_t)n + 2, sizeof *tp);
+    uint32_t *ti = malloc((nz + 1) * sizeof *ti);
+    uint32_t *sp = calloc((size_t)n + 2, sizeof *sp);
+    uint32_t *si = malloc((nz + 1) * sizeof *si);
+    uint32_t *gp = calloc((size_t)n + 1, sizeof *gp);
+    uint32_t *gi = malloc((2 * nz + 1) * sizeof *gi);
+    int rc = -ENOMEM;
+    if (!tp || !ti || !sp || !si || !gp || !gi)
+        goto out;
+    for (uint32_t v = 0; v < n; v++)
+        for (uint32_t q = rp[v]; q < rp[v + 1]; q++)
+            if (ci[q] != v)
+                tp[ci[q] + 2]++;
+    for (uint32_t v = 0; v < n; v++)
+        tp[v + 2] += tp[v + 1];
+    for (uint32_t v = 0; v < n; v++)
+        for (uint32_t q = rp[v]; q < rp[v + 1]; q++)
+            if (ci[q] != v)
+                ti[tp[ci[q] + 1]++] = v;
+    /* tp[u] .. tp[u+1]: the rows holding u, ascending */
+    for (uint32_t u = 0; u < n; u++)
+        for (uint32_t q = tp[u]; q < tp[u + 1]; q++)
+            sp[ti[q] + 2]++;
+    for (uint32_t v = 0; v < n; v++)
+        sp[v + 2] += sp[v + 1];
+    for (uint32_t u = 0; u < n; u++)
+        for (uint32_t q = tp[u]; q < tp[u + 1]; q++)
+            si[sp[ti[q] + 1]++] = u;
+    /* sp[v] .. sp[v+1]: row v ascending; the union with its column */
+    uint32_t m = 0;
+    for (uint32_t v = 0; v < n; v++) {
+        gp[v] = m;
+        uint32_t i = sp[v], j = tp[v], ie = sp[v + 1], je = tp[v + 1];
+        while (i < ie || j < je) {
+            uint32_t x = j >= je || (i < ie && si[i] < ti[j]) ? si[i++]
+                         : i < ie && si[i] == ti[j]          ? (j++, si[i++])
+                                                             : ti[j++];
+            if (m == gp[v] || gi[m - 1] != x) /* repeated in a row */
+                gi[m++] = x;
+        }
+    }
+    gp[n] = m;
+    *ret_p = gp, *ret_i = gi;
+    gp = gi = NULL;
+    rc = 0;
+out:
+    free(tp), free(ti), free(sp), free(si), free(gp), free(gi);
+    return rc;
+}
+
+/* Closed neighbourhoods of v and u equal (v ≠ u, each in the other's
+ * row): the rows are equal but for v in u's and u in v's. */
+static bool md_twins(const uint32_t *gp, const uint32_t *gi, uint32_t u,
+                     uint32_t v)
+{
+    uint32_t i = gp[u], j = gp[v];
+    while (i < gp[u + 1] || j < gp[v + 1]) {
+        if (i < gp[u + 1] && gi[i] == v) {
+            i++;
+            continue;
+        }
+        if (j < gp[v + 1] && gi[j] == u) {
+            j++;
+            continue;
+        }
+        if (i == gp[u + 1] || j == gp[v + 1] || gi[i] != gi[j])
+            return false;
+        i++, j++;
+    }
+    return true;
 }
 
 /* perm: the elimination order. 0, -ERANGE (L would exceed max_nnz
@@ -241,52 +328,96 @@ static int md_order(uint32_t n, const uint32_t *rp, const uint32_t *ci,
                     uint64_t max_nnz, const geo_ctx *ctx, uint32_t *perm)
 {
     md_work M = {0};
+    uint32_t *gp = NULL, *gi = NULL, *node = NULL, *nextu = NULL;
+    uint64_t *hk = NULL;
     size_t sz = (size_t)n + 1;
-    M.adj = calloc(sz, sizeof *M.adj);
-    M.len = calloc(sz, sizeof *M.len);
-    M.cap = calloc(sz, sizeof *M.cap);
-    M.head = malloc(sz * sizeof *M.head);
-    M.next = malloc(sz * sizeof *M.next);
-    M.prev = malloc(sz * sizeof *M.prev);
-    M.deg = malloc(sz * sizeof *M.deg);
-    M.buf = malloc(sz * sizeof *M.buf);
-    int rc = -ENOMEM;
-    if (!M.adj || !M.len || !M.cap || !M.head || !M.next || !M.prev ||
-        !M.deg || !M.buf)
+    int rc = md_graph(n, rp, ci, &gp, &gi);
+    if (rc < 0)
+        return rc;
+    rc = -ENOMEM;
+    node = malloc(sz * sizeof *node);   /* unknown → its node */
+    nextu = malloc(sz * sizeof *nextu); /* next unknown of its node */
+    hk = malloc(sz * sizeof *hk);
+    if (!node || !nextu || !hk)
         goto out;
-    /* the graph of A + A' (a pattern given with one triangle missing
-     * still gives a valid order), without the diagonal */
-    for (uint32_t v = 0; v < n; v++)
-        for (uint32_t q = rp[v]; q < rp[v + 1]; q++)
-            if (ci[q] != v)
-                M.cap[v]++, M.cap[ci[q]]++;
-    for (uint32_t v = 0; v < n; v++)
-        if (!(M.adj[v] = malloc(((size_t)M.cap[v] + 1) * sizeof **M.adj)))
-            goto out;
-    for (uint32_t v = 0; v < n; v++)
-        for (uint32_t q = rp[v]; q < rp[v + 1]; q++)
-            if (ci[q] != v) {
-                M.adj[v][M.len[v]++] = ci[q];
-                M.adj[ci[q]][M.len[ci[q]]++] = v;
-            }
+    /* supervariables: equal closed rows, found among equal hashes */
     for (uint32_t v = 0; v < n; v++) {
-        qsort(M.adj[v], M.len[v], sizeof **M.adj, cmp_u32);
-        uint32_t m = 0;
-        for (uint32_t i = 0; i < M.len[v]; i++)
-            if (m == 0 || M.adj[v][i] != M.adj[v][m - 1])
-                M.adj[v][m++] = M.adj[v][i];
-        M.len[v] = m;
+        uint32_t h = v * 2654435761u;
+        for (uint32_t q = gp[v]; q < gp[v + 1]; q++)
+            h += gi[q] * 2654435761u;
+        hk[v] = (uint64_t)h << 32 | v;
+        node[v] = NONE;
+    }
+    qsort(hk, n, sizeof *hk, cmp_u64);
+    uint32_t nn = 0;
+    for (uint32_t a = 0, b; a < n; a = b) {
+        for (b = a + 1; b < n && hk[b] >> 32 == hk[a] >> 32; b++)
+            ;
+        for (uint32_t i = a; i < b; i++) {
+            uint32_t u = (uint32_t)hk[i];
+            if (node[u] != NONE)
+                continue;
+            node[u] = nn++;
+            for (uint32_t j = i + 1; j < b; j++) {
+                uint32_t v = (uint32_t)hk[j];
+                if (node[v] == NONE &&
+                    gp[u + 1] - gp[u] == gp[v + 1] - gp[v] &&
+                    md_twins(gp, gi, u, v))
+                    node[v] = node[u];
+            }
+        }
+    }
+    M.adj = calloc((size_t)nn + 1, sizeof *M.adj);
+    M.len = calloc((size_t)nn + 1, sizeof *M.len);
+    M.cap = calloc((size_t)nn + 1, sizeof *M.cap);
+    M.head = malloc(sz * sizeof *M.head);
+    M.next = malloc(((size_t)nn + 1) * sizeof *M.next);
+    M.prev = malloc(((size_t)nn + 1) * sizeof *M.prev);
+    M.deg = malloc(((size_t)nn + 1) * sizeof *M.deg);
+    M.w = calloc((size_t)nn + 1, sizeof *M.w);
+    M.first = malloc(((size_t)nn + 1) * sizeof *M.first);
+    M.buf = malloc(((size_t)nn + 1) * sizeof *M.buf);
+    if (!M.adj || !M.len || !M.cap || !M.head || !M.next || !M.prev ||
+        !M.deg || !M.w || !M.first || !M.buf)
+        goto out;
+    for (uint32_t v = n; v-- > 0;) { /* members ascending */
+        uint32_t s = node[v];
+        nextu[v] = M.w[s] ? M.first[s] : NONE;
+        M.first[s] = v;
+        M.w[s]++;
+    }
+    /* a node's neighbours: its first unknown's, as nodes, ascending
+     * (nodes taken in order, each appended to its neighbours' lists) */
+    for (uint32_t s = 0; s < nn; s++) {
+        uint32_t u = M.first[s];
+        for (uint32_t q = gp[u]; q < gp[u + 1]; q++)
+            if (node[gi[q]] != s)
+                M.cap[node[gi[q]]]++;
+    }
+    for (uint32_t s = 0; s < nn; s++)
+        if (!(M.adj[s] = malloc(((size_t)M.cap[s] + 1) * sizeof **M.adj)))
+            goto out;
+    for (uint32_t s = 0; s < nn; s++) {
+        uint32_t u = M.first[s];
+        for (uint32_t q = gp[u]; q < gp[u + 1]; q++) {
+            uint32_t t = node[gi[q]];
+            if (t != s && (M.len[t] == 0 || M.adj[t][M.len[t] - 1] != s))
+                M.adj[t][M.len[t]++] = s;
+        }
     }
     for (uint32_t d = 0; d <= n; d++)
         M.head[d] = NONE;
-    for (uint32_t v = n; v-- > 0;) {
-        M.deg[v] = M.len[v];
-        md_link(&M, v);
+    for (uint32_t s = nn; s-- > 0;) {
+        uint32_t d = M.w[s] - 1;
+        for (uint32_t i = 0; i < M.len[s]; i++)
+            d += M.w[M.adj[s][i]];
+        M.deg[s] = d;
+        md_link(&M, s);
     }
     uint64_t nnz = 0;
-    uint32_t mindeg = 0;
-    for (uint32_t k = 0; k < n; k++) {
-        if ((k & 4095) == 4095 && geo_ctx_canceled(ctx)) {
+    uint32_t mindeg = 0, k = 0;
+    for (uint32_t it = 0; it < nn; it++) {
+        if ((it & 4095) == 4095 && geo_ctx_canceled(ctx)) {
             rc = -ECANCELED;
             goto out;
         }
@@ -294,29 +425,34 @@ static int md_order(uint32_t n, const uint32_t *rp, const uint32_t *ci,
             mindeg++;
         uint32_t p = M.head[mindeg];
         md_unlink(&M, p);
-        perm[k] = p;
-        const uint32_t *N = M.adj[p];
-        uint32_t d = M.len[p];
-        nnz += (uint64_t)d + 1;
+        /* its unknowns' columns: the later ones of p and the rest */
+        uint64_t wp = M.w[p], rest = M.deg[p] + 1 - wp;
+        nnz += wp * rest + wp * (wp + 1) / 2;
         if (max_nnz && nnz > max_nnz) {
             rc = -ERANGE;
             goto out;
         }
+        for (uint32_t u = M.first[p]; u != NONE; u = nextu[u])
+            perm[k++] = u;
+        const uint32_t *N = M.adj[p];
+        uint32_t d = M.len[p];
         /* each neighbour's list becomes (its list ∪ N) \ {itself, p} */
         for (uint32_t a = 0; a < d; a++) {
             uint32_t u = N[a], *L = M.adj[u], lu = M.len[u];
-            uint32_t i = 0, j = 0, m = 0;
+            uint32_t i = 0, j = 0, m = 0, du = M.w[u] - 1;
             while (i < lu || j < d) {
                 uint32_t x = j >= d || (i < lu && L[i] < N[j]) ? L[i++]
                              : i < lu && L[i] == N[j]         ? (j++, L[i++])
                                                               : N[j++];
-                if (x != u && x != p)
+                if (x != u && x != p) {
                     M.buf[m++] = x;
+                    du += M.w[x];
+                }
             }
             if (m > M.cap[u]) {
                 uint32_t c = m + m / 2 + 1;
-                if (c > n)
-                    c = n;
+                if (c > nn)
+                    c = nn;
                 uint32_t *t = realloc(L, (size_t)c * sizeof *t);
                 if (!t)
                     goto out;
@@ -326,10 +462,10 @@ static int md_order(uint32_t n, const uint32_t *rp, const uint32_t *ci,
             memcpy(M.adj[u], M.buf, (size_t)m * sizeof *M.buf);
             M.len[u] = m;
             md_unlink(&M, u);
-            M.deg[u] = m;
+            M.deg[u] = du;
             md_link(&M, u);
-            if (m < mindeg)
-                mindeg = m;
+            if (du < mindeg)
+                mindeg = du;
         }
         free(M.adj[p]);
         M.adj[p] = NULL;
@@ -338,10 +474,11 @@ static int md_order(uint32_t n, const uint32_t *rp, const uint32_t *ci,
     rc = 0;
 out:
     if (M.adj)
-        for (uint32_t v = 0; v < n; v++)
-            free(M.adj[v]);
+        for (uint32_t s = 0; s < nn; s++)
+            free(M.adj[s]);
     free(M.adj), free(M.len), free(M.cap), free(M.head), free(M.next);
-    free(M.prev), free(M.deg), free(M.buf);
+    free(M.prev), free(M.deg), free(M.w), free(M.first), free(M.buf);
+    free(gp), free(gi), free(node), free(nextu), free(hk);
     return rc;
 }
 

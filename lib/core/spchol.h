@@ -15,13 +15,15 @@
  * for banded orderings; conjugate gradients on the same bi-Laplacian
  * need O(patch diameter²) iterations of O(n) each.
  * GEO_SPCHOL_MIN_DEGREE, minimum degree on the explicit elimination
- * graph, for graphs made of many small cliques whose factor stays sparse
- * (the Schur complement of a polyhedron's planes, lib/correct/
+ * graph of supervariables (unknowns with equal rows, eliminated
+ * together), for graphs made of many small cliques whose factor stays
+ * sparse (the Schur complement of a polyhedron's planes, lib/correct/
  * convex_refine.c: every vertex joins all its planes; there it gives
  * 4× fewer entries of L and 20× fewer operations than nested
  * dissection, whose level sets cut through the cliques). Its own cost is
- * about the entries of L times their rows' lengths, so it is not for
- * large meshes.
+ * about the entries of L times their rows' lengths: on the least-norm
+ * systems (a row per facet corner) it halves L but takes twice the time
+ * of dissection and factor together, and it is not for large meshes.
  * Factorisation: up-looking (row by row of L, each row's pattern from the
  * elimination tree), L stored by columns.
  *
@@ -49,11 +51,12 @@ typedef enum geo_spchol_order {
  * with values v[...], each column at most once, both triangles and the
  * diagonal present (A must be symmetric: each off-diagonal entry is read
  * from one of its two rows), eliminated in the given order. max_nnz
- * bounds the entries of L (0: no bound). On success *ret is the factor. Returns 0, -EINVAL (a column
- * index ≥ n), -EDOM (A is not numerically positive definite), -ERANGE
- * (L would exceed max_nnz entries: nothing numeric was done), -ENOMEM or
- * -ECANCELED (ctx checked every 4,096 columns, and as often in the
- * minimum-degree ordering); *ret is NULL then. */
+ * bounds the entries of L (0: no bound). On success *ret is the factor.
+ * Returns 0, -EINVAL (a column index ≥ n), -EDOM (A is not numerically
+ * positive definite), -ERANGE (L would exceed max_nnz entries: nothing
+ * numeric was done), -ENOMEM or -ECANCELED (ctx checked every 4,096
+ * columns, and as often in the minimum-degree ordering); *ret is NULL
+ * then. */
 int geo_spchol_factor(uint32_t n, const uint32_t *rp, const uint32_t *ci,
                       const double *v, geo_spchol_order order,
                       uint64_t max_nnz, const geo_ctx *ctx, geo_spchol **ret);
