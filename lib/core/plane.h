@@ -55,20 +55,6 @@ bool geo_plane_triples_meet(const geo_plane_triples *t, uint32_t a,
 
 void geo_plane_triples_free(geo_plane_triples *t);
 
-/* The largest value n·x + d of any of the planes at any of the points,
- * and at least 0: how far the points reach outside the intersection of
- * the planes' negative half-spaces. The value is the one the evaluation
- * of every pair would give, bit for bit (geo_plane_eval). Most pairs are
- * skipped: the points go in cells of a few neighbours; a plane's value
- * at a point of a cell is within |n|·r of its value at the cell's centre
- * (r: the cell's radius), so a plane lower there than the cell's highest
- * by more than 2·|n|·r, or below −|n|·r, is never the largest above 0 at
- * a point of the cell (the margin covers the evaluations' rounding). A
- * point with a coordinate that is not finite is evaluated against every
- * plane, as is everything when memory is short. */
-double geo_planes_reach(const double (*planes)[4], uint32_t nplanes,
-                        const double (*pts)[3], uint32_t npts);
-
 /* Eigen-decomposition of the symmetric 3×3 matrix m (row-major, only the
  * upper triangle read, m not modified) by cyclic Jacobi rotations: ret_values ascending,
  * ret_vectors[k] the unit eigenvector of ret_values[k]. */

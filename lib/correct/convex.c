@@ -12,6 +12,7 @@
 
 #include "halfspace.h"
 #include "plane.h"
+#include "ptree.h"
 #include "replanar.h"
 #include "topo.h"
 #include "vec.h"
@@ -325,11 +326,27 @@ static double outside_allow(const geo_convex_planes *cp, double max_dev)
 }
 
 /* How far the result q reaches outside the scan p: the largest value of
- * a scan facet's plane at a vertex of q. */
+ * a scan facet's plane at a vertex of q (every pair when memory is
+ * short for the tree). */
 static double reach_outside(const geo_poly *p, const geo_poly *q)
 {
-    return geo_planes_reach((const double(*)[4])p->planes, p->nfacets,
-                            (const double(*)[3])q->verts, q->nverts);
+    const double(*x)[3] = (const double(*)[3])q->verts;
+    const double(*pl)[4] = (const double(*)[4])p->planes;
+    geo_ptree *t = NULL;
+    double out = 0;
+    if (geo_ptree_build(x, q->nverts, &t) == 0 &&
+        geo_ptree_reach(t, x, pl, p->nfacets, &out) == 0) {
+        geo_ptree_free(t);
+        return out;
+    }
+    geo_ptree_free(t);
+    for (uint32_t v = 0; v < q->nverts; v++)
+        for (uint32_t f = 0; f < p->nfacets; f++) {
+            double d = geo_plane_eval(pl[f], x[v]);
+            if (d > out)
+                out = d;
+        }
+    return out;
 }
 
 /* Where the result q reaches outside the scan p beyond outside_allow,
@@ -465,22 +482,42 @@ static int check_result(const geo_poly *p, const geo_poly *q,
     }
     for (uint32_t g = 0; g < q->nfacets; g++)
         ag[g] = cp->allow[src[g]];
+    /* the pair (scan vertex, result plane) farthest beyond its bound,
+     * the first in vertex order (then plane order) among equals; a plane
+     * is tested only at the vertices that may lie above its bound (the
+     * bound is at least its own allowance) */
+    geo_ptree *t = NULL;
+    uint32_t *near = malloc(((size_t)p->nverts + 1) * sizeof *near);
+    if (!near || geo_ptree_build((const double(*)[3])p->verts, p->nverts,
+                                 &t) < 0) {
+        free(own), free(ag), free(near);
+        return -ENOMEM;
+    }
     double worst = 0, worst_allow = 0, margin = 0;
-    for (uint32_t v = 0; v < p->nverts; v++) {
-        double ov = own[v];
-        if (ov == INFINITY)
-            continue;
-        const double *x = p->verts[v];
-        for (uint32_t g = 0; g < q->nfacets; g++) {
-            double e = geo_plane_eval(q->planes[g], x);
+    uint32_t wv = 0, wg = 0;
+    for (uint32_t g = 0; g < q->nfacets; g++) {
+        double lift = ROOF_FACTOR * ag[g] + margin;
+        uint32_t nn = geo_ptree_above(t, q->planes[g],
+                                      lift - 1e-9 * (1 + fabs(lift)), near);
+        for (uint32_t i = 0; i < nn; i++) {
+            uint32_t v = near[i];
+            double ov = own[v];
+            if (ov == INFINITY)
+                continue;
+            double e = geo_plane_eval(q->planes[g], p->verts[v]);
             double a = ag[g] > ov ? ag[g] : ov;
-            if (e - ROOF_FACTOR * a > margin) {
+            double m = e - ROOF_FACTOR * a;
+            if (m > margin ||
+                (m == margin && m > 0 && (v < wv || (v == wv && g < wg)))) {
                 worst = e;
                 worst_allow = ROOF_FACTOR * a;
                 margin = worst - worst_allow;
+                wv = v, wg = g;
             }
         }
     }
+    geo_ptree_free(t);
+    free(near);
     free(own);
     free(ag);
     if (worst > worst_allow)

@@ -347,109 +347,11 @@ static void test_plane_triples_meet_as_intersect3(void **state)
     geo_plane_triples_free(&t);
 }
 
-/* A random unit vector (rejection from the cube). */
-static void rand_dir(uint64_t *rng, double n[3])
-{
-    double l;
-    do {
-        for (int c = 0; c < 3; c++)
-            n[c] = 2 * geo_rand_unit(rng) - 1;
-        l = geo_vdot(n, n);
-    } while (l > 1 || l < 1e-6);
-    for (int c = 0; c < 3; c++)
-        n[c] /= sqrt(l);
-}
-
-/* Every pair evaluated: the value geo_planes_reach must give. */
-static double reach_brute(const double (*pl)[4], uint32_t np,
-                          const double (*x)[3], uint32_t nx)
-{
-    double m = 0;
-    for (uint32_t i = 0; i < nx; i++)
-        for (uint32_t j = 0; j < np; j++) {
-            double d = geo_plane_eval(pl[j], x[i]);
-            if (d > m)
-                m = d;
-        }
-    return m;
-}
-
-/* geo_planes_reach against every pair, bit for bit: planes tangent to a
- * sphere (scaled, some not unit), points around it inside and out, in
- * clusters, on a pencil of planes (ties), and points and planes that are
- * not finite. */
-static void test_planes_reach_is_every_pair(void **state)
-{
-    (void)state;
-    enum { NP = 700, NX = 300 };
-    double(*pl)[4] = malloc(NP * sizeof *pl), (*x)[3] = malloc(NX * sizeof *x);
-    assert_non_null(pl);
-    assert_non_null(x);
-    uint64_t rng = 41;
-    int positive = 0;
-    for (int round = 0; round < 40; round++) {
-        uint32_t np = 1 + (uint32_t)(geo_rand_next(&rng) % NP);
-        uint32_t nx = (uint32_t)(geo_rand_next(&rng) % NX);
-        double s = round % 3 == 0 ? 3.0 : 1.0; /* not unit normals */
-        double out = round % 4 == 1 ? 0.0 : 0.05; /* all inside or not */
-        for (uint32_t j = 0; j < np; j++) {
-            double n[3];
-            rand_dir(&rng, n);
-            for (int c = 0; c < 3; c++)
-                pl[j][c] = s * n[c];
-            pl[j][3] = -s * (1 + 0.01 * geo_rand_unit(&rng));
-        }
-        for (uint32_t i = 0; i < nx; i++) {
-            double n[3];
-            rand_dir(&rng, n);
-            double r = out > 0 ? 1 - 0.1 * geo_rand_unit(&rng) +
-                                     out * geo_rand_unit(&rng)
-                               : 0.99 - 0.1 * geo_rand_unit(&rng);
-            if (i > 0 && i % 7 < 3) /* a cluster around the last point */
-                for (int c = 0; c < 3; c++)
-                    x[i][c] = x[i - 1][c] + 1e-9 * geo_rand_unit(&rng);
-            else
-                for (int c = 0; c < 3; c++)
-                    x[i][c] = r * n[c] + 5;
-        }
-        for (uint32_t j = 0; j < np; j++) /* about the centre (5, 5, 5) */
-            pl[j][3] -= 5 * (pl[j][0] + pl[j][1] + pl[j][2]);
-        if (round % 4 == 2 && nx > 0 && np > 10) /* a pencil through x[0] */
-            for (uint32_t j = 0; j < 10; j++)
-                pl[j][3] = -geo_vdot(pl[j], x[0]);
-        double want = reach_brute((const double(*)[4])pl, np,
-                                  (const double(*)[3])x, nx);
-        double got = geo_planes_reach((const double(*)[4])pl, np,
-                                      (const double(*)[3])x, nx);
-        assert_memory_equal(&want, &got, sizeof want);
-        positive += want > 0;
-        if (round % 4 == 1)
-            assert_true(want == 0);
-    }
-    print_message("planes_reach: %d of 40 sets reach outside\n", positive);
-    assert_true(positive > 20);
-    /* not finite: a NaN point and a NaN plane count for nothing, an
-     * infinite point for what its planes give */
-    double q[2][4] = {{1, 0, 0, -1}, {NAN, 0, 0, 0}};
-    double y[3][3] = {{0.5, 0, 0}, {NAN, 0, 0}, {2, 0, 0}};
-    assert_true(geo_planes_reach((const double(*)[4])q, 2,
-                                 (const double(*)[3])y, 3) == 1.0);
-    y[1][0] = INFINITY;
-    assert_true(isinf(geo_planes_reach((const double(*)[4])q, 2,
-                                       (const double(*)[3])y, 3)));
-    assert_true(geo_planes_reach((const double(*)[4])q, 0,
-                                 (const double(*)[3])y, 3) == 0);
-    assert_true(geo_planes_reach((const double(*)[4])q, 2,
-                                 (const double(*)[3])y, 0) == 0);
-    free(pl), free(x);
-}
-
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_box_measures),
         cmocka_unit_test(test_plane_triples_meet_as_intersect3),
-        cmocka_unit_test(test_planes_reach_is_every_pair),
         cmocka_unit_test(test_notch_cube_volume),
         cmocka_unit_test(test_from_arrays_rejects_bad_index_naming_place),
         cmocka_unit_test(test_topo_box_is_closed_manifold),
