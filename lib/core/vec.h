@@ -25,6 +25,17 @@ static inline void geo_vscale(const double a[3], double s, double r[3])
     r[2] = a[2] * s;
 }
 
+/* A running box along one axis: lo = fmin(lo, x), hi = fmax(hi, x) for
+ * lo and hi not NaN (a NaN x leaves both), compared inline: at -O2 fmin
+ * and fmax are library calls, in loops over every vertex. */
+static inline void geo_minmax(double x, double *lo, double *hi)
+{
+    if (x < *lo)
+        *lo = x;
+    if (x > *hi)
+        *hi = x;
+}
+
 /* r = a + s·b */
 static inline void geo_vmadd(const double a[3], double s, const double b[3],
                              double r[3])

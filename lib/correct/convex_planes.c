@@ -171,10 +171,8 @@ static bool fits(finder *f, const mom *m, const double pl[4], uint32_t h,
     for (uint32_t i = 0; i < n; i++) {
         if (fabs(geo_plane_eval(q, p->verts[v[i]])) > dmax)
             return false;
-        for (int k = 0; k < 3; k++) {
-            lo[k] = fmin(lo[k], p->verts[v[i]][k]);
-            hi[k] = fmax(hi[k], p->verts[v[i]][k]);
-        }
+        for (int k = 0; k < 3; k++)
+            geo_minmax(p->verts[v[i]][k], &lo[k], &hi[k]);
     }
     for (uint32_t i = 0; i < f->nvs; i++)
         if (fabs(geo_plane_eval(q, p->verts[f->vs[i]])) > dmax)
@@ -458,7 +456,7 @@ static void hinge_fit(const geo_poly *p, const seg *sg, uint32_t n,
                 lo = INFINITY, hi = -INFINITY;
                 for (uint32_t j = 0; j < nv; j++) {
                     double d = geo_plane_eval(ref, p->verts[fv[j]]);
-                    lo = fmin(lo, d), hi = fmax(hi, d);
+                    geo_minmax(d, &lo, &hi);
                 }
             }
             double ra = geo_plane_eval(ref, p->verts[sg[i].a]);

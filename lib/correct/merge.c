@@ -71,10 +71,8 @@ geo_mw *geo_mw_new(geo_edit *e, const geo_merge_opts *opts, geo_err *err)
     double lo[3] = {INFINITY, INFINITY, INFINITY};
     double hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (uint32_t v = 0; v < e->nverts; v++)
-        for (int k = 0; k < 3; k++) {
-            lo[k] = fmin(lo[k], e->verts[v][k]);
-            hi[k] = fmax(hi[k], e->verts[v][k]);
-        }
+        for (int k = 0; k < 3; k++)
+            geo_minmax(e->verts[v][k], &lo[k], &hi[k]);
     double size = 0;
     if (e->nverts) {
         double d[3];

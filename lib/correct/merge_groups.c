@@ -170,11 +170,11 @@ static double extent_along(const geo_edit *e, const uint32_t *vs, uint32_t n,
     double lo = INFINITY, hi = -INFINITY;
     for (uint32_t i = 0; i < n; i++) {
         double t = geo_vdot(axis, e->verts[vs[i]]);
-        lo = fmin(lo, t), hi = fmax(hi, t);
+        geo_minmax(t, &lo, &hi);
     }
     for (uint32_t i = 0; i < nx; i++) {
         double t = geo_vdot(axis, xs[i]);
-        lo = fmin(lo, t), hi = fmax(hi, t);
+        geo_minmax(t, &lo, &hi);
     }
     return hi > lo ? hi - lo : 0;
 }
@@ -202,10 +202,8 @@ static bool fits(grower *g, uint32_t f, double ret_plane[4])
     memcpy(lo, g->lo, sizeof lo);
     memcpy(hi, g->hi, sizeof hi);
     for (uint32_t i = 0; i < nx; i++)
-        for (int k = 0; k < 3; k++) {
-            lo[k] = fmin(lo[k], extra[i][k]);
-            hi[k] = fmax(hi[k], extra[i][k]);
-        }
+        for (int k = 0; k < 3; k++)
+            geo_minmax(extra[i][k], &lo[k], &hi[k]);
     geo_vsub(hi, lo, d);
     double ext = geo_vlen(d);
     double pl[4], ax[3];
