@@ -203,24 +203,35 @@ static int cmp_u64(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+/* Approximate minimum degree (Amestoy, Davis and Duff 1996) on the
+ * quotient graph, over supervariables: unknowns with the same closed
+ * neighbourhood in A (the three of a plane in convex_refine) are one
+ * node of their count's weight and are eliminated together. An
+ * eliminated node becomes an element: the clique of its neighbours,
+ * kept as a list rather than as the clique's edges, and it absorbs the
+ * elements it was adjacent to (and any other whose variables all lie in
+ * its clique). The next pivot is a node of least approximate external
+ * degree — the variables it is joined to, bounded above by those of its
+ * variables outside the new element, the new element and |L_e \ L_p| of
+ * its other elements; bucket lists give it in O(1), ties to the node
+ * whose degree changed last. The pivot's clique is exact, so the count
+ * of L's entries, checked against max_nnz as it goes, is the factor's.
+ * The work is about the entries of A plus those of the elements' lists
+ * as they are built. */
+enum { MD_VARIABLE, MD_ELEMENT, MD_ABSORBED };
 
-/* The elimination graph is kept as it is, over supervariables: unknowns
- * with the same closed neighbourhood in A (the three of a plane in
- * convex_refine) are one node of their count's weight, and stay
- * indistinguishable, so they are eliminated together (a scalar minimum
- * degree would take them one after another too). Each node holds its
- * neighbours not yet eliminated, a sorted array. Eliminating p joins its
- * neighbours into a clique; the next is one of least degree (the
- * unknowns its members are joined to; bucket lists give it in O(1), ties
- * to the node whose degree changed last). The work is about the entries
- * of L times the degrees over the weights squared, so the count of
- * entries is checked against max_nnz as it goes. */
 typedef struct md_work {
     uint32_t **adj, *len, *cap;
     uint32_t *head, *next, *prev, *deg;
     uint32_t *w;     /* per node: its unknowns */
     uint32_t *first; /* per node: its first unknown */
     uint32_t *buf;
+    uint32_t **el, *elen, *ecap; /* per variable: its elements */
+    uint32_t *ext;   /* per variable: its approximate external degree */
+    uint32_t *lw;    /* per element: the weight of its variables */
+    uint32_t *wv, *wmark; /* per element: |L_e \ L_p|, set in round */
+    uint32_t *mark;  /* per node: in the pivot's clique (its round) */
+    uint8_t *state;
 } md_work;
 
 static void md_unlink(md_work *M, uint32_t v)
@@ -330,6 +341,7 @@ static int md_order(uint32_t n, const uint32_t *rp, const uint32_t *ci,
     md_work M = {0};
     uint32_t *gp = NULL, *gi = NULL, *node = NULL, *nextu = NULL;
     uint64_t *hk = NULL;
+    uint32_t nn = 0; /* nodes */
     size_t sz = (size_t)n + 1;
     int rc = md_graph(n, rp, ci, &gp, &gi);
     if (rc < 0)
@@ -349,7 +361,6 @@ static int md_order(uint32_t n, const uint32_t *rp, const uint32_t *ci,
         node[v] = NONE;
     }
     qsort(hk, n, sizeof *hk, cmp_u64);
-    uint32_t nn = 0;
     for (uint32_t a = 0, b; a < n; a = b) {
         for (b = a + 1; b < n && hk[b] >> 32 == hk[a] >> 32; b++)
             ;
@@ -414,8 +425,25 @@ static int md_order(uint32_t n, const uint32_t *rp, const uint32_t *ci,
         M.deg[s] = d;
         md_link(&M, s);
     }
+    /* the quotient graph: a node is a variable (its variables in adj,
+     * its elements in el), an element (an eliminated node: the
+     * variables of its clique in adj, their weight in lw) or absorbed */
+    M.el = calloc((size_t)nn + 1, sizeof *M.el);
+    M.elen = calloc((size_t)nn + 1, sizeof *M.elen);
+    M.ecap = calloc((size_t)nn + 1, sizeof *M.ecap);
+    M.ext = malloc(((size_t)nn + 1) * sizeof *M.ext);
+    M.lw = calloc((size_t)nn + 1, sizeof *M.lw);
+    M.wv = calloc((size_t)nn + 1, sizeof *M.wv);
+    M.mark = calloc((size_t)nn + 1, sizeof *M.mark);
+    M.wmark = calloc((size_t)nn + 1, sizeof *M.wmark);
+    M.state = calloc((size_t)nn + 1, 1);
+    if (!M.el || !M.elen || !M.ecap || !M.ext || !M.lw || !M.wv ||
+        !M.mark || !M.wmark || !M.state)
+        goto out;
+    for (uint32_t s = 0; s < nn; s++)
+        M.ext[s] = M.deg[s] + 1 - M.w[s];
     uint64_t nnz = 0;
-    uint32_t mindeg = 0, k = 0;
+    uint32_t mindeg = 0, k = 0, stamp = 0;
     for (uint32_t it = 0; it < nn; it++) {
         if ((it & 4095) == 4095 && geo_ctx_canceled(ctx)) {
             rc = -ECANCELED;
@@ -425,59 +453,139 @@ static int md_order(uint32_t n, const uint32_t *rp, const uint32_t *ci,
             mindeg++;
         uint32_t p = M.head[mindeg];
         md_unlink(&M, p);
-        /* its unknowns' columns: the later ones of p and the rest */
-        uint64_t wp = M.w[p], rest = M.deg[p] + 1 - wp;
-        nnz += wp * rest + wp * (wp + 1) / 2;
+        stamp++;
+        /* its clique: its variables and those of its elements, which
+         * it absorbs */
+        M.mark[p] = stamp;
+        uint32_t m = 0, degp = 0;
+        for (uint32_t a = 0; a < M.elen[p]; a++) {
+            uint32_t e = M.el[p][a];
+            if (M.state[e] != MD_ELEMENT)
+                continue;
+            for (uint32_t q = 0; q < M.len[e]; q++) {
+                uint32_t v = M.adj[e][q];
+                if (M.state[v] == MD_VARIABLE && M.mark[v] != stamp) {
+                    M.mark[v] = stamp;
+                    M.buf[m++] = v;
+                    degp += M.w[v];
+                }
+            }
+            M.state[e] = MD_ABSORBED;
+            free(M.adj[e]);
+            M.adj[e] = NULL;
+            M.len[e] = 0;
+        }
+        for (uint32_t q = 0; q < M.len[p]; q++) {
+            uint32_t v = M.adj[p][q];
+            if (M.state[v] == MD_VARIABLE && M.mark[v] != stamp) {
+                M.mark[v] = stamp;
+                M.buf[m++] = v;
+                degp += M.w[v];
+            }
+        }
+        free(M.el[p]);
+        M.el[p] = NULL;
+        M.elen[p] = 0;
+        if (m > M.cap[p]) {
+            uint32_t *t = realloc(M.adj[p], (size_t)m * sizeof *t);
+            if (!t)
+                goto out;
+            M.adj[p] = t;
+            M.cap[p] = m;
+        }
+        memcpy(M.adj[p], M.buf, (size_t)m * sizeof *M.buf);
+        M.len[p] = m;
+        M.lw[p] = degp;
+        M.state[p] = MD_ELEMENT;
+        /* its unknowns' columns: the later ones of p and the clique */
+        uint64_t wp = M.w[p];
+        nnz += wp * degp + wp * (wp + 1) / 2;
         if (max_nnz && nnz > max_nnz) {
             rc = -ERANGE;
             goto out;
         }
         for (uint32_t u = M.first[p]; u != NONE; u = nextu[u])
             perm[k++] = u;
-        const uint32_t *N = M.adj[p];
-        uint32_t d = M.len[p];
-        /* each neighbour's list becomes (its list ∪ N) \ {itself, p} */
-        for (uint32_t a = 0; a < d; a++) {
-            uint32_t u = N[a], *L = M.adj[u], lu = M.len[u];
-            uint32_t i = 0, j = 0, m = 0, du = M.w[u] - 1;
-            while (i < lu || j < d) {
-                uint32_t x = j >= d || (i < lu && L[i] < N[j]) ? L[i++]
-                             : i < lu && L[i] == N[j]         ? (j++, L[i++])
-                                                              : N[j++];
-                if (x != u && x != p) {
-                    M.buf[m++] = x;
-                    du += M.w[x];
+        uint32_t left = n - k;
+        /* |L_e \ L_p| for the other elements of the clique's variables */
+        for (uint32_t a = 0; a < m; a++) {
+            uint32_t i = M.adj[p][a];
+            for (uint32_t q = 0; q < M.elen[i]; q++) {
+                uint32_t e = M.el[i][q];
+                if (M.state[e] != MD_ELEMENT)
+                    continue;
+                if (M.wmark[e] != stamp) {
+                    M.wmark[e] = stamp;
+                    M.wv[e] = M.lw[e];
                 }
+                M.wv[e] -= M.w[i];
             }
-            if (m > M.cap[u]) {
-                uint32_t c = m + m / 2 + 1;
-                if (c > nn)
-                    c = nn;
-                uint32_t *t = realloc(L, (size_t)c * sizeof *t);
+        }
+        /* each variable of the clique: its elements (those wholly in the
+         * clique absorbed) and p, its variables outside the clique, and
+         * its approximate external degree (Amestoy, Davis and Duff) */
+        for (uint32_t a = 0; a < m; a++) {
+            uint32_t i = M.adj[p][a], ne = 0, na = 0;
+            uint64_t d = 0;
+            for (uint32_t q = 0; q < M.elen[i]; q++) {
+                uint32_t e = M.el[i][q];
+                if (M.state[e] != MD_ELEMENT)
+                    continue;
+                if (M.wv[e] == 0) {
+                    M.state[e] = MD_ABSORBED; /* L_e ⊆ L_p */
+                    free(M.adj[e]);
+                    M.adj[e] = NULL;
+                    M.len[e] = 0;
+                    continue;
+                }
+                d += M.wv[e];
+                M.el[i][ne++] = e;
+            }
+            if (ne == M.ecap[i]) {
+                uint32_t c = ne + ne / 2 + 4;
+                uint32_t *t = realloc(M.el[i], (size_t)c * sizeof *t);
                 if (!t)
                     goto out;
-                M.adj[u] = t;
-                M.cap[u] = c;
+                M.el[i] = t;
+                M.ecap[i] = c;
             }
-            memcpy(M.adj[u], M.buf, (size_t)m * sizeof *M.buf);
-            M.len[u] = m;
-            md_unlink(&M, u);
-            M.deg[u] = du;
-            md_link(&M, u);
-            if (du < mindeg)
-                mindeg = du;
+            M.el[i][ne++] = p;
+            M.elen[i] = ne;
+            for (uint32_t q = 0; q < M.len[i]; q++) {
+                uint32_t v = M.adj[i][q];
+                if (M.state[v] == MD_VARIABLE && M.mark[v] != stamp &&
+                    v != i) {
+                    M.adj[i][na++] = v;
+                    d += M.w[v];
+                }
+            }
+            M.len[i] = na;
+            d += degp - M.w[i];
+            uint64_t bound = (uint64_t)M.ext[i] + degp - M.w[i];
+            if (bound < d)
+                d = bound;
+            if (left - M.w[i] < d)
+                d = left - M.w[i];
+            M.ext[i] = (uint32_t)d;
+            md_unlink(&M, i);
+            M.deg[i] = (uint32_t)d + M.w[i] - 1;
+            md_link(&M, i);
+            if (M.deg[i] < mindeg)
+                mindeg = M.deg[i];
         }
-        free(M.adj[p]);
-        M.adj[p] = NULL;
-        M.len[p] = 0;
     }
     rc = 0;
 out:
     if (M.adj)
         for (uint32_t s = 0; s < nn; s++)
             free(M.adj[s]);
+    if (M.el)
+        for (uint32_t s = 0; s < nn; s++)
+            free(M.el[s]);
     free(M.adj), free(M.len), free(M.cap), free(M.head), free(M.next);
     free(M.prev), free(M.deg), free(M.w), free(M.first), free(M.buf);
+    free(M.el), free(M.elen), free(M.ecap), free(M.ext), free(M.lw);
+    free(M.wv), free(M.wmark), free(M.mark), free(M.state);
     free(gp), free(gi), free(node), free(nextu), free(hk);
     return rc;
 }

@@ -1,8 +1,9 @@
 /* spchol.h — direct solution of a sparse symmetric positive definite
  * system A·x = b by Cholesky factorisation A = P'·L·L'·P (the fairing
  * systems of lib/mesh/hole_fill.h: bi-Laplacians of surface patches, whose
- * graphs are planar-like meshes; the least-norm re-planarization; the
- * silhouette fit of lib/correct/convex_refine.c).
+ * graphs are planar-like meshes; the least-norm re-planarization of
+ * lib/replanar/least_norm.h; the silhouette fit of lib/correct/
+ * convex_refine.c).
  *
  * Orderings, on A's graph alone (no coordinates), the caller's choice.
  * GEO_SPCHOL_DISSECTION, nested dissection, for large mesh-like graphs: a
@@ -14,16 +15,14 @@
  * O(n log n) entries in L and O(n^1.5) operations, against O(n²)-O(n³)
  * for banded orderings; conjugate gradients on the same bi-Laplacian
  * need O(patch diameter²) iterations of O(n) each.
- * GEO_SPCHOL_MIN_DEGREE, minimum degree on the explicit elimination
- * graph of supervariables (unknowns with equal rows, eliminated
- * together), for graphs made of many small cliques whose factor stays
- * sparse (the Schur complement of a polyhedron's planes, lib/correct/
- * convex_refine.c: every vertex joins all its planes; there it gives
- * 4× fewer entries of L and 20× fewer operations than nested
- * dissection, whose level sets cut through the cliques). Its own cost is
- * about the entries of L times their rows' lengths: on the least-norm
- * systems (a row per facet corner) it halves L but takes twice the time
- * of dissection and factor together, and it is not for large meshes.
+ * GEO_SPCHOL_MIN_DEGREE, approximate minimum degree on the quotient
+ * graph (Amestoy, Davis and Duff), over supervariables (unknowns with
+ * equal rows, eliminated together), for the small systems of many
+ * cliques: the Schur complement of a polyhedron's planes (lib/correct/
+ * convex_refine.c, every vertex joining all its planes: 4× fewer
+ * entries of L and 20× fewer operations than nested dissection, whose
+ * level sets cut through the cliques) and the least-norm systems of a
+ * row per facet corner (half the entries).
  * Factorisation: up-looking (row by row of L, each row's pattern from the
  * elimination tree), L stored by columns.
  *

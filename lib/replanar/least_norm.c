@@ -209,7 +209,7 @@ int geo_least_norm_step(const geo_poly *p, const uint8_t *fixed,
         s.b[r][0] = rhs;
     }
     geo_spchol *fac = NULL;
-    rc = geo_spchol_factor(s.nrows, s.rp, s.ci, s.mv, GEO_SPCHOL_DISSECTION,
+    rc = geo_spchol_factor(s.nrows, s.rp, s.ci, s.mv, GEO_SPCHOL_MIN_DEGREE,
                            max_nnz, ctx, &fac);
     if (rc == 0)
         rc = geo_spchol_solve3(fac, s.b);
