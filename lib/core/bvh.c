@@ -6,6 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "select.h"
+
 void geo_bbox_empty(geo_bbox *b)
 {
     for (int k = 0; k < 3; k++) {
@@ -83,42 +85,6 @@ typedef struct builder {
     const double (*cent)[3];  /* centroids by item index */
 } builder;
 
-/* Partially orders items[lo..hi) so that items[k] has the k-th smallest
- * centroid along axis: quickselect with median-of-three pivots and a
- * three-way partition (so runs of equal centroids always make progress). */
-static void select_kth(const double (*cent)[3], uint32_t *items, uint32_t lo,
-                       uint32_t hi, uint32_t k, int axis)
-{
-    while (hi - lo > 1) {
-        uint32_t mid = lo + (hi - lo) / 2;
-        double a = cent[items[lo]][axis], m = cent[items[mid]][axis],
-               z = cent[items[hi - 1]][axis];
-        double pivot = a < m ? (m < z ? m : (a < z ? z : a))
-                             : (a < z ? a : (m < z ? z : m));
-        /* [lo, lt) < pivot, [lt, i) == pivot, (gt, hi) > pivot */
-        uint32_t lt = lo, i = lo, gt = hi;
-        while (i < gt) {
-            double c = cent[items[i]][axis];
-            uint32_t t = items[i];
-            if (c < pivot) {
-                items[i++] = items[lt];
-                items[lt++] = t;
-            } else if (c > pivot) {
-                items[i] = items[--gt];
-                items[gt] = t;
-            } else {
-                i++;
-            }
-        }
-        if (k < lt)
-            hi = lt;
-        else if (k >= gt)
-            lo = gt;
-        else
-            return;
-    }
-}
-
 /* The median split of items[lo, hi) on the longest axis of their
  * centroids' bounds. */
 static uint32_t median_split(const builder *b, uint32_t lo, uint32_t hi)
@@ -133,7 +99,7 @@ static uint32_t median_split(const builder *b, uint32_t lo, uint32_t hi)
         if (cb.hi[k] - cb.lo[k] > cb.hi[axis] - cb.lo[axis])
             axis = k;
     uint32_t mid = lo + (hi - lo) / 2;
-    select_kth(b->cent, h->items, lo, hi, mid, axis);
+    geo_select_axis(b->cent, h->items, lo, hi, mid, axis);
     return mid;
 }
 

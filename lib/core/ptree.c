@@ -10,6 +10,7 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "select.h"
 #include "vec.h"
 
 #define LEAF_SIZE 4 /* points a leaf holds, at most (but equal ones) */
@@ -27,70 +28,6 @@ struct geo_ptree {
     uint32_t nnodes, depth;
     double scale; /* the largest |x| + |y| + |z| of a finite point */
 };
-
-typedef struct axis_key {
-    const double (*pts)[3];
-    int axis;
-} axis_key;
-
-static int cmp_axis(const void *a, const void *b, void *arg)
-{
-    const axis_key *k = arg;
-    double x = k->pts[*(const uint32_t *)a][k->axis];
-    double y = k->pts[*(const uint32_t *)b][k->axis];
-    return (x > y) - (x < y);
-}
-
-/* Reorders ix[lo .. hi) so that the points before k are no higher on
- * axis than those from k on: quickselect with a median-of-three pivot,
- * three ways (equal keys); after 2·log2(n) + 8 rounds that have not
- * narrowed the range (an adversarial order) the range is sorted, so the
- * worst case stays O(n log n). */
-static void split_at(const double (*pts)[3], uint32_t *ix, uint32_t lo,
-                     uint32_t hi, uint32_t k, int axis)
-{
-    int budget = 8;
-    for (uint32_t m = hi - lo; m > 1; m >>= 1)
-        budget += 2;
-#define KEY(i) (pts[ix[i]][axis])
-#define SWAP(i, j) (t = ix[i], ix[i] = ix[j], ix[j] = t)
-    uint32_t t;
-    while (hi - lo > 16) {
-        if (budget-- == 0) {
-            axis_key key = {pts, axis};
-            qsort_r(ix + lo, hi - lo, sizeof *ix, cmp_axis, &key);
-            return;
-        }
-        uint32_t mid = lo + (hi - lo) / 2;
-        if (KEY(mid) < KEY(lo))
-            SWAP(mid, lo);
-        if (KEY(hi - 1) < KEY(lo))
-            SWAP(hi - 1, lo);
-        if (KEY(hi - 1) < KEY(mid))
-            SWAP(hi - 1, mid);
-        double pivot = KEY(mid);
-        uint32_t lt = lo, i = lo, gt = hi;
-        while (i < gt) {
-            if (KEY(i) < pivot)
-                SWAP(lt, i), lt++, i++;
-            else if (KEY(i) > pivot)
-                gt--, SWAP(i, gt);
-            else
-                i++;
-        }
-        if (k < lt)
-            hi = lt;
-        else if (k >= gt)
-            lo = gt;
-        else
-            return;
-    }
-    for (uint32_t i = lo + 1; i < hi; i++) /* a short range: insertion */
-        for (uint32_t j = i; j > lo && KEY(j) < KEY(j - 1); j--)
-            SWAP(j, j - 1);
-#undef KEY
-#undef SWAP
-}
 
 /* The node of idx[lo .. hi) at depth, then its halves' (preorder). */
 static void build(geo_ptree *t, const double (*pts)[3], uint32_t lo,
@@ -126,7 +63,7 @@ static void build(geo_ptree *t, const double (*pts)[3], uint32_t lo,
     if (hi - lo <= LEAF_SIZE || !(bhi[axis] > blo[axis]))
         return;
     uint32_t mid = lo + (hi - lo) / 2;
-    split_at(pts, t->idx, lo, hi, mid, axis);
+    geo_select_axis(pts, t->idx, lo, hi, mid, axis);
     build(t, pts, lo, mid, depth + 1);
     t->node[id].right = t->nnodes;
     build(t, pts, mid, hi, depth + 1);

@@ -65,3 +65,57 @@ double geo_select_kth(double *a, uint32_t n, uint32_t k)
     }
     return a[k];
 }
+
+typedef struct axis_key {
+    const double (*pts)[3];
+    int axis;
+} axis_key;
+
+static int cmp_axis(const void *a, const void *b, void *arg)
+{
+    const axis_key *k = arg;
+    double x = k->pts[*(const uint32_t *)a][k->axis];
+    double y = k->pts[*(const uint32_t *)b][k->axis];
+    return (x > y) - (x < y);
+}
+
+void geo_select_axis(const double (*pts)[3], uint32_t *idx, uint32_t lo,
+                     uint32_t hi, uint32_t k, int axis)
+{
+    int budget = 8;
+    for (uint32_t m = hi - lo; m > 1; m >>= 1)
+        budget += 2;
+    while (hi - lo > 1) {
+        if (budget-- == 0) {
+            axis_key key = {pts, axis};
+            qsort_r(idx + lo, hi - lo, sizeof *idx, cmp_axis, &key);
+            return;
+        }
+        uint32_t mid = lo + (hi - lo) / 2;
+        double a = pts[idx[lo]][axis], m = pts[idx[mid]][axis],
+               z = pts[idx[hi - 1]][axis];
+        double pivot = a < m ? (m < z ? m : (a < z ? z : a))
+                             : (a < z ? a : (m < z ? z : m));
+        /* [lo, lt) < pivot, [lt, i) == pivot, (gt, hi) > pivot */
+        uint32_t lt = lo, i = lo, gt = hi;
+        while (i < gt) {
+            double c = pts[idx[i]][axis];
+            uint32_t t = idx[i];
+            if (c < pivot) {
+                idx[i++] = idx[lt];
+                idx[lt++] = t;
+            } else if (c > pivot) {
+                idx[i] = idx[--gt];
+                idx[gt] = t;
+            } else {
+                i++;
+            }
+        }
+        if (k < lt)
+            hi = lt;
+        else if (k >= gt)
+            lo = gt;
+        else
+            return;
+    }
+}

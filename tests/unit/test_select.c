@@ -1,7 +1,8 @@
 /* test_select.c — geo_select_kth gives the value a sort puts at k: every
  * k of short arrays, random k of long ones, with many equal values,
  * sorted, reversed, all equal and organ-pipe orders, and zeros, negative
- * values and infinities among them. */
+ * values and infinities among them; geo_select_axis splits point
+ * indices as a sort by a coordinate would, over the same orders. */
 #include "testutil.h"
 
 #include <math.h>
@@ -72,10 +73,60 @@ static void test_kth_is_what_a_sort_gives(void **state)
     free(a);
 }
 
+/* geo_select_axis: idx[k] carries the key a sort puts at k, the keys
+ * before it are not larger and those after not smaller, and idx stays a
+ * permutation; for every fill order (equal keys, sorted, organ pipe). */
+static void test_axis_split_is_a_partition(void **state)
+{
+    (void)state;
+    enum { N = 3000 };
+    double(*pts)[3] = malloc(N * sizeof *pts), *key = malloc(N * sizeof *key);
+    uint32_t *idx = malloc(N * sizeof *idx), *seen = calloc(N, sizeof *seen);
+    assert_non_null(pts);
+    assert_non_null(key);
+    assert_non_null(idx);
+    assert_non_null(seen);
+    uint64_t rng = 5;
+    for (int kind = 0; kind < 7; kind++)
+        for (int round = 0; round < 20; round++) {
+            uint32_t n = 1 + (uint32_t)(geo_rand_next(&rng) % N);
+            int axis = round % 3;
+            fill(key, n, kind, &rng);
+            for (uint32_t i = 0; i < n; i++) {
+                pts[i][0] = pts[i][1] = pts[i][2] = -1;
+                pts[i][axis] = key[i];
+                idx[i] = i;
+            }
+            uint32_t lo = (uint32_t)(geo_rand_next(&rng) % n);
+            uint32_t hi = lo + 1 + (uint32_t)(geo_rand_next(&rng) % (n - lo));
+            uint32_t k = lo + (uint32_t)(geo_rand_next(&rng) % (hi - lo));
+            for (uint32_t i = 0; i < hi - lo; i++)
+                key[i] = pts[lo + i][axis];
+            qsort(key, hi - lo, sizeof *key, cmp_double);
+            geo_select_axis((const double(*)[3])pts, idx, lo, hi, k, axis);
+            double kv = pts[idx[k]][axis];
+            assert_true(kv == key[k - lo]);
+            uint32_t tag = (uint32_t)(kind * 20 + round + 1);
+            for (uint32_t i = 0; i < n; i++) {
+                assert_true(idx[i] < n);
+                assert_int_not_equal(seen[idx[i]], tag);
+                seen[idx[i]] = tag;
+                if (i < lo || i >= hi)
+                    assert_int_equal(idx[i], i);
+                else if (i < k)
+                    assert_true(pts[idx[i]][axis] <= kv);
+                else
+                    assert_true(pts[idx[i]][axis] >= kv);
+            }
+        }
+    free(pts), free(key), free(idx), free(seen);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_kth_is_what_a_sort_gives),
+        cmocka_unit_test(test_axis_split_is_a_partition),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
