@@ -254,6 +254,30 @@ static void md_link(md_work *M, uint32_t v)
     M->head[d] = v;
 }
 
+/* Appends the variables of node s's list not yet marked with stamp to
+ * M->buf (*m of them, their weight added to *deg). */
+static void md_gather(md_work *M, uint32_t s, uint32_t stamp, uint32_t *m,
+                      uint32_t *deg)
+{
+    for (uint32_t q = 0; q < M->len[s]; q++) {
+        uint32_t v = M->adj[s][q];
+        if (M->state[v] == MD_VARIABLE && M->mark[v] != stamp) {
+            M->mark[v] = stamp;
+            M->buf[(*m)++] = v;
+            *deg += M->w[v];
+        }
+    }
+}
+
+/* Element e is covered by another: its list is no longer read. */
+static void md_absorb(md_work *M, uint32_t e)
+{
+    M->state[e] = MD_ABSORBED;
+    free(M->adj[e]);
+    M->adj[e] = NULL;
+    M->len[e] = 0;
+}
+
 /* The graph of A + A' without the diagonal, each row sorted: the
  * transpose of the transpose sorts A's rows, the transpose adds the
  * entries of a pattern given with one triangle missing. 0 or -ENOMEM. */
@@ -462,27 +486,10 @@ static int md_order(uint32_t n, const uint32_t *rp, const uint32_t *ci,
             uint32_t e = M.el[p][a];
             if (M.state[e] != MD_ELEMENT)
                 continue;
-            for (uint32_t q = 0; q < M.len[e]; q++) {
-                uint32_t v = M.adj[e][q];
-                if (M.state[v] == MD_VARIABLE && M.mark[v] != stamp) {
-                    M.mark[v] = stamp;
-                    M.buf[m++] = v;
-                    degp += M.w[v];
-                }
-            }
-            M.state[e] = MD_ABSORBED;
-            free(M.adj[e]);
-            M.adj[e] = NULL;
-            M.len[e] = 0;
+            md_gather(&M, e, stamp, &m, &degp);
+            md_absorb(&M, e);
         }
-        for (uint32_t q = 0; q < M.len[p]; q++) {
-            uint32_t v = M.adj[p][q];
-            if (M.state[v] == MD_VARIABLE && M.mark[v] != stamp) {
-                M.mark[v] = stamp;
-                M.buf[m++] = v;
-                degp += M.w[v];
-            }
-        }
+        md_gather(&M, p, stamp, &m, &degp);
         free(M.el[p]);
         M.el[p] = NULL;
         M.elen[p] = 0;
@@ -531,11 +538,8 @@ static int md_order(uint32_t n, const uint32_t *rp, const uint32_t *ci,
                 uint32_t e = M.el[i][q];
                 if (M.state[e] != MD_ELEMENT)
                     continue;
-                if (M.wv[e] == 0) {
-                    M.state[e] = MD_ABSORBED; /* L_e ⊆ L_p */
-                    free(M.adj[e]);
-                    M.adj[e] = NULL;
-                    M.len[e] = 0;
+                if (M.wv[e] == 0) { /* L_e ⊆ L_p */
+                    md_absorb(&M, e);
                     continue;
                 }
                 d += M.wv[e];
