@@ -659,22 +659,22 @@ static int lex(proto_jpull *j)
     return tk;
 }
 
-/* Remembers a member name of object serial; false when that object
- * already has it (or, with *oom set, when memory ran out). */
-static bool key_insert(proto_jpull *j, uint32_t serial, const char *s,
-                       size_t len, bool *oom)
+static uint64_t key_hash(uint32_t serial, const char *s, size_t len)
 {
     uint64_t h = 0xcbf29ce484222325u ^ serial;
     for (size_t i = 0; i < len; i++)
         h = (h ^ (unsigned char)s[i]) * 0x100000001b3u;
-    h |= 1;
+    return h | 1;
+}
+
+/* Puts e in the table of names (it is not there). */
+static bool table_put(proto_jpull *j, const proto_jkey *e)
+{
     if ((j->nkeys + 1) * 2 > j->cap_keys) {
         size_t cap = j->cap_keys ? j->cap_keys * 2 : 64;
         proto_jkey *nk = calloc(cap, sizeof *nk);
-        if (!nk) {
-            *oom = true;
+        if (!nk)
             return false;
-        }
         for (size_t i = 0; i < j->cap_keys; i++) {
             if (!j->keys[i].hash)
                 continue;
@@ -687,11 +687,51 @@ static bool key_insert(proto_jpull *j, uint32_t serial, const char *s,
         j->keys = nk;
         j->cap_keys = cap;
     }
-    size_t mask = j->cap_keys - 1, k = h & mask;
-    for (; j->keys[k].hash; k = (k + 1) & mask) {
+    size_t mask = j->cap_keys - 1, k = e->hash & mask;
+    while (j->keys[k].hash)
+        k = (k + 1) & mask;
+    j->keys[k] = *e;
+    j->nkeys++;
+    return true;
+}
+
+/* True when the table holds name s of object serial (hash h). */
+static bool table_has(const proto_jpull *j, uint64_t h, uint32_t serial,
+                      const char *s, size_t len)
+{
+    if (!j->cap_keys)
+        return false;
+    size_t mask = j->cap_keys - 1;
+    for (size_t k = h & mask; j->keys[k].hash; k = (k + 1) & mask) {
         const proto_jkey *e = &j->keys[k];
         if (e->hash == h && e->serial == serial && e->len == len &&
             (len == 0 || memcmp(j->arena + e->off, s, len) == 0))
+            return true;
+    }
+    return false;
+}
+
+/* Remembers a member name of the innermost open object; false when that
+ * object already has it (or, with *oom set, when memory ran out). An
+ * object's first name is only logged: nothing can clash with it until a
+ * second one comes, which then puts both in the table. Most objects of a
+ * model (a facet each) have one member, and never touch the table. */
+static bool key_insert(proto_jpull *j, const char *s, size_t len, bool *oom)
+{
+    uint32_t serial = j->serials[j->depth - 1];
+    size_t mark = j->marks[j->depth - 1], before = j->nlog - mark;
+    uint64_t h = 0;
+    if (before > 0) {
+        h = key_hash(serial, s, len);
+        if (before == 1) {
+            proto_jkey *first = &j->log[mark];
+            first->hash = key_hash(serial, j->arena + first->off, first->len);
+            if (!table_put(j, first)) {
+                *oom = true;
+                return false;
+            }
+        }
+        if (table_has(j, h, serial, s, len))
             return false;
     }
     if (len > j->acap - j->alen) {
@@ -723,23 +763,28 @@ static bool key_insert(proto_jpull *j, uint32_t serial, const char *s,
     }
     if (len)
         memcpy(j->arena + j->alen, s, len);
-    j->keys[k] = (proto_jkey){h, serial, (uint32_t)len, j->alen};
-    j->log[j->nlog++] = j->keys[k];
+    proto_jkey e = {h, serial, (uint32_t)len, j->alen};
+    j->log[j->nlog++] = e;
     j->alen += len;
-    j->nkeys++;
+    if (before > 0 && !table_put(j, &e)) {
+        j->nlog--;
+        j->alen -= len;
+        *oom = true;
+        return false;
+    }
     return true;
 }
 
 /* Forgets the names of the object that ends: they can no longer clash,
  * and a table holding only the open objects' names stays in cache where
- * one holding every name read grows with the document (a model's
- * facets are an object each). Its names are the log's last (those of
- * the objects inside it went when they ended); each leaves the table by
+ * one holding every name read grows with the document. Its names are the
+ * log's last (those of the objects inside it went when they ended); in
+ * the table only when there are two or more, each leaves it by
  * backward-shift deletion, which keeps every probe sequence unbroken. */
 static void keys_drop(proto_jpull *j, size_t mark)
 {
     size_t mask = j->cap_keys - 1;
-    for (size_t n = j->nlog; n > mark; n--) {
+    for (size_t n = j->nlog; j->nlog - mark > 1 && n > mark; n--) {
         const proto_jkey *e = &j->log[n - 1];
         size_t i = e->hash & mask;
         while (!(j->keys[i].hash == e->hash && j->keys[i].serial == e->serial &&
@@ -846,7 +891,7 @@ static proto_jtok begin_member(proto_jpull *j, int tk)
     if (j->has_nul)
         return fail_token(j, "NUL byte in object key not supported");
     bool oom = false;
-    if (!key_insert(j, j->serials[j->depth - 1], j->str, j->str_len, &oom))
+    if (!key_insert(j, j->str, j->str_len, &oom))
         return oom ? oom_error(j) : fail_token(j, "duplicate object key");
     size_t ks = j->tok_start, ke = j->tok_end;
     int colon = lex(j);
@@ -933,9 +978,65 @@ static proto_jtok next_token(proto_jpull *j)
     }
 }
 
+/* Whitespace, as lex() skips it. */
+static size_t skip_space(const unsigned char *d, size_t n, size_t p)
+{
+    while (p < n && (d[p] == ' ' || d[p] == '\n' || d[p] == '\r' ||
+                     d[p] == '\t'))
+        p++;
+    return p;
+}
+
+/* A number element of an array, its first byte at p; what next_token's
+ * lex() and begin_value() would do with it. */
+static proto_jtok array_number(proto_jpull *j, size_t p)
+{
+    j->tok_start = j->tok_end = j->pos = p;
+    int tk = lex_number(j, p);
+    if (tk == TK_FAILED)
+        return PROTO_JT_ERROR;
+    if (tk == TK_INVALID)
+        return fail_token(j, "invalid token");
+    j->state = ST_AFTER;
+    return tk == TK_INTEGER ? PROTO_JT_INTEGER : PROTO_JT_REAL;
+}
+
+/* The tokens of arrays of numbers (a model's coordinates and indices,
+ * most of its text) without the general state machine: a number as the
+ * first element or after a comma, and the array's end after an element.
+ * Exactly what next_token returns for them; -2 for anything else. */
+static proto_jtok next_in_array(proto_jpull *j)
+{
+    if (j->depth >= PROTO_JSON_MAX_DEPTH)
+        return (proto_jtok)-2;
+    const unsigned char *d = j->data;
+    size_t n = j->len, p = skip_space(d, n, j->pos);
+    if (j->state == ST_ARR_FIRST) {
+        if (p < n && (d[p] == '-' || is_digit(d[p])))
+            return array_number(j, p);
+        return (proto_jtok)-2;
+    }
+    if (j->state != ST_AFTER || j->depth == 0 ||
+        j->kinds[j->depth - 1] != K_ARRAY || p >= n)
+        return (proto_jtok)-2;
+    if (d[p] == ']') {
+        j->tok_start = p;
+        j->tok_end = j->pos = p + 1;
+        return end_container(j, PROTO_JT_ARRAY_END);
+    }
+    if (d[p] != ',')
+        return (proto_jtok)-2;
+    size_t q = skip_space(d, n, p + 1);
+    if (q < n && (d[q] == '-' || is_digit(d[q])))
+        return array_number(j, q);
+    return (proto_jtok)-2;
+}
+
 proto_jtok proto_jpull_next(proto_jpull *j)
 {
-    proto_jtok t = next_token(j);
+    proto_jtok t = next_in_array(j);
+    if (t == (proto_jtok)-2)
+        t = next_token(j);
     j->last = t;
     if (j->behind && j->pos >= j->behind_next) {
         j->behind_next = j->pos + PROTO_JPULL_BEHIND_STEP;

@@ -534,6 +534,15 @@ static void test_duplicate_keys_are_refused_per_object(void **state)
                         "1:22 duplicate object key near '\"a\"'");
     assert_string_equal(error_of("{\"\":1,\"\":2}"),
                         "1:8 duplicate object key near '\"\"'");
+    /* an object's first name is only logged until a second comes: the
+     * third repeating the first, and a one-member object inside the
+     * first member, are still caught */
+    assert_string_equal(error_of("{\"a\":1,\"b\":2,\"a\":3}"),
+                        "1:16 duplicate object key near '\"a\"'");
+    assert_string_equal(error_of("{\"a\":{\"a\":1},\"a\":2}"),
+                        "1:16 duplicate object key near '\"a\"'");
+    assert_string_equal(error_of("{\"a\":{\"a\":1},\"b\":{\"a\":1,\"a\":2}}"),
+                        "1:27 duplicate object key near '\"a\"'");
     /* many keys in one object */
     size_t cap = 200000 * 16;
     char *s = malloc(cap);
