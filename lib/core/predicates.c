@@ -247,21 +247,6 @@ int geo_orient3d(const double a[3], const double b[3], const double c[3],
     return orient3d_exact(a, b, c, d);
 }
 
-void geo_orient3d_plane_init(geo_orient3d_plane *pl, const double a[3],
-                             const double b[3], const double c[3])
-{
-    pl->a = a, pl->b = b, pl->c = c;
-    double ba[3], ca[3];
-    for (int k = 0; k < 3; k++)
-        ba[k] = b[k] - a[k], ca[k] = c[k] - a[k];
-    for (int k = 0; k < 3; k++) {
-        int i = (k + 1) % 3, j = (k + 2) % 3;
-        double p1 = ba[i] * ca[j], p2 = ba[j] * ca[i];
-        pl->n[k] = p1 - p2;
-        pl->m[k] = fabs(p1) + fabs(p2);
-    }
-}
-
 /* plane(p) exactly as an expansion; acc has room for 8. */
 static int plane_value_exact(const double plane[4], const double p[3],
                              double *acc)

@@ -50,8 +50,26 @@ typedef struct geo_orient3d_plane {
     double m[3]; /* |products| summed per component of n, rounded */
 } geo_orient3d_plane;
 
-void geo_orient3d_plane_init(geo_orient3d_plane *pl, const double a[3],
-                             const double b[3], const double c[3]);
+/* Inline: the pair search forms two per candidate pair, and the call
+ * and its loop cost more than the arithmetic. */
+static inline void geo_orient3d_plane_init(geo_orient3d_plane *pl,
+                                           const double a[3],
+                                           const double b[3],
+                                           const double c[3])
+{
+    pl->a = a, pl->b = b, pl->c = c;
+    double ba0 = b[0] - a[0], ba1 = b[1] - a[1], ba2 = b[2] - a[2];
+    double ca0 = c[0] - a[0], ca1 = c[1] - a[1], ca2 = c[2] - a[2];
+    double p1 = ba1 * ca2, p2 = ba2 * ca1;
+    pl->n[0] = p1 - p2;
+    pl->m[0] = fabs(p1) + fabs(p2);
+    p1 = ba2 * ca0, p2 = ba0 * ca2;
+    pl->n[1] = p1 - p2;
+    pl->m[1] = fabs(p1) + fabs(p2);
+    p1 = ba0 * ca1, p2 = ba1 * ca0;
+    pl->n[2] = p1 - p2;
+    pl->m[2] = fabs(p1) + fabs(p2);
+}
 
 static inline int geo_orient3d_plane_sign(const geo_orient3d_plane *pl,
                                           const double d[3])
