@@ -185,8 +185,8 @@ static int turn_in_axis(const geo_poly *p, uint32_t f, int axis)
  * rounded distance, ties to the first). The square root is taken only
  * for a squared distance above every one before: a smaller or equal one
  * cannot have a larger root. */
-static uint32_t farthest(const geo_poly *p, const uint32_t *fv, uint32_t n,
-                         const double x[3])
+static inline uint32_t farthest(const geo_poly *p, const uint32_t *fv,
+                                uint32_t n, const double x[3])
 {
     uint32_t k = 0;
     double best = -1, best2 = -1;
@@ -235,10 +235,12 @@ static bool strictly_convex(const geo_poly *p, const uint32_t *fv, uint32_t n,
     return changes == 2;
 }
 
-void geo_facet_shape_of(const geo_poly *p, uint32_t f, geo_facet_shape *ret)
+/* geo_facet_shape_of, inlined at each call below so that the triangle's
+ * instance (n = 3, most facets of a mesh) has its loops unrolled. */
+static inline __attribute__((always_inline)) void
+shape_of(const geo_poly *p, uint32_t f, const uint32_t *fv, uint32_t n,
+         geo_facet_shape *ret)
 {
-    uint32_t n = geo_poly_facet_size(p, f);
-    const uint32_t *fv = geo_poly_facet(p, f);
     memset(ret, 0, sizeof *ret);
     ret->turn = 1;
     ret->axis = 2;
@@ -352,6 +354,16 @@ void geo_facet_shape_of(const geo_poly *p, uint32_t f, geo_facet_shape *ret)
                                                     V(p, fv[(i + 1) % n]),
                                                     axis)) *
                           ret->turn >= 0;
+}
+
+void geo_facet_shape_of(const geo_poly *p, uint32_t f, geo_facet_shape *ret)
+{
+    uint32_t n = geo_poly_facet_size(p, f);
+    const uint32_t *fv = geo_poly_facet(p, f);
+    if (n == 3)
+        shape_of(p, f, fv, 3, ret);
+    else
+        shape_of(p, f, fv, n, ret);
 }
 
 /* ------------------------------------------------ own-polygon tests */
@@ -1162,18 +1174,21 @@ static bool free_edge_misses(const geo_poly *p, const uint32_t *x,
 static bool triangles_need_test(const geo_poly *p, const uint32_t *x,
                                 const uint32_t *y)
 {
-    /* which of y's vertices x lists, as a bit per position */
-    unsigned in_x = 0, nshared = 0;
-    for (int j = 0; j < 3; j++) {
-        unsigned hit = (y[j] == x[0]) | (y[j] == x[1]) | (y[j] == x[2]);
-        in_x |= hit << j;
-        nshared += hit;
-    }
+    /* which of y's vertices x lists (in_x, a bit per position of y) and
+     * which of x's y lists (in_y): nine comparisons, once */
+    uint32_t x0 = x[0], x1 = x[1], x2 = x[2], y0 = y[0], y1 = y[1],
+             y2 = y[2];
+    unsigned e00 = x0 == y0, e01 = x0 == y1, e02 = x0 == y2;
+    unsigned e10 = x1 == y0, e11 = x1 == y1, e12 = x1 == y2;
+    unsigned e20 = x2 == y0, e21 = x2 == y1, e22 = x2 == y2;
+    unsigned in_x = (e00 | e10 | e20) | (e01 | e11 | e21) << 1 |
+                    (e02 | e12 | e22) << 2;
+    unsigned in_y = (e00 | e01 | e02) | (e10 | e11 | e12) << 1 |
+                    (e20 | e21 | e22) << 2;
+    unsigned nshared = (in_x & 1) + (in_x >> 1 & 1) + (in_x >> 2);
     if (nshared == 2) {
         int c = in_x == 3 ? 2 : in_x == 5 ? 1 : 0; /* y's own vertex */
-        int a = 0; /* x's own vertex */
-        while (x[a] == y[(c + 1) % 3] || x[a] == y[(c + 2) % 3])
-            a++;
+        int a = in_y == 3 ? 2 : in_y == 5 ? 1 : 0; /* x's own vertex */
         return geo_orient3d(V(p, y[(c + 1) % 3]), V(p, y[(c + 2) % 3]),
                             V(p, x[a]), V(p, y[c])) == 0;
     }
@@ -1183,10 +1198,11 @@ static bool triangles_need_test(const geo_poly *p, const uint32_t *x,
     bool straddle = true;
     for (int pass = 0; pass < 2; pass++) {
         const uint32_t *f = pass ? y : x, *g = pass ? x : y;
+        unsigned shared = pass ? in_y : in_x; /* g's vertices f lists */
         geo_orient3d_plane_init(&pl, V(p, f[0]), V(p, f[1]), V(p, f[2]));
         bool pos = false, neg = false, zero = false;
         for (int j = 0; j < 3; j++) {
-            if (g[j] == f[0] || g[j] == f[1] || g[j] == f[2])
+            if (shared >> j & 1)
                 continue; /* the shared vertex: on the plane */
             int sg = geo_orient3d_plane_sign(&pl, V(p, g[j]));
             pos |= sg > 0;
@@ -1255,10 +1271,13 @@ static bool visit_pair(void *user, uint32_t a, uint32_t b)
          atomic_load_explicit(&s->flags[b], memory_order_relaxed)) &
         GEO_SI_DEGENERATE)
         return true;
-    if (geo_poly_facet_size(s->p, a) == 3 &&
-        geo_poly_facet_size(s->p, b) == 3 &&
-        !triangles_need_test(s->p, geo_poly_facet(s->p, a),
-                             geo_poly_facet(s->p, b)))
+    /* every facet a triangle (s->tri): facet f's corners are 3f..3f+2 */
+    if (s->tri ? !triangles_need_test(s->p, s->p->fidx + 3 * (size_t)a,
+                                      s->p->fidx + 3 * (size_t)b)
+               : geo_poly_facet_size(s->p, a) == 3 &&
+                     geo_poly_facet_size(s->p, b) == 3 &&
+                     !triangles_need_test(s->p, geo_poly_facet(s->p, a),
+                                          geo_poly_facet(s->p, b)))
         return true;
     geo_facet_shape sa, sb;
     facet_ref F, G;
