@@ -1112,12 +1112,13 @@ typedef struct search {
     const geo_bvh *h;   /* the caller's tree, or NULL: */
     const geo_fbvh *fh; /* the search's own */
     const geo_ctx *ctx;
-    /* per facet, or NULL when every facet is a triangle: then packed
-     * (one byte, tri_pack) and the masks taken from the vertices, for
-     * the few pairs that reach pair_test — not 28 bytes per facet */
+    /* per facet, or NULL when every facet is a triangle (all_tri): a
+     * triangle's shape is then formed only for the few pairs that reach
+     * pair_test (one in a hundred on a mesh), its masks taken from the
+     * vertices — not 28 bytes and a shape per facet */
     const geo_facet_shape *shapes;
     const uint64_t *masks; /* vertex_mask of each facet */
-    const uint8_t *tri;
+    bool all_tri;
     const uint64_t *const *sorted; /* per facet: sorted keys or NULL;
                                       NULL when no facet has them */
     atomic_uchar *flags;
@@ -1224,28 +1225,6 @@ static bool triangles_need_test(const geo_poly *p, const uint32_t *x,
     return !(free_edge_misses(p, x, y) && free_edge_misses(p, y, x));
 }
 
-/* The shape of a non-degenerate triangle in a byte: the positions of
- * its first two reference vertices (the third is the other one), the
- * axis and the turn; simple and convex it always is. */
-static uint8_t tri_pack(const uint32_t *v, const geo_facet_shape *s)
-{
-    int ia = s->ref[0] == v[0] ? 0 : s->ref[0] == v[1] ? 1 : 2;
-    int ib = s->ref[1] == v[0] ? 0 : s->ref[1] == v[1] ? 1 : 2;
-    return (uint8_t)(ia | ib << 2 | s->axis << 4 | (s->turn > 0) << 6);
-}
-
-static void tri_unpack(uint8_t t, const uint32_t *v, geo_facet_shape *ret)
-{
-    int ia = t & 3, ib = t >> 2 & 3;
-    memset(ret, 0, sizeof *ret);
-    ret->ref[0] = v[ia];
-    ret->ref[1] = v[ib];
-    ret->ref[2] = v[3 - ia - ib];
-    ret->axis = (int8_t)(t >> 4 & 3);
-    ret->turn = t >> 6 & 1 ? 1 : -1;
-    ret->simple = ret->convex = true;
-}
-
 static bool visit_pair(void *user, uint32_t a, uint32_t b)
 {
     visit_state *vs = user;
@@ -1271,8 +1250,8 @@ static bool visit_pair(void *user, uint32_t a, uint32_t b)
          atomic_load_explicit(&s->flags[b], memory_order_relaxed)) &
         GEO_SI_DEGENERATE)
         return true;
-    /* every facet a triangle (s->tri): facet f's corners are 3f..3f+2 */
-    if (s->tri ? !triangles_need_test(s->p, s->p->fidx + 3 * (size_t)a,
+    /* every facet a triangle: facet f's corners are 3f..3f+2 */
+    if (s->all_tri ? !triangles_need_test(s->p, s->p->fidx + 3 * (size_t)a,
                                       s->p->fidx + 3 * (size_t)b)
                : geo_poly_facet_size(s->p, a) == 3 &&
                      geo_poly_facet_size(s->p, b) == 3 &&
@@ -1289,8 +1268,8 @@ static bool visit_pair(void *user, uint32_t a, uint32_t b)
                         geo_poly_facet(s->p, b), &s->shapes[b], s->masks[b],
                         s->sorted ? s->sorted[b] : NULL};
     } else { /* triangles: no sorted keys */
-        tri_unpack(s->tri[a], geo_poly_facet(s->p, a), &sa);
-        tri_unpack(s->tri[b], geo_poly_facet(s->p, b), &sb);
+        geo_facet_shape_of(s->p, a, &sa);
+        geo_facet_shape_of(s->p, b, &sb);
         F = facet_at(s->p, a, &sa);
         G = facet_at(s->p, b, &sb);
     }
@@ -1387,7 +1366,6 @@ typedef struct shape_job {
     const geo_poly *p;
     geo_facet_shape *shapes;
     uint64_t *masks;
-    uint8_t *tri;
     atomic_uchar *flags;
     uint32_t block;
 } shape_job;
@@ -1399,13 +1377,21 @@ static void run_shapes(void *arg, size_t i)
     if (hi > j->p->nfacets)
         hi = j->p->nfacets;
     for (uint32_t f = lo; f < hi; f++) {
-        geo_facet_shape own, *s = j->shapes ? &j->shapes[f] : &own;
+        if (!j->shapes) {
+            /* a triangle is simple and convex, degenerate exactly when
+             * its corners are collinear (what geo_facet_shape_of finds) */
+            const uint32_t *v = j->p->fidx + 3 * (size_t)f;
+            atomic_init(&j->flags[f],
+                        collinear3(V(j->p, v[0]), V(j->p, v[1]),
+                                   V(j->p, v[2]))
+                            ? GEO_SI_DEGENERATE
+                            : 0);
+            continue;
+        }
+        geo_facet_shape *s = &j->shapes[f];
         geo_facet_shape_of(j->p, f, s);
-        if (j->masks)
-            j->masks[f] = vertex_mask(geo_poly_facet(j->p, f),
-                                      geo_poly_facet_size(j->p, f));
-        else if (!s->degenerate)
-            j->tri[f] = tri_pack(geo_poly_facet(j->p, f), s);
+        j->masks[f] = vertex_mask(geo_poly_facet(j->p, f),
+                                  geo_poly_facet_size(j->p, f));
         unsigned char fl = 0;
         if (s->degenerate)
             fl = GEO_SI_DEGENERATE;
@@ -1445,12 +1431,9 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     geo_fbvh *own = NULL;
     geo_facet_shape *shapes = NULL;
     uint64_t *masks = NULL;
-    uint8_t *tri = NULL;
     if (maxn > 3) {
         shapes = malloc(((size_t)nf + 1) * sizeof *shapes);
         masks = malloc(((size_t)nf + 1) * sizeof *masks);
-    } else {
-        tri = malloc((size_t)nf + 1);
     }
     const uint64_t **sorted = NULL;
     uint64_t *keys = NULL;
@@ -1461,11 +1444,11 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     task_out *out = NULL;
     uint32_t ntasks = 0;
     pair_list all = {0};
-    if ((maxn > 3 ? !shapes || !masks : !tri) || !flags || !plain || !ta ||
+    if ((maxn > 3 && (!shapes || !masks)) || !flags || !plain || !ta ||
         !tb || sort_large_facets(p, &sorted, &keys) < 0)
         goto oom;
 
-    shape_job sj = {p, shapes, masks, tri, flags, 4096};
+    shape_job sj = {p, shapes, masks, flags, 4096};
     geo_ctx_parallel_for(ctx, (nf + sj.block - 1) / sj.block, run_shapes, &sj);
     if ((rc = geo_ctx_progress(ctx, 0.05)) < 0)
         goto fail;
@@ -1486,7 +1469,7 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
         goto oom;
     s.p = p, s.h = bvh, s.fh = own, s.ctx = ctx;
     s.shapes = shapes, s.masks = masks;
-    s.tri = tri;
+    s.all_tri = maxn == 3;
     s.flags = flags;
     s.sorted = sorted;
     s.keep = o.max_pairs, s.maxn = maxn, s.ta = ta, s.tb = tb, s.out = out;
@@ -1571,7 +1554,6 @@ done:
     geo_fbvh_free(own);
     free(shapes);
     free(masks);
-    free(tri);
     free(sorted);
     free(keys);
     free(flags);
