@@ -450,25 +450,38 @@ static uint32_t eight_digits_value(uint64_t v)
     return (uint32_t)v;
 }
 
+static const uint32_t POW10_8[8] = {1,      10,      100,      1000,
+                                    10000,  100000,  1000000,  10000000};
+
 /* Significant digits of v < 10^8. */
 static int digits_of(uint32_t v)
 {
-    static const uint32_t pow10[8] = {1,      10,      100,      1000,
-                                      10000,  100000,  1000000,  10000000};
     int k = 0;
-    while (k < 8 && v >= pow10[k])
+    while (k < 8 && v >= POW10_8[k])
         k++;
     return k;
 }
 
-/* A number starting at start ('-' or a digit), read as jansson reads it:
- * "-" or "01" or "1." or "1e" are not numbers (TK_INVALID with the bytes
- * read so far), the look-ahead byte is checked as UTF-8. The digits are
- * gathered in the same pass (w·10^q, as proto/decimal.h wants them). */
-static int lex_number(proto_jpull *j, size_t start)
+/* What scan_number found. */
+enum { SN_INTEGER, SN_REAL, SN_INVALID, SN_TOO_BIG };
+
+typedef struct number_scan {
+    int kind;
+    size_t end;        /* where the scan stopped */
+    bool neg, dropped; /* dropped: a non-zero digit beyond the 19 kept */
+    uint64_t w;        /* the value is ±w·10^q */
+    int64_t q;
+} number_scan;
+
+/* The grammar of a number starting at start ('-' or a digit), as jansson
+ * reads it: "-" or "01" or "1." or "1e" are not numbers (SN_INVALID where
+ * the grammar fails), an integer of more than 63 bits is SN_TOO_BIG. The
+ * digits are gathered in the same pass (w·10^q, as proto/decimal.h wants
+ * them). Wherever it stops, the byte there is the number's look-ahead. */
+static inline __attribute__((always_inline)) void
+scan_number(const unsigned char *d, size_t n, size_t start, number_scan *ret)
 {
-    const unsigned char *d = j->data;
-    size_t n = j->len, p = start;
+    size_t p = start;
     bool neg = d[p] == '-';
     if (neg)
         p++;
@@ -476,6 +489,7 @@ static int lex_number(proto_jpull *j, size_t start)
     int nd = 0;
     int64_t q = 0;
     bool dropped = false;
+    *ret = (number_scan){.kind = SN_INVALID, .neg = neg};
     if (p < n && d[p] == '0') {
         p++;
     } else if (p < n && is_digit(d[p])) {
@@ -497,39 +511,27 @@ static int lex_number(proto_jpull *j, size_t start)
             }
         }
     } else {
-        if (!lookahead_ok(j, p, start))
-            return TK_FAILED;
-        j->tok_end = j->pos = p;
-        return TK_INVALID;
+        ret->end = p;
+        return;
     }
-    if (p < n && d[p] >= 0x80 && !lookahead_ok(j, p, start))
-        return TK_FAILED;
     if (p < n && is_digit(d[p])) { /* a leading zero */
-        j->tok_end = j->pos = p;
-        return TK_INVALID;
+        ret->end = p;
+        return;
     }
     if (p >= n || (d[p] != '.' && d[p] != 'e' && d[p] != 'E')) {
-        j->tok_end = j->pos = p;
+        ret->end = p;
+        ret->w = w;
         /* at most 19 digits are in w; more overflow any int64 */
-        if (neg) {
-            if (q > 0 || w > UINT64_C(1) << 63)
-                return fail_at(j, p, start, p, false,
-                               "too big negative integer");
-            j->integer = w == UINT64_C(1) << 63 ? INT64_MIN : -(int64_t)w;
-        } else {
-            if (q > 0 || w > (uint64_t)INT64_MAX)
-                return fail_at(j, p, start, p, false, "too big integer");
-            j->integer = (int64_t)w;
-        }
-        return TK_INTEGER;
+        ret->kind = q > 0 || w > (neg ? UINT64_C(1) << 63 : (uint64_t)INT64_MAX)
+                        ? SN_TOO_BIG
+                        : SN_INTEGER;
+        return;
     }
     if (d[p] == '.') {
         p++;
-        if (p < n && d[p] >= 0x80 && !lookahead_ok(j, p, start))
-            return TK_FAILED;
         if (p >= n || !is_digit(d[p])) {
-            j->tok_end = j->pos = p;
-            return TK_INVALID;
+            ret->end = p;
+            return;
         }
         uint64_t v;
         while (nd <= 11 && n - p >= 8 && eight_digits(v = load8(d + p))) {
@@ -550,22 +552,15 @@ static int lex_number(proto_jpull *j, size_t start)
                 dropped |= dg != 0;
             }
         }
-        if (p < n && d[p] >= 0x80 && !lookahead_ok(j, p, start))
-            return TK_FAILED;
     }
     if (p < n && (d[p] == 'e' || d[p] == 'E')) {
         p++;
-        if (p < n && d[p] >= 0x80 && !lookahead_ok(j, p, start))
-            return TK_FAILED;
         bool eneg = false;
-        if (p < n && (d[p] == '+' || d[p] == '-')) {
+        if (p < n && (d[p] == '+' || d[p] == '-'))
             eneg = d[p++] == '-';
-            if (p < n && d[p] >= 0x80 && !lookahead_ok(j, p, start))
-                return TK_FAILED;
-        }
         if (p >= n || !is_digit(d[p])) {
-            j->tok_end = j->pos = p;
-            return TK_INVALID;
+            ret->end = p;
+            return;
         }
         int64_t ex = 0;
         do {
@@ -573,19 +568,79 @@ static int lex_number(proto_jpull *j, size_t start)
                 ex = ex * 10 + (d[p] - '0');
             p++;
         } while (p < n && is_digit(d[p]));
-        if (p < n && d[p] >= 0x80 && !lookahead_ok(j, p, start))
-            return TK_FAILED;
         q += eneg ? -ex : ex;
     }
+    ret->end = p;
+    ret->kind = SN_REAL;
+    ret->w = w;
+    ret->q = q;
+    ret->dropped = dropped;
+}
+
+/* A number starting at start, read as jansson reads it: scan_number's
+ * grammar, then the look-ahead byte checked as UTF-8 (wherever the scan
+ * stopped: a byte of 0x80 or above can continue no part of a number),
+ * then the verdict (TK_INVALID with the bytes read so far). */
+static int lex_number(proto_jpull *j, size_t start)
+{
+    number_scan sc;
+    scan_number(j->data, j->len, start, &sc);
+    size_t p = sc.end;
+    if (!lookahead_ok(j, p, start))
+        return TK_FAILED;
+    switch (sc.kind) {
+    case SN_INVALID:
+        j->tok_end = j->pos = p;
+        return TK_INVALID;
+    case SN_TOO_BIG:
+        j->tok_end = j->pos = p;
+        return fail_at(j, p, start, p, false, sc.neg
+                                                  ? "too big negative integer"
+                                                  : "too big integer");
+    case SN_INTEGER:
+        j->tok_end = j->pos = p;
+        j->integer = sc.neg && sc.w == UINT64_C(1) << 63 ? INT64_MIN
+                     : sc.neg                             ? -(int64_t)sc.w
+                                                          : (int64_t)sc.w;
+        return TK_INTEGER;
+    default:
+        break;
+    }
     j->tok_end = j->pos = p;
-    int r = proto_decimal_from_parts(neg, w, q, dropped,
-                                     (const char *)d + start, p - start,
-                                     &j->real);
+    int r = proto_decimal_from_parts(sc.neg, sc.w, sc.q, sc.dropped,
+                                     (const char *)j->data + start,
+                                     p - start, &j->real);
     if (r == -ENOMEM)
         return fail_oom(j);
     if (r < 0)
         return fail_at(j, p, start, p, false, "real number overflow");
     return TK_REAL;
+}
+
+bool proto_json_number(const void *data, size_t len, size_t start,
+                       size_t *ret_end, bool *ret_is_int,
+                       int64_t *ret_integer, double *ret_real)
+{
+    const unsigned char *d = data;
+    if (start >= len || (d[start] != '-' && !is_digit(d[start])))
+        return false;
+    number_scan sc;
+    scan_number(d, len, start, &sc);
+    if (sc.end < len && d[sc.end] >= 0x80)
+        return false;
+    *ret_end = sc.end;
+    if (sc.kind == SN_INTEGER) {
+        *ret_is_int = true;
+        *ret_integer = sc.neg && sc.w == UINT64_C(1) << 63 ? INT64_MIN
+                       : sc.neg                             ? -(int64_t)sc.w
+                                                            : (int64_t)sc.w;
+        return true;
+    }
+    *ret_is_int = false;
+    return sc.kind == SN_REAL &&
+           proto_decimal_from_parts(sc.neg, sc.w, sc.q, sc.dropped,
+                                    (const char *)d + start, sc.end - start,
+                                    ret_real) == 0;
 }
 
 static bool is_alpha(unsigned c)
@@ -1032,17 +1087,31 @@ static proto_jtok next_in_array(proto_jpull *j)
     return (proto_jtok)-2;
 }
 
-proto_jtok proto_jpull_next(proto_jpull *j)
+/* The token t has been read: remembered, and the pages behind it
+ * offered back every PROTO_JPULL_BEHIND_STEP bytes. */
+static proto_jtok returned(proto_jpull *j, proto_jtok t)
 {
-    proto_jtok t = next_in_array(j);
-    if (t == (proto_jtok)-2)
-        t = next_token(j);
     j->last = t;
     if (j->behind && j->pos >= j->behind_next) {
         j->behind_next = j->pos + PROTO_JPULL_BEHIND_STEP;
         j->behind(j->behind_user, j->tok_start);
     }
     return t;
+}
+
+proto_jtok proto_jpull_next(proto_jpull *j)
+{
+    proto_jtok t = next_in_array(j);
+    if (t == (proto_jtok)-2)
+        t = next_token(j);
+    return returned(j, t);
+}
+
+proto_jtok proto_jpull_end_object_at(proto_jpull *j, size_t pos)
+{
+    j->tok_start = pos - 1;
+    j->tok_end = j->pos = pos;
+    return returned(j, end_container(j, PROTO_JT_OBJECT_END));
 }
 
 proto_jtok proto_jpull_skip(proto_jpull *j)

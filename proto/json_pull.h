@@ -128,4 +128,24 @@ proto_jtok proto_jpull_next(proto_jpull *j);
  * Anywhere else it reads nothing and returns the last token again. */
 proto_jtok proto_jpull_skip(proto_jpull *j);
 
+/* For a reader that reads an object's members from the bytes itself
+ * (proto/model_json.c's fast path): called right after the OBJECT token
+ * that opened it, with pos just past its closing '}', the tokenizer goes
+ * on as if it had read every token up to that '}' and returned its
+ * OBJECT_END (which it returns). The caller answers for the bytes in
+ * between: a valid object, no member name twice. */
+proto_jtok proto_jpull_end_object_at(proto_jpull *j, size_t pos);
+
+/* The number at data[start..len) as the tokenizer reads one, for such a
+ * reader: true when the bytes from start are a whole number that
+ * proto_jpull_next would return as PROTO_JT_INTEGER (*ret_is_int,
+ * *ret_integer) or PROTO_JT_REAL (*ret_real, the same bits), ending at
+ * *ret_end before a byte below 0x80 or the end. False for anything else
+ * (no number, an integer beyond 64 bits, a real that overflows, a
+ * look-ahead byte the tokenizer would check as UTF-8): the tokenizer
+ * then says what is wrong. */
+bool proto_json_number(const void *data, size_t len, size_t start,
+                       size_t *ret_end, bool *ret_is_int,
+                       int64_t *ret_integer, double *ret_real);
+
 #endif

@@ -11,7 +11,9 @@
  * when present. Unknown keys are ignored. Counts are checked against the
  * limits before the model is allocated (tree reader) or while it is
  * filled (streaming reader, which stops storing past a limit). Both
- * readers give the same first error for every document.
+ * readers give the same first error for every document. The streaming
+ * reader takes the layout facet writes straight from the bytes (its fast
+ * path, below) and anything else token by token.
  *
  * Writing: one vertex and one facet per line, every double printed as the
  * shortest decimal that reads back to the same double, so a write/read
@@ -555,6 +557,259 @@ static int mread_verdict(mread *m, proto_read_report *rep, geo_err *err)
     return proto_finish_planes(p, m->given, m->lim, rep, err);
 }
 
+/* The fast path: a model object in the layout facet writes (members
+ * "format", "units", "vertices" and "facets" in any order, each once; a
+ * vertex an array of three numbers; a facet {"vertices": [indices]} with
+ * an optional "plane": [four numbers] after them; whitespace anywhere),
+ * read straight from the bytes into the same mread the token reader
+ * fills, number by number through the tokenizer's own conversion
+ * (proto_json_number). A model's text is 9 parts in 10 such arrays, where
+ * a token at a time costs three times the bytes' own work. Whatever else
+ * it meets — another member, an escape, a string that is not the
+ * expected name, a number the tokenizer would refuse, a count past its
+ * limit, a depth near the limit — it leaves to the token reader, which
+ * then reads the object from its start: every error a document can
+ * have is that reader's. */
+
+enum { FN_FORMAT, FN_UNITS, FN_VERTICES, FN_FACETS, FN_OTHER };
+
+typedef struct fast {
+    const unsigned char *d;
+    size_t n, p;
+    const proto_jpull *j; /* its behind callback */
+    size_t behind_next;
+} fast;
+
+static void f_space(fast *f)
+{
+    const unsigned char *d = f->d;
+    size_t p = f->p;
+    while (p < f->n &&
+           (d[p] == ' ' || d[p] == '\n' || d[p] == '\r' || d[p] == '\t'))
+        p++;
+    f->p = p;
+}
+
+/* Whitespace, then the byte c (taken) or false. */
+static bool f_byte(fast *f, unsigned char c)
+{
+    f_space(f);
+    if (f->p < f->n && f->d[f->p] == c) {
+        f->p++;
+        return true;
+    }
+    return false;
+}
+
+static bool f_number(fast *f, double *ret)
+{
+    f_space(f);
+    bool is_int;
+    int64_t i;
+    if (!proto_json_number(f->d, f->n, f->p, &f->p, &is_int, &i, ret))
+        return false;
+    if (is_int)
+        *ret = (double)i; /* as number_value */
+    return true;
+}
+
+/* An index: a non-negative integer of 32 bits. */
+static bool f_index(fast *f, uint32_t *ret)
+{
+    f_space(f);
+    bool is_int;
+    int64_t i;
+    double r;
+    if (!proto_json_number(f->d, f->n, f->p, &f->p, &is_int, &i, &r) ||
+        !is_int || i < 0 || i > (int64_t)UINT32_MAX)
+        return false;
+    *ret = (uint32_t)i;
+    return true;
+}
+
+/* A string of printable ASCII without escapes, its bytes in [*s, *e). */
+static bool f_plain_string(fast *f, size_t *s, size_t *e)
+{
+    if (!f_byte(f, '"'))
+        return false;
+    size_t p = f->p;
+    while (p < f->n && f->d[p] >= 0x20 && f->d[p] < 0x7F && f->d[p] != '"' &&
+           f->d[p] != '\\')
+        p++;
+    if (p >= f->n || f->d[p] != '"')
+        return false;
+    *s = f->p;
+    *e = p;
+    f->p = p + 1;
+    return true;
+}
+
+static bool f_string_is(fast *f, const char *want)
+{
+    size_t s, e;
+    return f_plain_string(f, &s, &e) && e - s == strlen(want) &&
+           memcmp(f->d + s, want, e - s) == 0;
+}
+
+/* Whitespace, then the len bytes of lit (taken) or false. */
+static bool f_literal(fast *f, const char *lit, size_t len)
+{
+    f_space(f);
+    if (f->n - f->p < len || memcmp(f->d + f->p, lit, len) != 0)
+        return false;
+    f->p += len;
+    return true;
+}
+
+/* A member name and its colon: FN_*, FN_OTHER for anything else. */
+static int f_name(fast *f)
+{
+    static const char *const names[] = {"format", "units", "vertices",
+                                        "facets"};
+    size_t s, e;
+    if (!f_plain_string(f, &s, &e) || !f_byte(f, ':'))
+        return FN_OTHER;
+    for (int k = 0; k < FN_OTHER; k++)
+        if (e - s == strlen(names[k]) && memcmp(f->d + s, names[k], e - s) == 0)
+            return k;
+    return FN_OTHER;
+}
+
+/* The pages behind are offered back as the tokenizer does. */
+static void f_behind(fast *f)
+{
+    if (f->j->behind && f->p >= f->behind_next) {
+        f->behind_next = f->p + PROTO_JPULL_BEHIND_STEP;
+        f->j->behind(f->j->behind_user, f->p);
+    }
+}
+
+static bool f_vertices(fast *f, mread *m)
+{
+    if (!f_byte(f, '['))
+        return false;
+    if (f_byte(f, ']'))
+        return true;
+    geo_poly *p = m->p;
+    do {
+        double xyz[3];
+        if (!f_byte(f, '[') || !f_number(f, &xyz[0]) || !f_byte(f, ',') ||
+            !f_number(f, &xyz[1]) || !f_byte(f, ',') ||
+            !f_number(f, &xyz[2]) || !f_byte(f, ']'))
+            return false;
+        uint64_t i = m->nv++;
+        if (m->nv > m->lim->max_vertices ||
+            (i >= p->cap_verts && geo_poly_reserve(p, i + 1, 0, 0) < 0))
+            return false;
+        memcpy(p->verts[i], xyz, sizeof xyz);
+        f_behind(f);
+    } while (f_byte(f, ','));
+    return f_byte(f, ']');
+}
+
+static bool f_facet(fast *f, mread *m)
+{
+    geo_poly *p = m->p;
+    uint64_t fi = m->nf++;
+    if (m->nf > m->lim->max_facets ||
+        (fi >= p->cap_facets && geo_poly_reserve(p, 0, (size_t)fi + 1, 0) < 0))
+        return false;
+    if (fi >= m->cap_given) {
+        size_t cap = m->cap_given ? m->cap_given * 2 : 1024;
+        bool *g = realloc(m->given, cap);
+        if (!g)
+            return false;
+        m->given = g;
+        m->cap_given = cap;
+    }
+    if (!f_literal(f, "\"vertices\"", 10) || !f_byte(f, ':') ||
+        !f_byte(f, '['))
+        return false;
+    do {
+        uint32_t v;
+        if (!f_index(f, &v))
+            return false;
+        m->nc++;
+        if (m->nc > m->lim->max_corners ||
+            (m->nc > p->cap_idx &&
+             geo_poly_reserve(p, 0, 0, (size_t)m->nc) < 0))
+            return false;
+        p->fidx[m->nc - 1] = v;
+    } while (f_byte(f, ','));
+    if (!f_byte(f, ']'))
+        return false;
+    double pl[4];
+    bool have_plane = f_byte(f, ',');
+    if (have_plane &&
+        (!f_literal(f, "\"plane\"", 7) || !f_byte(f, ':') ||
+         !f_byte(f, '[') || !f_number(f, &pl[0]) ||
+         !f_byte(f, ',') || !f_number(f, &pl[1]) || !f_byte(f, ',') ||
+         !f_number(f, &pl[2]) || !f_byte(f, ',') || !f_number(f, &pl[3]) ||
+         !f_byte(f, ']')))
+        return false;
+    if (!f_byte(f, '}'))
+        return false;
+    p->fstart[fi + 1] = (uint32_t)m->nc;
+    if (have_plane)
+        memcpy(p->planes[fi], pl, sizeof pl);
+    m->given[fi] = have_plane;
+    return true;
+}
+
+static bool f_facets(fast *f, mread *m)
+{
+    if (!f_byte(f, '['))
+        return false;
+    if (f_byte(f, ']'))
+        return true;
+    do {
+        if (!f_byte(f, '{') || !f_facet(f, m))
+            return false;
+        f_behind(f);
+    } while (f_byte(f, ','));
+    return f_byte(f, ']');
+}
+
+/* The members of the model object whose '{' j has just returned, into
+ * m (as the token reader initialises it); the position just past its
+ * '}', or 0 when the token reader must read it. */
+static size_t fast_model(proto_jpull *j, mread *m)
+{
+    if (j->depth + 4 > PROTO_JSON_MAX_DEPTH)
+        return 0; /* the indices' depth: the tokenizer's limit decides */
+    fast f = {(const unsigned char *)j->data, j->len, j->tok_end, j,
+              j->tok_end + PROTO_JPULL_BEHIND_STEP};
+    bool seen[FN_OTHER] = {false};
+    do {
+        int k = f_name(&f);
+        if (k == FN_OTHER || seen[k])
+            return 0;
+        seen[k] = true;
+        bool ok;
+        switch (k) {
+        case FN_FORMAT:
+            ok = f_string_is(&f, FORMAT_NAME);
+            m->format = M_OK;
+            break;
+        case FN_UNITS:
+            ok = f_string_is(&f, "mm");
+            m->units = M_OK;
+            break;
+        case FN_VERTICES:
+            ok = f_vertices(&f, m);
+            m->vertices = M_OK;
+            break;
+        default:
+            ok = f_facets(&f, m);
+            m->facets = M_OK;
+            break;
+        }
+        if (!ok)
+            return 0;
+    } while (f_byte(&f, ','));
+    return f_byte(&f, '}') ? f.p : 0;
+}
+
 geo_poly *proto_json_from_pull(proto_jpull *j, proto_jtok first,
                                const proto_limits *lim, proto_read_report *rep,
                                bool *ret_syntax, geo_err *err)
@@ -573,8 +828,28 @@ geo_poly *proto_json_from_pull(proto_jpull *j, proto_jtok first,
             return NULL;
         }
         m.p->fstart[0] = 0;
+        size_t end = fast_model(j, &m);
+        if (end) {
+            proto_jpull_end_object_at(j, end);
+        } else {
+            /* from the start, with nothing of the fast path's kept */
+            free(m.given);
+            geo_poly_free(m.p);
+            m = (mread){
+                .j = j, .lim = lim, .store_v = true, .store_f = true,
+                .bad_f = UINT32_MAX, .plane_f = UINT32_MAX,
+            };
+            m.p = geo_poly_new();
+            if (!m.p || geo_poly_reserve(m.p, 0, 1, 0) < 0) {
+                geo_poly_free(m.p);
+                geo_err_set(err, -ENOMEM, "out of memory");
+                return NULL;
+            }
+            m.p->fstart[0] = 0;
+        }
         proto_jtok t;
-        while (r == 0 && (t = proto_jpull_next(j)) != PROTO_JT_OBJECT_END) {
+        while (!end && r == 0 &&
+               (t = proto_jpull_next(j)) != PROTO_JT_OBJECT_END) {
             if (t == PROTO_JT_ERROR) {
                 r = -1;
             } else if (strcmp(j->str, "format") == 0) {
