@@ -780,7 +780,10 @@ static bool key_insert(proto_jpull *j, const char *s, size_t len, bool *oom)
         h = key_hash(serial, s, len);
         if (before == 1) {
             proto_jkey *first = &j->log[mark];
-            first->hash = key_hash(serial, j->arena + first->off, first->len);
+            /* an empty first name may have left the arena unallocated */
+            first->hash = key_hash(serial,
+                                   first->len ? j->arena + first->off : "",
+                                   first->len);
             if (!table_put(j, first)) {
                 *oom = true;
                 return false;

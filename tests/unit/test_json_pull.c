@@ -543,6 +543,8 @@ static void test_duplicate_keys_are_refused_per_object(void **state)
                         "1:16 duplicate object key near '\"a\"'");
     assert_string_equal(error_of("{\"a\":{\"a\":1},\"b\":{\"a\":1,\"a\":2}}"),
                         "1:27 duplicate object key near '\"a\"'");
+    /* an empty first name, before anything was stored for names */
+    assert_string_equal(error_of("{\"\":1,\"a\":2}"), "");
     /* many keys in one object */
     size_t cap = 200000 * 16;
     char *s = malloc(cap);
