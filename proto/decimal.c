@@ -16,18 +16,20 @@
 __extension__ typedef unsigned __int128 u128;
 
 /* 5^0 .. 5^27, the powers of five below 2^63. */
-static const uint64_t POW5[28] = {
-    UINT64_C(1), UINT64_C(5), UINT64_C(25), UINT64_C(125), UINT64_C(625),
-    UINT64_C(3125), UINT64_C(15625), UINT64_C(78125), UINT64_C(390625),
-    UINT64_C(1953125), UINT64_C(9765625), UINT64_C(48828125),
-    UINT64_C(244140625), UINT64_C(1220703125), UINT64_C(6103515625),
-    UINT64_C(30517578125), UINT64_C(152587890625), UINT64_C(762939453125),
-    UINT64_C(3814697265625), UINT64_C(19073486328125),
-    UINT64_C(95367431640625), UINT64_C(476837158203125),
-    UINT64_C(2384185791015625), UINT64_C(11920928955078125),
-    UINT64_C(59604644775390625), UINT64_C(298023223876953125),
-    UINT64_C(1490116119384765625), UINT64_C(7450580596923828125),
-};
+#define POW5_LIST(X)                                                        \
+    X(1) X(5) X(25) X(125) X(625) X(3125) X(15625) X(78125) X(390625)       \
+    X(1953125) X(9765625) X(48828125) X(244140625) X(1220703125)            \
+    X(6103515625) X(30517578125) X(152587890625) X(762939453125)            \
+    X(3814697265625) X(19073486328125) X(95367431640625)                    \
+    X(476837158203125) X(2384185791015625) X(11920928955078125)             \
+    X(59604644775390625) X(298023223876953125) X(1490116119384765625)       \
+    X(7450580596923828125)
+#define AS_U64(v) UINT64_C(v),
+#define AS_RECIP(v) (~(u128)0 / UINT64_C(v)),
+static const uint64_t POW5[28] = {POW5_LIST(AS_U64)};
+/* floor(2^128 / 5^k) (5^k does not divide 2^128): division by 5^k as
+ * two products (parse_exact) */
+static const u128 RECIP5[28] = {POW5_LIST(AS_RECIP)};
 
 /* 10^0 .. 10^22: every one is a double exactly. */
 static const double POW10D[23] = {
@@ -105,10 +107,19 @@ static bool parse_exact(uint64_t w, int64_t q, double *ret)
          * quotient has more than 64 bits, the remainder is the sticky
          * part */
         int l = __builtin_clzll(w);
-        u128 num = (u128)(w << l) << 64;
-        uint64_t den = POW5[-q];
-        u128 quo = num / den;
-        return round_to_double(quo, (int)q - 64 - l, num % den != 0, ret);
+        uint64_t h = w << l, den = POW5[-q];
+        u128 num = (u128)h << 64, r = RECIP5[-q];
+        /* num·r / 2^128 lies in (num/den − 1, num/den]: its floor, formed
+         * exactly from h·r's two halves, is the quotient or one less, and
+         * the remainder says which */
+        u128 quo = (u128)h * (uint64_t)(r >> 64) +
+                   (((u128)h * (uint64_t)r) >> 64);
+        u128 rem = num - quo * den;
+        while (rem >= den) {
+            quo++;
+            rem -= den;
+        }
+        return round_to_double(quo, (int)q - 64 - l, rem != 0, ret);
     }
     return false;
 }
