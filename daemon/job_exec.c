@@ -26,7 +26,8 @@ static int fail(job_outcome *ret, int r, const geo_err *err)
 }
 
 int job_exec(void *user, const job_rec *job, const void *input,
-             size_t input_len, const geo_ctx *ctx, job_outcome *ret)
+             size_t input_len, job_decoded *decoded, const geo_ctx *ctx,
+             job_outcome *ret)
 {
     geo_err err = {{0}};
     json_error_t je;
@@ -43,12 +44,19 @@ int job_exec(void *user, const job_rec *job, const void *input,
     geo_poly *model = NULL;
     json_t *stats = NULL, *summary = NULL;
     /* a read-only pipeline's result is its (FMB1) input: the store keeps
-     * one copy (store_finish without a model) */
-    bool fmb1 = input_len >= 4 && memcmp(input, "FMB1", 4) == 0;
+     * one copy (store_finish without a model). A primed input is the
+     * model job_submit stored as FMB1, bit for bit what reading it back
+     * gives (FMB1 keeps every double, a unit plane is kept as it is). */
+    bool fmb1 = decoded || (input_len >= 4 && memcmp(input, "FMB1", 4) == 0);
     bool changes = !fmb1 || runner_changes_model(&pl);
-    if (fmb1) {
+    if (decoded) {
+        model = decoded->data;
+        decoded->data = NULL;
+    } else if (fmb1) {
         model = proto_model_read_mem(input, input_len, PROTO_FMT_FMB1, NULL,
                                      &err);
+    }
+    if (fmb1) {
         if (!model) {
             geo_err_prefix(&err, "stored input");
             proto_pipeline_free(&pl);

@@ -1,5 +1,5 @@
 /* job_exec.h — the executor the worker pool runs for every job: decodes
- * the stored input (FMB1), parses the stored pipeline, runs it through the
+ * the stored input (FMB1) unless its submitter primed the model, parses the stored pipeline, runs it through the
  * runner, and encodes the outcome (result model as FMB1, statistics and
  * summary as JSON). It is the glue between job_pool (threads, store) and
  * runner (kernels); it does no geometry itself. */
@@ -10,8 +10,10 @@
 #include "metrics.h"
 
 /* A job_exec_fn (job_pool.h); user is a metrics * (per-operation
- * durations are recorded there) or NULL. */
+ * durations are recorded there) or NULL. A primed input (decoded) is a
+ * geo_poly *, taken over. */
 int job_exec(void *user, const job_rec *job, const void *input,
-             size_t input_len, const geo_ctx *ctx, job_outcome *ret);
+             size_t input_len, job_decoded *decoded, const geo_ctx *ctx,
+             job_outcome *ret);
 
 #endif

@@ -39,6 +39,12 @@ typedef struct slot {
     int64_t last_report;   /* monotonic ms of the last stored progress */
 } slot;
 
+/* A primed input (job_pool_prime). */
+typedef struct primed {
+    char id[JOB_ID_LEN + 1];
+    job_decoded d;
+} primed;
+
 struct job_pool {
     store *s;
     job_pool_config c;
@@ -60,6 +66,11 @@ struct job_pool {
     char store_err[sizeof(geo_err)]; /* under err_lock: the last refusal */
     pthread_t monitor;
     bool monitor_started;
+    /* primed inputs, oldest first, under primed_lock */
+    pthread_mutex_t primed_lock;
+    primed primed[JOB_POOL_PRIMED_MAX];
+    unsigned nprimed;
+    size_t primed_bytes;
 };
 
 static void set_reason(slot *sl, int why)
@@ -129,6 +140,65 @@ static int record_outcome(job_pool *p, const job_rec *job,
                           const job_outcome *out, bool *ret_requeued,
                           geo_err *err);
 
+static void decoded_release(job_decoded *d)
+{
+    if (d->data && d->free_fn)
+        d->free_fn(d->data);
+    d->data = NULL;
+}
+
+/* Drops primed entry i (under primed_lock), releasing its input. */
+static void primed_drop(job_pool *p, unsigned i)
+{
+    p->primed_bytes -= p->primed[i].d.bytes;
+    decoded_release(&p->primed[i].d);
+    memmove(&p->primed[i], &p->primed[i + 1],
+            (p->nprimed - i - 1) * sizeof *p->primed);
+    p->nprimed--;
+}
+
+void job_pool_prime(job_pool *p, const char *id, job_decoded d)
+{
+    if (d.bytes > JOB_POOL_PRIMED_BYTES || strlen(id) > JOB_ID_LEN) {
+        decoded_release(&d);
+        return;
+    }
+    pthread_mutex_lock(&p->primed_lock);
+    while (p->nprimed > 0 &&
+           (p->nprimed == JOB_POOL_PRIMED_MAX ||
+            p->primed_bytes + d.bytes > JOB_POOL_PRIMED_BYTES))
+        primed_drop(p, 0);
+    primed *e = &p->primed[p->nprimed++];
+    snprintf(e->id, sizeof e->id, "%s", id);
+    e->d = d;
+    p->primed_bytes += d.bytes;
+    pthread_mutex_unlock(&p->primed_lock);
+}
+
+/* Takes job id's primed input into *ret; false when there is none. */
+static bool primed_take(job_pool *p, const char *id, job_decoded *ret)
+{
+    bool found = false;
+    pthread_mutex_lock(&p->primed_lock);
+    for (unsigned i = p->nprimed; i-- > 0;)
+        if (strcmp(p->primed[i].id, id) == 0) {
+            *ret = p->primed[i].d;
+            p->primed[i].d.data = NULL; /* moved out, not released */
+            primed_drop(p, i);
+            found = true;
+            break;
+        }
+    pthread_mutex_unlock(&p->primed_lock);
+    return found;
+}
+
+void job_pool_unprime(job_pool *p, const char *id)
+{
+    job_decoded d;
+    if (primed_take(p, id, &d))
+        decoded_release(&d);
+}
+
 static void run_job(slot *sl, job_rec *job)
 {
     job_pool *p = sl->pool;
@@ -153,8 +223,12 @@ static void run_job(slot *sl, job_rec *job)
     void *input = NULL;
     size_t input_len = 0;
     geo_err err = {{0}};
-    int r = store_get_blob(p->s, job->id, STORE_BLOB_INPUT, &input,
-                           &input_len, &err);
+    /* the input as its submitter decoded it, else the stored bytes */
+    job_decoded dec;
+    bool was_primed = primed_take(p, job->id, &dec);
+    int r = was_primed ? 0
+                   : store_get_blob(p->s, job->id, STORE_BLOB_INPUT, &input,
+                                    &input_len, &err);
     if (r == 0) {
         geo_ctx ctx = {
             .progress = on_progress,
@@ -168,7 +242,12 @@ static void run_job(slot *sl, job_rec *job)
             .parallel_for = p->c.parallel_for,
             .pf_user = p->c.pf_user,
         };
-        r = p->c.exec(p->c.exec_user, job, input, input_len, &ctx, &out);
+        r = p->c.exec(p->c.exec_user, job, input, input_len,
+                      was_primed ? &dec : NULL, &ctx, &out);
+        if (was_primed) {
+            input_len = dec.bytes; /* for the trim below */
+            decoded_release(&dec);
+        }
         free(input);
     } else {
         out.error = strdup(err.msg);
@@ -410,6 +489,7 @@ job_pool *job_pool_start(store *s, const job_pool_config *c, geo_err *err)
     atomic_init(&p->timeout_ms, c->job_timeout_ms);
     pthread_mutex_init(&p->lock, NULL);
     pthread_mutex_init(&p->err_lock, NULL);
+    pthread_mutex_init(&p->primed_lock, NULL);
     atomic_init(&p->store_failing, 0);
     pthread_condattr_t ca;
     pthread_condattr_init(&ca);
@@ -543,6 +623,9 @@ job_pool *job_pool_stop(job_pool *p, uint64_t grace_ms)
     pthread_cond_destroy(&p->tick);
     pthread_mutex_destroy(&p->lock);
     pthread_mutex_destroy(&p->err_lock);
+    while (p->nprimed > 0)
+        primed_drop(p, p->nprimed - 1);
+    pthread_mutex_destroy(&p->primed_lock);
     free(p->slots);
     free(p);
     return NULL;

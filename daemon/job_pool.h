@@ -43,14 +43,28 @@ typedef struct job_outcome {
     size_t stats_len;
 } job_outcome;
 
+/* A job's input already decoded by whoever stored it (job_submit: the
+ * model it has just parsed and stored), handed to the pool so that the
+ * worker that runs the job soon after neither reads it back from the
+ * store nor decodes it again. data is released with free_fn; bytes is
+ * what it holds in memory. */
+typedef struct job_decoded {
+    void *data;
+    size_t bytes;
+    void (*free_fn)(void *data);
+} job_decoded;
+
 /* Runs one job: job is the claimed record, input its input blob; ctx has
- * progress and cancel wired (and the pool's parallel_for). Returns 0 on
- * success (outcome filled), -ECANCELED when ctx asked it to stop, any
- * other negative errno on failure (outcome->error says why). Called on a
- * worker thread; must be thread-safe. */
+ * progress and cancel wired (and the pool's parallel_for). decoded is
+ * NULL, or the input as it was primed (job_pool_prime; input is then
+ * NULL): the executor may take decoded->data (setting it NULL), else the
+ * pool releases it after the call. Returns 0 on success (outcome
+ * filled), -ECANCELED when ctx asked it to stop, any other negative
+ * errno on failure (outcome->error says why). Called on a worker thread;
+ * must be thread-safe. */
 typedef int (*job_exec_fn)(void *user, const job_rec *job, const void *input,
-                           size_t input_len, const geo_ctx *ctx,
-                           job_outcome *ret);
+                           size_t input_len, job_decoded *decoded,
+                           const geo_ctx *ctx, job_outcome *ret);
 
 /* Told after every change the pool makes to a job in the store (claimed,
  * progress, finished, requeued); used to wake waiting clients.
@@ -97,6 +111,23 @@ bool job_pool_paused(job_pool *p);
 
 /* Changes the time limit for jobs claimed from now on (reload). */
 void job_pool_set_timeout(job_pool *p, uint64_t job_timeout_ms);
+
+/* What the pool keeps of primed inputs at most, together and in count:
+ * beyond it the oldest go, and their jobs' workers read the store, as for
+ * a job queued before the start or stored by another node. */
+#define JOB_POOL_PRIMED_BYTES ((size_t)64 << 20)
+#define JOB_POOL_PRIMED_MAX 1024
+
+/* Keeps d, the decoded input of job id just stored, for the job's run on
+ * this node; the pool owns d from here (released at once when it alone
+ * exceeds the budget). An entry no run takes — the job canceled while
+ * queued, or run by another node — stays until the budget pushes it out
+ * or the pool stops. */
+void job_pool_prime(job_pool *p, const char *id, job_decoded d);
+
+/* Releases job id's primed input, if the pool holds one (the job was not
+ * stored after all). */
+void job_pool_unprime(job_pool *p, const char *id);
 
 /* Workers running a job right now. */
 unsigned job_pool_busy(job_pool *p);

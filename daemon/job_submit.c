@@ -8,6 +8,28 @@
 #include "model_io.h"
 #include "runner.h"
 
+static void poly_free(void *data)
+{
+    geo_poly_free(data);
+}
+
+/* Hands a copy of the model just stored to the pool, for the worker that
+ * runs it (job_pool_prime): a copy of the arrays costs a fraction of
+ * reading the FMB1 back and checking its planes. Out of memory it is
+ * simply not primed. */
+static void prime(job_pool *pool, const char *id, const geo_poly *model)
+{
+    geo_poly *copy = geo_poly_copy(model);
+    if (!copy)
+        return;
+    size_t bytes = sizeof *copy + (size_t)copy->nverts * sizeof *copy->verts +
+                   ((size_t)copy->nfacets + 1) * sizeof *copy->fstart +
+                   (size_t)geo_poly_ncorners(copy) * sizeof *copy->fidx +
+                   (copy->planes ? (size_t)copy->nfacets * sizeof *copy->planes
+                                 : 0);
+    job_pool_prime(pool, id, (job_decoded){copy, bytes, poly_free});
+}
+
 int job_submit(store *s, job_pool *pool, unsigned queue_size,
                const job_request *rq, job_rec *ret, bool *ret_replayed,
                geo_err *err)
@@ -52,8 +74,14 @@ int job_submit(store *s, job_pool *pool, unsigned queue_size,
         .idem_hash = rq->idem_hash,
         .created_ms = now,
     };
+    /* primed before the job is visible to the workers, which may claim
+     * it the moment it is stored; withdrawn if it is not stored */
+    if (pool && rq->model)
+        prime(pool, id, rq->model);
     job_rec old;
     r = store_put(s, &j, queue_size, &old, err);
+    if (r < 0 && pool && rq->model)
+        job_pool_unprime(pool, id);
     if (r == -EEXIST) {
         if (old.idem_hash != rq->idem_hash) {
             r = geo_err_set(err, -EEXIST, "Idempotency-Key '%s' was used "

@@ -5,7 +5,9 @@
  *
  * A model input is stored as FMB1 (the scanner's binary model, proto/
  * model_io.h): a worker decodes it in microseconds instead of parsing JSON
- * again, and it keeps every double bit for bit. A frep-object/1 input is
+ * again, and it keeps every double bit for bit. A copy of the parsed model
+ * is also primed in the local pool (job_pool_prime), so that the worker
+ * that runs the job here skips even that. A frep-object/1 input is
  * stored as its compact JSON text (jansson prints doubles exactly); the
  * executor tells the two apart by FMB1's magic "FMB1", which JSON text
  * cannot start with. The pipeline is stored in canonical JSON (every

@@ -22,12 +22,26 @@ typedef struct fixture {
 } fixture;
 
 /* Input "ok" succeeds, "fail" fails, "spin" reports progress every
- * millisecond until canceled. */
+ * millisecond until canceled. A primed input (a string) is used in place
+ * of the stored one; "take" is taken over (and freed here) and read as
+ * "ok", any other is left to the pool. */
 static int exec(void *user, const job_rec *job, const void *input,
-                size_t len, const geo_ctx *ctx, job_outcome *ret)
+                size_t len, job_decoded *decoded, const geo_ctx *ctx,
+                job_outcome *ret)
 {
     (void)user;
     (void)job;
+    if (decoded) {
+        assert_null(input);
+        input = decoded->data;
+        len = strlen(decoded->data);
+        if (strcmp(decoded->data, "take") == 0) {
+            free(decoded->data);
+            decoded->data = NULL;
+            input = "ok";
+            len = 2;
+        }
+    }
     if (len == 2 && memcmp(input, "ok", 2) == 0) {
         ret->model = strdup("MODEL");
         ret->model_len = 5;
@@ -142,6 +156,75 @@ static void test_jobs_run_and_outcomes_are_recorded(void **state)
     assert_int_equal(atomic_load(&f->done), 2);
 }
 
+static job_decoded text_input(const char *text, size_t bytes)
+{
+    return (job_decoded){strdup(text), bytes, free};
+}
+
+static void expect_state(fixture *f, const char *id, job_state want)
+{
+    job_rec r = wait_state(f, id, want);
+    job_rec_clear(&r);
+}
+
+/* A primed input replaces the stored one for the job's run; an entry
+ * pushed out by the budget, in bytes or in count, leaves the job to its
+ * stored input; whatever the executor does not take, and what is still
+ * held when the pool stops, the pool releases (the sanitizer build
+ * checks that nothing leaks). */
+static void test_primed_inputs_replace_the_stored_ones(void **state)
+{
+    fixture *f = *state;
+    char a[27], b[27], c[27], d[27], e[27], g[27];
+    job_pool *p = start(f, 1, 10000);
+    job_pool_set_paused(p, true);
+    submit(f, p, "fail", a);
+    job_pool_prime(p, a, text_input("ok", 2));
+    submit(f, p, "fail", b);
+    job_pool_prime(p, b, text_input("take", 4));
+    submit(f, p, "ok", c);
+    /* larger than the budget alone: released at once, the rest stays */
+    job_pool_prime(p, c, text_input("fail", JOB_POOL_PRIMED_BYTES + 1));
+    /* withdrawn: the stored input runs */
+    char w[27];
+    submit(f, p, "ok", w);
+    job_pool_prime(p, w, text_input("fail", 4));
+    job_pool_unprime(p, w);
+    job_pool_set_paused(p, false);
+    expect_state(f, a, JOB_SUCCEEDED);
+    expect_state(f, b, JOB_SUCCEEDED);
+    expect_state(f, c, JOB_SUCCEEDED);
+    expect_state(f, w, JOB_SUCCEEDED);
+    job_pool_stop(p, 1000);
+
+    /* the budget in bytes: e's entry pushes d's out */
+    p = start(f, 1, 10000);
+    job_pool_set_paused(p, true);
+    submit(f, p, "fail", d);
+    job_pool_prime(p, d, text_input("ok", 2));
+    submit(f, p, "ok", e);
+    job_pool_prime(p, e, text_input("fail", JOB_POOL_PRIMED_BYTES));
+    job_pool_set_paused(p, false);
+    expect_state(f, d, JOB_FAILED);
+    expect_state(f, e, JOB_FAILED);
+    job_pool_stop(p, 1000);
+
+    /* the budget in count: entries for jobs run elsewhere push g's out,
+     * and the pool stops holding them */
+    p = start(f, 1, 10000);
+    job_pool_set_paused(p, true);
+    submit(f, p, "fail", g);
+    job_pool_prime(p, g, text_input("ok", 1));
+    for (int i = 0; i < JOB_POOL_PRIMED_MAX; i++) {
+        char id[JOB_ID_LEN + 1];
+        snprintf(id, sizeof id, "elsewhere-%d", i);
+        job_pool_prime(p, id, text_input("ok", 1));
+    }
+    job_pool_set_paused(p, false);
+    expect_state(f, g, JOB_FAILED);
+    job_pool_stop(p, 1000);
+}
+
 static void test_local_cancel_stops_a_running_job(void **state)
 {
     fixture *f = *state;
@@ -222,6 +305,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
 #define T(name) cmocka_unit_test_setup_teardown(name, setup, teardown)
         T(test_jobs_run_and_outcomes_are_recorded),
+        T(test_primed_inputs_replace_the_stored_ones),
         T(test_local_cancel_stops_a_running_job),
         T(test_cancel_flag_in_the_store_reaches_the_worker),
         T(test_time_limit_fails_the_job),
