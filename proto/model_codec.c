@@ -253,6 +253,24 @@ bool proto_scan_line(proto_scan *s, const char **ret, size_t *ret_len)
 
 int proto_parse_double(const char *tok, size_t len, double *ret)
 {
+    /* A number in JSON's grammar (what every writer prints, most tokens)
+     * goes through the exact conversion of the JSON reader, which gives
+     * strtod's double without its multi-precision path (half the time of
+     * reading an OBJ was strtod); an integer keeps the sign of a zero as
+     * strtod does. Anything else — a leading '+' or '.', a trailing '.',
+     * leading zeros, more than 19 digits of an integer, an overflow — is
+     * strtod's to accept or refuse, as before. */
+    size_t end;
+    bool is_int;
+    int64_t integer;
+    double r;
+    if (proto_json_number(tok, len, 0, &end, &is_int, &integer, &r) &&
+        end == len) {
+        *ret = !is_int                           ? r
+               : integer == 0 && tok[0] == '-' ? -0.0
+                                                : (double)integer;
+        return 0;
+    }
     /* strtod needs a terminated string; longer tokens are no numbers a
      * writer would produce (the longest %.17g form has 24 bytes) */
     char buf[64];

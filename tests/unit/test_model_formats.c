@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "model_cmp.h"
+#include "model_codec.h"
 #include "model_io.h"
 
 static geo_poly *load(const char *name)
@@ -987,6 +988,78 @@ static void test_format_table_is_the_one_list(void **state)
     assert_int_equal(strlen(tiny), sizeof tiny - 1);
 }
 
+/* The text readers' number parse as it was: strtod on the whole token,
+ * no "nan", "inf" or hex floats, an overflow -ERANGE. */
+static int strtod_reference(const char *tok, size_t len, double *ret)
+{
+    char buf[64];
+    if (len == 0 || len >= sizeof buf)
+        return -EINVAL;
+    memcpy(buf, tok, len);
+    buf[len] = '\0';
+    char c = buf[0] == '-' || buf[0] == '+' ? buf[1] : buf[0];
+    if (!((c >= '0' && c <= '9') || c == '.') || strpbrk(buf, "xX"))
+        return -EINVAL;
+    char *endp;
+    double d = strtod(buf, &endp);
+    if (endp != buf + len)
+        return -EINVAL;
+    if (!isfinite(d))
+        return -ERANGE;
+    *ret = d;
+    return 0;
+}
+
+/* proto_parse_double takes numbers in JSON's grammar through the JSON
+ * reader's conversion and leaves the rest to strtod: the same verdict and
+ * the same bits as strtod alone, on every syntax a text model holds. */
+static void test_number_tokens_parse_as_strtod(void **state)
+{
+    (void)state;
+    static const char *const fixed[] = {
+        "0", "-0", "-0.0", "+0", "+1.5", ".5", "-.5", "5.", "01", "-007",
+        "1e5", "1E+05", "1e-400", "1e400", "-1e400", "12345678901234567890",
+        "-9223372036854775808", "9223372036854775807", "9223372036854775808",
+        "0x1p3", "nan", "inf", "-", "1.2.3", "1e", "1e+", "1ee5", "",
+        "0.1000000000000000055511151231257827", "4.9e-324", "2.5e-324",
+        "1.7976931348623157e308", "1.7976931348623159e308",
+    };
+    size_t nfixed = sizeof fixed / sizeof *fixed;
+    uint64_t rng = 99;
+    char tok[48];
+    for (size_t i = 0; i < nfixed + 200000; i++) {
+        size_t n;
+        if (i < nfixed) {
+            n = strlen(fixed[i]);
+            memcpy(tok, fixed[i], n);
+        } else {
+            /* sign, digits, point, digits, exponent: each optional */
+            static const char *const signs[] = {"", "", "-", "+"};
+            n = (size_t)snprintf(tok, sizeof tok, "%s",
+                                 signs[geo_rand_next(&rng) % 4]);
+            int nd = (int)(geo_rand_next(&rng) % 21);
+            int point = (int)(geo_rand_next(&rng) % (unsigned)(nd + 2)) - 1;
+            for (int k = 0; k < nd && n < 40; k++) {
+                if (k == point)
+                    tok[n++] = '.';
+                tok[n++] = (char)('0' + geo_rand_next(&rng) % 10);
+            }
+            if (point == nd && geo_rand_next(&rng) % 2)
+                tok[n++] = '.';
+            if (geo_rand_next(&rng) % 3 == 0)
+                n += (size_t)snprintf(tok + n, sizeof tok - n, "e%d",
+                                      (int)(geo_rand_next(&rng) % 700) - 350);
+        }
+        tok[n] = '\0';
+        double want = 0, got = 0;
+        int rw = strtod_reference(tok, n, &want);
+        int rg = proto_parse_double(tok, n, &got);
+        if (rw != rg || (rw == 0 && memcmp(&want, &got, sizeof got) != 0))
+            fail_msg("\"%s\": strtod %d %a, parse %d %a", tok, rw, want, rg,
+                     got);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1012,6 +1085,7 @@ int main(void)
         cmocka_unit_test(test_huge_counts_fail_before_allocating),
         cmocka_unit_test(test_ase_lists_every_triangle_and_marks_diagonals),
         cmocka_unit_test(test_mutated_inputs_give_errors_or_valid_models),
+        cmocka_unit_test(test_number_tokens_parse_as_strtod),
     };
     return cmocka_run_group_tests(tests, make_tmpdir, remove_tmpdir);
 }
