@@ -810,24 +810,33 @@ static size_t fast_model(proto_jpull *j, mread *m)
     return f_byte(&f, '}') ? f.p : 0;
 }
 
+/* An mread with its empty model (one facet start, 0). -ENOMEM. */
+static int mread_start(mread *m, proto_jpull *j, const proto_limits *lim,
+                       geo_err *err)
+{
+    *m = (mread){
+        .j = j, .lim = lim, .store_v = true, .store_f = true,
+        .bad_f = UINT32_MAX, .plane_f = UINT32_MAX,
+    };
+    m->p = geo_poly_new();
+    if (!m->p || geo_poly_reserve(m->p, 0, 1, 0) < 0) {
+        m->p = geo_poly_free(m->p);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    m->p->fstart[0] = 0;
+    return 0;
+}
+
 geo_poly *proto_json_from_pull(proto_jpull *j, proto_jtok first,
                                const proto_limits *lim, proto_read_report *rep,
                                bool *ret_syntax, geo_err *err)
 {
     *ret_syntax = false;
-    mread m = {
-        .j = j, .lim = lim, .store_v = true, .store_f = true,
-        .bad_f = UINT32_MAX, .plane_f = UINT32_MAX,
-    };
+    mread m = {0}; /* no model unless the text is an object */
     int r = 0;
     if (first == PROTO_JT_OBJECT) {
-        m.p = geo_poly_new();
-        if (!m.p || geo_poly_reserve(m.p, 0, 1, 0) < 0) {
-            geo_poly_free(m.p);
-            geo_err_set(err, -ENOMEM, "out of memory");
+        if (mread_start(&m, j, lim, err) < 0)
             return NULL;
-        }
-        m.p->fstart[0] = 0;
         size_t end = fast_model(j, &m);
         if (end) {
             proto_jpull_end_object_at(j, end);
@@ -835,17 +844,8 @@ geo_poly *proto_json_from_pull(proto_jpull *j, proto_jtok first,
             /* from the start, with nothing of the fast path's kept */
             free(m.given);
             geo_poly_free(m.p);
-            m = (mread){
-                .j = j, .lim = lim, .store_v = true, .store_f = true,
-                .bad_f = UINT32_MAX, .plane_f = UINT32_MAX,
-            };
-            m.p = geo_poly_new();
-            if (!m.p || geo_poly_reserve(m.p, 0, 1, 0) < 0) {
-                geo_poly_free(m.p);
-                geo_err_set(err, -ENOMEM, "out of memory");
+            if (mread_start(&m, j, lim, err) < 0)
                 return NULL;
-            }
-            m.p->fstart[0] = 0;
         }
         proto_jtok t;
         while (!end && r == 0 &&
