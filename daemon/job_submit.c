@@ -19,15 +19,16 @@ static void poly_free(void *data)
  * simply not primed. */
 static void prime(job_pool *pool, const char *id, const geo_poly *model)
 {
+    size_t bytes =
+        sizeof *model + (size_t)model->nverts * sizeof *model->verts +
+        ((size_t)model->nfacets + 1) * sizeof *model->fstart +
+        (size_t)geo_poly_ncorners(model) * sizeof *model->fidx +
+        (size_t)model->nfacets * sizeof *model->planes;
+    if (bytes > JOB_POOL_PRIMED_BYTES)
+        return; /* the pool would not keep it: no copy of a large model */
     geo_poly *copy = geo_poly_copy(model);
-    if (!copy)
-        return;
-    size_t bytes = sizeof *copy + (size_t)copy->nverts * sizeof *copy->verts +
-                   ((size_t)copy->nfacets + 1) * sizeof *copy->fstart +
-                   (size_t)geo_poly_ncorners(copy) * sizeof *copy->fidx +
-                   (copy->planes ? (size_t)copy->nfacets * sizeof *copy->planes
-                                 : 0);
-    job_pool_prime(pool, id, (job_decoded){copy, bytes, poly_free});
+    if (copy)
+        job_pool_prime(pool, id, (job_decoded){copy, bytes, poly_free});
 }
 
 int job_submit(store *s, job_pool *pool, unsigned queue_size,
