@@ -108,26 +108,6 @@ unsigned char *proto_buf_grow(proto_buf *b, size_t n)
     return at;
 }
 
-void proto_st_u16le(unsigned char *p, uint16_t v)
-{
-    p[0] = (unsigned char)v;
-    p[1] = (unsigned char)(v >> 8);
-}
-
-void proto_st_u32le(unsigned char *p, uint32_t v)
-{
-    for (int i = 0; i < 4; i++)
-        p[i] = (unsigned char)(v >> (8 * i));
-}
-
-void proto_st_f64le(unsigned char *p, double v)
-{
-    uint64_t u;
-    memcpy(&u, &v, 8);
-    for (int i = 0; i < 8; i++)
-        p[i] = (unsigned char)(u >> (8 * i));
-}
-
 void proto_buf_u16le(proto_buf *b, uint16_t v)
 {
     unsigned char s[2] = {(unsigned char)v, (unsigned char)(v >> 8)};
@@ -157,35 +137,6 @@ void proto_buf_f64le(proto_buf *b, double v)
     for (int i = 0; i < 8; i++)
         s[i] = (unsigned char)(u >> (8 * i));
     proto_buf_append(b, s, 8);
-}
-
-uint16_t proto_ld_u16le(const unsigned char *p)
-{
-    return (uint16_t)(p[0] | (unsigned)p[1] << 8);
-}
-
-uint32_t proto_ld_u32le(const unsigned char *p)
-{
-    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 |
-           (uint32_t)p[3] << 24;
-}
-
-double proto_ld_f64le(const unsigned char *p)
-{
-    uint64_t u = 0;
-    for (int i = 7; i >= 0; i--)
-        u = u << 8 | p[i];
-    double d;
-    memcpy(&d, &u, 8);
-    return d;
-}
-
-float proto_ld_f32le(const unsigned char *p)
-{
-    uint32_t u = proto_ld_u32le(p);
-    float f;
-    memcpy(&f, &u, 4);
-    return f;
 }
 
 void proto_scan_init(proto_scan *s, const void *data, size_t len,

@@ -20,6 +20,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "model_io.h"
 
@@ -43,20 +44,85 @@ void proto_buf_u32(proto_buf *b, uint32_t v);
 /* Appends n bytes and returns where they start, for the caller to fill;
  * NULL after an allocation failure (then failed is set). */
 unsigned char *proto_buf_grow(proto_buf *b, size_t n);
-/* Little-endian stores to unaligned bytes. */
-void proto_st_u16le(unsigned char *p, uint16_t v);
-void proto_st_u32le(unsigned char *p, uint32_t v);
-void proto_st_f64le(unsigned char *p, double v);
+/* Little-endian stores to and loads from unaligned bytes; inline, since
+ * the binary formats (FMB1 above all: the store's) call them for every
+ * number, and on a little-endian machine each is one move. */
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+#define PROTO_LE_MOVE 1
+#else
+#define PROTO_LE_MOVE 0
+#endif
+
+static inline void proto_st_u16le(unsigned char *p, uint16_t v)
+{
+    p[0] = (unsigned char)v;
+    p[1] = (unsigned char)(v >> 8);
+}
+
+static inline void proto_st_u32le(unsigned char *p, uint32_t v)
+{
+    if (PROTO_LE_MOVE) {
+        memcpy(p, &v, 4);
+        return;
+    }
+    for (int i = 0; i < 4; i++)
+        p[i] = (unsigned char)(v >> (8 * i));
+}
+
+static inline void proto_st_f64le(unsigned char *p, double v)
+{
+    uint64_t u;
+    memcpy(&u, &v, 8);
+    if (PROTO_LE_MOVE) {
+        memcpy(p, &u, 8);
+        return;
+    }
+    for (int i = 0; i < 8; i++)
+        p[i] = (unsigned char)(u >> (8 * i));
+}
+
 void proto_buf_u16le(proto_buf *b, uint16_t v);
 void proto_buf_u32le(proto_buf *b, uint32_t v);
 void proto_buf_f32le(proto_buf *b, float v);
 void proto_buf_f64le(proto_buf *b, double v);
 
-/* Little-endian loads from unaligned bytes. */
-uint16_t proto_ld_u16le(const unsigned char *p);
-uint32_t proto_ld_u32le(const unsigned char *p);
-double proto_ld_f64le(const unsigned char *p);
-float proto_ld_f32le(const unsigned char *p);
+static inline uint16_t proto_ld_u16le(const unsigned char *p)
+{
+    return (uint16_t)(p[0] | (unsigned)p[1] << 8);
+}
+
+static inline uint32_t proto_ld_u32le(const unsigned char *p)
+{
+    uint32_t u;
+    if (PROTO_LE_MOVE) {
+        memcpy(&u, p, 4);
+        return u;
+    }
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 |
+           (uint32_t)p[3] << 24;
+}
+
+static inline double proto_ld_f64le(const unsigned char *p)
+{
+    uint64_t u = 0;
+    if (PROTO_LE_MOVE) {
+        memcpy(&u, p, 8);
+    } else {
+        for (int i = 7; i >= 0; i--)
+            u = u << 8 | p[i];
+    }
+    double d;
+    memcpy(&d, &u, 8);
+    return d;
+}
+
+static inline float proto_ld_f32le(const unsigned char *p)
+{
+    uint32_t u = proto_ld_u32le(p);
+    float f;
+    memcpy(&f, &u, 4);
+    return f;
+}
 
 /* A whitespace tokenizer over text that is not NUL-terminated; counts
  * lines (from 1) for error messages. With hash_comments, '#' starts a
