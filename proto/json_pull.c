@@ -450,18 +450,6 @@ static uint32_t eight_digits_value(uint64_t v)
     return (uint32_t)v;
 }
 
-static const uint32_t POW10_8[8] = {1,      10,      100,      1000,
-                                    10000,  100000,  1000000,  10000000};
-
-/* Significant digits of v < 10^8. */
-static int digits_of(uint32_t v)
-{
-    int k = 0;
-    while (k < 8 && v >= POW10_8[k])
-        k++;
-    return k;
-}
-
 /* What scan_number found. */
 enum { SN_INTEGER, SN_REAL, SN_INVALID, SN_TOO_BIG };
 
@@ -536,8 +524,10 @@ scan_number(const unsigned char *d, size_t n, size_t start, number_scan *ret)
         uint64_t v;
         while (nd <= 11 && n - p >= 8 && eight_digits(v = load8(d + p))) {
             uint32_t x = eight_digits_value(v);
-            /* leading zeros of the fraction are not significant */
-            nd += w ? 8 : digits_of(x);
+            /* leading zeros of the fraction are not significant: the
+             * first byte that is no '0' (v's lowest) starts the digits */
+            uint64_t z = v ^ 0x3030303030303030u;
+            nd += w ? 8 : z ? 8 - __builtin_ctzll(z) / 8 : 0;
             w = w * 100000000 + x;
             q -= 8;
             p += 8;
