@@ -638,13 +638,19 @@ static bool is_alpha(unsigned c)
     return (c | 0x20) - 'a' < 26;
 }
 
-static int lex(proto_jpull *j)
+/* Past the whitespace JSON allows at p. */
+static size_t skip_space(const unsigned char *d, size_t n, size_t p)
 {
-    const unsigned char *d = j->data;
-    size_t n = j->len, p = j->pos;
     while (p < n && (d[p] == ' ' || d[p] == '\n' || d[p] == '\r' ||
                      d[p] == '\t'))
         p++;
+    return p;
+}
+
+static int lex(proto_jpull *j)
+{
+    const unsigned char *d = j->data;
+    size_t n = j->len, p = skip_space(d, n, j->pos);
     j->tok_start = j->tok_end = j->pos = p;
     if (p >= n)
         return TK_EOF;
@@ -1024,15 +1030,6 @@ static proto_jtok next_token(proto_jpull *j)
             return PROTO_JT_ERROR;
         }
     }
-}
-
-/* Whitespace, as lex() skips it. */
-static size_t skip_space(const unsigned char *d, size_t n, size_t p)
-{
-    while (p < n && (d[p] == ' ' || d[p] == '\n' || d[p] == '\r' ||
-                     d[p] == '\t'))
-        p++;
-    return p;
 }
 
 /* A number element of an array, its first byte at p; what next_token's
