@@ -459,6 +459,7 @@ geo_poly *sim_scan_phase(const geo_poly *stone, uint32_t k, double noise,
                          double phase, uint64_t seed)
 {
     uint64_t rng = seed * 0xd1b54a32d192ed03ULL + 7;
+    noise = fmax(noise, SIM_NOISE_FLOOR);
     plane_list l = {0};
     for (uint32_t i = 0; i <= k; i++) {
         double e1[3], e2[3];

@@ -46,9 +46,17 @@ geo_poly *sim_halfspace_intersection(const double *planes, uint32_t n,
 geo_poly *sim_clip_convex(const geo_poly *p, const double plane[4], double tol,
                           int *ret_changed);
 
+/* The least silhouette noise a scan is made with, mm. Without noise, a
+ * stone edge that stays on the silhouette over a run of views gives one
+ * plane per view through that edge, and the clipping in doubles cannot
+ * resolve planes that meet along one line (at 1e-7 mm, 2 of 36 scans came
+ * out open; from 1e-6 mm none of 36, nor 147 scans of random designs).
+ * 1e-6 mm is a thousandth of the least noise a scanner reports. */
+#define SIM_NOISE_FLOOR 1e-6
+
 /* A scan of stone with k views over 180° about z plus one top view;
  * noise is the standard deviation of the silhouette noise in mm (the
- * sample models use 0.001). NULL on failure. */
+ * sample models use 0.001), raised to SIM_NOISE_FLOOR. NULL on failure. */
 geo_poly *sim_scan(const geo_poly *stone, uint32_t k, double noise,
                    uint64_t seed);
 
