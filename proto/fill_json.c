@@ -89,7 +89,15 @@ json_t *proto_validity_to_json(const geo_stats *s)
     if (s->low_degree_vertices)
         e |= reason(a, "%u vertices in fewer than 3 facets",
                     s->low_degree_vertices);
-    if (s->orientation != GEO_ORIENT_OUTWARD)
+    /* "inconsistent" has three causes; say which (lib/inspect/orient.h) */
+    if (s->orientation == GEO_ORIENT_INCONSISTENT && !s->orientable)
+        e |= reason(a, "orientation inconsistent: a shell is not "
+                    "orientable");
+    else if (s->orientation == GEO_ORIENT_INCONSISTENT &&
+             s->inconsistent_facets == 0)
+        e |= reason(a, "orientation inconsistent: of its %u shells some "
+                    "face outward, some inward", s->shells);
+    else if (s->orientation != GEO_ORIENT_OUTWARD)
         e |= reason(a, "orientation %s (%u inconsistent facets)",
                     geo_orientation_name(s->orientation),
                     s->inconsistent_facets);
