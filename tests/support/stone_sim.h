@@ -49,9 +49,9 @@ geo_poly *sim_clip_convex(const geo_poly *p, const double plane[4], double tol,
 /* The least silhouette noise a scan is made with, mm. Without noise, a
  * stone edge that stays on the silhouette over a run of views gives one
  * plane per view through that edge, and the clipping in doubles cannot
- * resolve planes that meet along one line (at 1e-7 mm, 2 of 36 scans came
- * out open; from 1e-6 mm none of 36, nor 147 scans of random designs).
- * 1e-6 mm is a thousandth of the least noise a scanner reports. */
+ * resolve planes that meet along one line (at 1e-7 mm 2 of 36 scans came
+ * out open; at 1e-6 mm none of those 36 nor of 60 random designs). A
+ * thousandth of the 1 µm of the sample models. */
 #define SIM_NOISE_FLOOR 1e-6
 
 /* A scan of stone with k views over 180° about z plus one top view;

@@ -178,12 +178,9 @@ static geo_poly *correct(const geo_poly *scan, enum method m, bool *valid,
     return p;
 }
 
-/* phase: the scan's view phase (sim_scan_phase), NAN when the scan was
- * not simulated here (then no bound). */
-/* A scan the simulator could not make (its clipping in doubles fails
- * where several silhouette planes pass through one stone edge, as they
- * do without noise): said in its row and counted, never left out in
- * silence. */
+/* A scan the simulator could not make (sim_scan gave NULL: out of memory,
+ * or a clip in doubles that left nothing): said in its row and counted,
+ * never left out in silence. */
 static void no_scan(const char *cut, unsigned seed, unsigned k,
                     double noise_um, totals *t)
 {
@@ -192,6 +189,8 @@ static void no_scan(const char *cut, unsigned seed, unsigned k,
     t->unsimulated++;
 }
 
+/* phase: the scan's view phase (sim_scan_phase), NAN when the scan was
+ * not simulated here (then no bound). */
 static void row(const char *cut, int ci, unsigned seed, unsigned k,
                 double noise_um, double phase, const geo_poly *truth,
                 const geo_poly *scan, enum method m, bool rows, totals *t)
