@@ -3,6 +3,7 @@
  *
  * Shape (lengths in model units, angles in degrees):
  *   {"loops", "filled", "planar", "left_open", "rejected_patches",
+ *    "facets_removed", "facets_split", "facets_reversed",
  *    "vertices_added", "facets_added", "max_dihedral_deg",
  *    "holes": [{"vertices", "first_vertex", "status", "attempt"?,
  *               "facets_added", "vertices_added", "planarity"?,

@@ -17,6 +17,7 @@
 #include "edgemap.h"
 #include "orient.h"
 #include "plane.h"
+#include "polygon_triangulate.h"
 #include "selfint.h"
 #include "topo.h"
 #include "vec.h"
@@ -58,6 +59,7 @@ void geo_mesh_fill_opts_default(geo_mesh_fill_opts *o)
     o->planar = true;
     o->check = true;
     o->fallback = true;
+    o->split_nonplanar = true;
 }
 
 void geo_mesh_fill_report_clear(geo_mesh_fill_report *rep)
@@ -1283,6 +1285,106 @@ done:
     return rc;
 }
 
+/* Splits every facet of p with a vertex farther than geo_poly_eps(p)
+ * from its plane into triangles on its own vertices: the facet keeps its
+ * index as the first triangle, the others are appended, each with its
+ * own plane. *ret_split gets how many were split. 0 or -ENOMEM (p
+ * unchanged). */
+static int split_nonplanar(geo_poly *p, uint32_t *ret_split)
+{
+    double eps = geo_poly_eps(p);
+    uint32_t nsplit = 0, ntri = 0;
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        uint32_t n = geo_poly_facet_size(p, f);
+        const uint32_t *v = geo_poly_facet(p, f);
+        bool off = false;
+        for (uint32_t i = 0; i < n && !off && n > 3; i++)
+            off = !(fabs(geo_plane_eval(p->planes[f], p->verts[v[i]])) <=
+                    eps);
+        if (off)
+            nsplit++, ntri += n - 2;
+    }
+    *ret_split = nsplit;
+    if (nsplit == 0)
+        return 0;
+    geo_poly *q = geo_poly_new();
+    uint32_t maxn = 3;
+    for (uint32_t f = 0; f < p->nfacets; f++)
+        if (geo_poly_facet_size(p, f) > maxn)
+            maxn = geo_poly_facet_size(p, f);
+    uint32_t (*tri)[3] = malloc((size_t)maxn * sizeof *tri);
+    uint32_t (*rest)[3] = malloc(((size_t)ntri + 1) * sizeof *rest);
+    int rc = -ENOMEM;
+    if (!q || !tri || !rest ||
+        geo_poly_reserve(q, p->nverts, p->nfacets + ntri - nsplit,
+                         geo_poly_ncorners(p) + 3 * (size_t)ntri) < 0)
+        goto out;
+    for (uint32_t v = 0; v < p->nverts; v++)
+        if (geo_poly_add_vertex(q, p->verts[v]) < 0)
+            goto out;
+    uint32_t nrest = 0;
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        uint32_t n = geo_poly_facet_size(p, f);
+        const uint32_t *v = geo_poly_facet(p, f);
+        bool off = false;
+        for (uint32_t i = 0; i < n && !off && n > 3; i++)
+            off = !(fabs(geo_plane_eval(p->planes[f], p->verts[v[i]])) <=
+                    eps);
+        int64_t id;
+        if (!off) {
+            if ((id = geo_poly_add_facet(q, v, n)) < 0)
+                goto out;
+            memcpy(q->planes[id], p->planes[f], sizeof q->planes[0]);
+            continue;
+        }
+        if (geo_polygon_triangulate(&p->verts[0][0], v, n, tri) < 0)
+            goto out;
+        for (uint32_t k = 0; k < n - 2; k++) {
+            uint32_t t3[3] = {v[tri[k][0]], v[tri[k][1]], v[tri[k][2]]};
+            if (k == 0) {
+                if ((id = geo_poly_add_facet(q, t3, 3)) < 0)
+                    goto out;
+                geo_poly_facet_fit_plane(q, (uint32_t)id, GEO_PLANE_UNWEIGHTED,
+                                         q->planes[id]);
+            } else {
+                memcpy(rest[nrest++], t3, sizeof t3);
+            }
+        }
+    }
+    for (uint32_t k = 0; k < nrest; k++) {
+        int64_t id = geo_poly_add_facet(q, rest[k], 3);
+        if (id < 0)
+            goto out;
+        geo_poly_facet_fit_plane(q, (uint32_t)id, GEO_PLANE_UNWEIGHTED,
+                                         q->planes[id]);
+    }
+    geo_poly tmp = *p;
+    *p = *q;
+    *q = tmp;
+    rc = 0;
+out:
+    geo_poly_free(q);
+    free(tri), free(rest);
+    return rc;
+}
+
+/* split_nonplanar, when p has a non-planar facet and a hole (a closed
+ * mesh is left alone). */
+static int split_if_open(geo_poly *p, uint32_t *ret_split, geo_err *err)
+{
+    *ret_split = 0;
+    if (!(geo_poly_max_nonplanarity(p) > geo_poly_eps(p)))
+        return 0;
+    geo_topo *t = geo_topo_build(p, err);
+    if (!t)
+        return -ENOMEM;
+    bool open = t->nboundary_edges > 0;
+    geo_topo_free(t);
+    if (open && split_nonplanar(p, ret_split) < 0)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    return 0;
+}
+
 int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
                   const geo_ctx *ctx, geo_mesh_fill_report *rep, geo_err *err)
 {
@@ -1299,12 +1401,16 @@ int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
     int rc = geo_poly_validate_indices(p, err);
     if (rc < 0)
         return rc;
+    uint32_t nsplit = 0;
+    if (mo.split_nonplanar && (rc = split_if_open(p, &nsplit, err)) < 0)
+        return rc;
     if (mo.remove_crossing) {
         geo_mesh_fill_report RR = {0};
         rc = fill_removing(p, &mo, ctx, &RR, err);
         if (rc < 0)
             return rc;
         if (rc == 1) {
+            RR.nsplit = nsplit;
             if (rep)
                 *rep = RR;
             else
@@ -1313,7 +1419,7 @@ int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
         }
         mo.remove_crossing = false;
     }
-    geo_mesh_fill_report R = {0};
+    geo_mesh_fill_report R = {.nsplit = nsplit};
     mfill M = {.p = p, .ctx = ctx};
     uint32_t *lstart = NULL, *lcorn = NULL, nloops = 0, *w = NULL;
     geo_topo *t = geo_topo_build(p, err);

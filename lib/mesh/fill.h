@@ -51,7 +51,8 @@
  *    reversed (rep->nreversed).
  *
  * Output: vertices and facets of p keep their indices (unless
- * remove_crossing removed some); new vertices and facets are appended,
+ * remove_crossing removed some; a facet split_nonplanar splits keeps its
+ * index as its first triangle); new vertices and facets are appended,
  * hole after hole. Ownership: p is modified in
  * place (left unchanged on error); rep->holes is malloc'd (release with
  * geo_mesh_fill_report_clear). Errors: -EINVAL (invalid indices or
@@ -107,6 +108,16 @@ typedef struct geo_mesh_fill_opts {
                            shell in p (no pair of parts comes to cross
                            that did not); it may still cross nothing of
                            its own shell, of other shells, or itself */
+    bool split_nonplanar; /* [true] when p has a hole, every facet whose
+                           vertices lie farther than geo_poly_eps from its
+                           plane is split into triangles on its own
+                           vertices first (lib/core/polygon_triangulate.h):
+                           such a polygon cannot be a facet of a valid
+                           solid, and meshes from other tools store
+                           polygons planar to their 6 or 7 digits only.
+                           The facet keeps its index as the first
+                           triangle; the others are appended
+                           (rep->nsplit) */
     bool remove_crossing; /* [false] first remove every facet that crosses
                            another (exact, lib/inspect/selfint.h) and has
                            a vertex on a hole's rim — a flap folded over
@@ -150,6 +161,8 @@ typedef struct geo_mesh_fill_report {
                               was turned inside out (see below) */
     uint32_t nremoved;     /* crossing rim facets removed first
                               (remove_crossing) */
+    uint32_t nsplit;       /* non-planar facets split into triangles
+                              first (split_nonplanar) */
     uint32_t verts_added, facets_added;
     double max_dihedral_deg; /* over every filled hole */
     geo_mesh_hole *holes;  /* nloops entries, in loop order */

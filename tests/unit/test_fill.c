@@ -518,6 +518,84 @@ static void test_closed_mesh_is_left_alone(void **s)
     geo_poly_free(p);
 }
 
+/* A unit cube of quads without its bottom (closed: with it), vertex 6
+ * (top, +x+y) moved by 1e-6 along x: the side quad x = 1 is no longer
+ * planar to eps (the top and the side y = 1 still hold the vertex), as
+ * polygons from other tools are planar only to their digits. */
+static geo_poly *open_cube_nonplanar(bool closed)
+{
+    double xyz[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                        {0, 0, 1}, {1, 0, 1}, {1 + 1e-6, 1, 1}, {0, 1, 1}};
+    static const uint32_t quads[] = {4, 5, 6, 7, 0, 1, 5, 4, 1, 2, 6, 5,
+                                     2, 3, 7, 6, 3, 0, 4, 7, 0, 3, 2, 1};
+    uint32_t nf = closed ? 6 : 5, start[7];
+    for (uint32_t f = 0; f <= nf; f++)
+        start[f] = 4 * f;
+    geo_poly *p = geo_poly_from_arrays(8, &xyz[0][0], nf, start, quads, NULL,
+                                       NULL);
+    assert_non_null(p);
+    return p;
+}
+
+static void test_nonplanar_facets_are_split_when_filling(void **s)
+{
+    (void)s;
+    geo_poly *p = open_cube_nonplanar(false);
+    assert_true(geo_poly_max_nonplanarity(p) > geo_poly_eps(p));
+    geo_poly *q = geo_poly_copy(p);
+    geo_mesh_fill_report rep;
+    assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(rep.nsplit, 1);
+    assert_int_equal(rep.nfilled, 1);
+    assert_true(is_valid(p));
+    /* a split facet keeps its index as a triangle of its own corners;
+     * the planar ones keep theirs as they were */
+    for (uint32_t f = 0; f < q->nfacets; f++) {
+        const uint32_t *a = geo_poly_facet(p, f), *b = geo_poly_facet(q, f);
+        if (geo_poly_facet_size(p, f) == 4) {
+            assert_memory_equal(a, b, 4 * sizeof *a);
+            continue;
+        }
+        assert_int_equal(geo_poly_facet_size(p, f), 3);
+        for (int k = 0; k < 3; k++) {
+            bool in = false;
+            for (int j = 0; j < 4; j++)
+                in |= a[k] == b[j];
+            assert_true(in);
+        }
+    }
+    geo_mesh_fill_report_clear(&rep);
+    /* without the split the same hole leaves an invalid solid */
+    geo_mesh_fill_opts o;
+    geo_mesh_fill_opts_default(&o);
+    o.split_nonplanar = false;
+    geo_poly_free(p);
+    p = geo_poly_copy(q);
+    assert_int_equal(geo_fill(p, &o, NULL, &rep, NULL), 0);
+    assert_int_equal(rep.nsplit, 0);
+    assert_false(is_valid(p));
+    geo_mesh_fill_report_clear(&rep);
+    geo_poly_free(q);
+    geo_poly_free(p);
+}
+
+static void test_closed_nonplanar_mesh_is_left_alone(void **s)
+{
+    (void)s;
+    geo_poly *p = open_cube_nonplanar(true);
+    geo_poly *q = geo_poly_copy(p);
+    geo_mesh_fill_report rep;
+    assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(rep.nloops, 0);
+    assert_int_equal(rep.nsplit, 0);
+    assert_int_equal(p->nfacets, q->nfacets);
+    assert_memory_equal(p->fidx, q->fidx,
+                        geo_poly_ncorners(p) * sizeof *p->fidx);
+    geo_mesh_fill_report_clear(&rep);
+    geo_poly_free(q);
+    geo_poly_free(p);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -531,6 +609,8 @@ int main(void)
         cmocka_unit_test(test_rim_whose_chords_are_mesh_edges_gets_a_dome),
         cmocka_unit_test(test_every_weight_fills_a_nonplanar_hole_validly),
         cmocka_unit_test(test_closed_mesh_is_left_alone),
+        cmocka_unit_test(test_nonplanar_facets_are_split_when_filling),
+        cmocka_unit_test(test_closed_nonplanar_mesh_is_left_alone),
         cmocka_unit_test(
             test_planar_hole_sharing_two_edges_with_a_facet_is_triangulated),
     };
