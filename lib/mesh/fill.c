@@ -1285,6 +1285,22 @@ done:
     return rc;
 }
 
+/* A facet of more than three vertices with one farther than eps from its
+ * plane (implicit planes read as stored: geo_poly_facet_plane). */
+static bool nonplanar(const geo_poly *p, uint32_t f, double eps)
+{
+    uint32_t n = geo_poly_facet_size(p, f);
+    if (n <= 3)
+        return false;
+    const uint32_t *v = geo_poly_facet(p, f);
+    double pl[4];
+    geo_poly_facet_plane(p, f, pl);
+    for (uint32_t i = 0; i < n; i++)
+        if (!(fabs(geo_plane_eval(pl, p->verts[v[i]])) <= eps))
+            return true;
+    return false;
+}
+
 /* Splits every facet of p with a vertex farther than geo_poly_eps(p)
  * from its plane into triangles on its own vertices: the facet keeps its
  * index as the first triangle, the others are appended, each with its
@@ -1296,12 +1312,7 @@ static int split_nonplanar(geo_poly *p, uint32_t *ret_split)
     uint32_t nsplit = 0, ntri = 0;
     for (uint32_t f = 0; f < p->nfacets; f++) {
         uint32_t n = geo_poly_facet_size(p, f);
-        const uint32_t *v = geo_poly_facet(p, f);
-        bool off = false;
-        for (uint32_t i = 0; i < n && !off && n > 3; i++)
-            off = !(fabs(geo_plane_eval(p->planes[f], p->verts[v[i]])) <=
-                    eps);
-        if (off)
+        if (nonplanar(p, f, eps))
             nsplit++, ntri += n - 2;
     }
     *ret_split = nsplit;
@@ -1326,15 +1337,11 @@ static int split_nonplanar(geo_poly *p, uint32_t *ret_split)
     for (uint32_t f = 0; f < p->nfacets; f++) {
         uint32_t n = geo_poly_facet_size(p, f);
         const uint32_t *v = geo_poly_facet(p, f);
-        bool off = false;
-        for (uint32_t i = 0; i < n && !off && n > 3; i++)
-            off = !(fabs(geo_plane_eval(p->planes[f], p->verts[v[i]])) <=
-                    eps);
         int64_t id;
-        if (!off) {
+        if (!nonplanar(p, f, eps)) {
             if ((id = geo_poly_add_facet(q, v, n)) < 0)
                 goto out;
-            memcpy(q->planes[id], p->planes[f], sizeof q->planes[0]);
+            geo_poly_facet_plane(p, f, q->planes[id]);
             continue;
         }
         if (geo_polygon_triangulate(&p->verts[0][0], v, n, tri) < 0)
