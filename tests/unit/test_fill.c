@@ -502,20 +502,27 @@ static void test_every_weight_fills_a_nonplanar_hole_validly(void **s)
         }
 }
 
-static void test_closed_mesh_is_left_alone(void **s)
+/* geo_fill on the closed mesh p (freed) finds no loop, splits nothing
+ * and leaves every facet as it was. */
+static void assert_left_alone(geo_poly *p)
 {
-    (void)s;
-    geo_poly *p = load("brilliant.truth.json");
     geo_poly *q = geo_poly_copy(p);
     geo_mesh_fill_report rep;
     assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
     assert_int_equal(rep.nloops, 0);
+    assert_int_equal(rep.nsplit, 0);
     assert_int_equal(p->nfacets, q->nfacets);
     assert_memory_equal(p->fidx, q->fidx,
                         geo_poly_ncorners(p) * sizeof *p->fidx);
     geo_mesh_fill_report_clear(&rep);
     geo_poly_free(q);
     geo_poly_free(p);
+}
+
+static void test_closed_mesh_is_left_alone(void **s)
+{
+    (void)s;
+    assert_left_alone(load("brilliant.truth.json"));
 }
 
 /* A unit cube of quads without its bottom (closed: with it), vertex 6
@@ -583,17 +590,8 @@ static void test_closed_nonplanar_mesh_is_left_alone(void **s)
 {
     (void)s;
     geo_poly *p = open_cube_nonplanar(true);
-    geo_poly *q = geo_poly_copy(p);
-    geo_mesh_fill_report rep;
-    assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
-    assert_int_equal(rep.nloops, 0);
-    assert_int_equal(rep.nsplit, 0);
-    assert_int_equal(p->nfacets, q->nfacets);
-    assert_memory_equal(p->fidx, q->fidx,
-                        geo_poly_ncorners(p) * sizeof *p->fidx);
-    geo_mesh_fill_report_clear(&rep);
-    geo_poly_free(q);
-    geo_poly_free(p);
+    assert_true(geo_poly_max_nonplanarity(p) > geo_poly_eps(p));
+    assert_left_alone(p);
 }
 
 int main(void)
