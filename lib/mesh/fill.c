@@ -1309,20 +1309,24 @@ static bool nonplanar(const geo_poly *p, uint32_t f, double eps)
 static int split_nonplanar(geo_poly *p, uint32_t *ret_split)
 {
     double eps = geo_poly_eps(p);
-    uint32_t nsplit = 0, ntri = 0;
+    uint8_t *split = malloc((size_t)p->nfacets + 1);
+    if (!split)
+        return -ENOMEM;
+    uint32_t nsplit = 0, ntri = 0, maxn = 3;
     for (uint32_t f = 0; f < p->nfacets; f++) {
         uint32_t n = geo_poly_facet_size(p, f);
-        if (nonplanar(p, f, eps))
+        split[f] = nonplanar(p, f, eps);
+        if (split[f]) {
             nsplit++, ntri += n - 2;
+            maxn = n > maxn ? n : maxn;
+        }
     }
     *ret_split = nsplit;
-    if (nsplit == 0)
+    if (nsplit == 0) {
+        free(split);
         return 0;
+    }
     geo_poly *q = geo_poly_new();
-    uint32_t maxn = 3;
-    for (uint32_t f = 0; f < p->nfacets; f++)
-        if (geo_poly_facet_size(p, f) > maxn)
-            maxn = geo_poly_facet_size(p, f);
     uint32_t (*tri)[3] = malloc((size_t)maxn * sizeof *tri);
     uint32_t (*rest)[3] = malloc(((size_t)ntri + 1) * sizeof *rest);
     int rc = -ENOMEM;
@@ -1338,7 +1342,7 @@ static int split_nonplanar(geo_poly *p, uint32_t *ret_split)
         uint32_t n = geo_poly_facet_size(p, f);
         const uint32_t *v = geo_poly_facet(p, f);
         int64_t id;
-        if (!nonplanar(p, f, eps)) {
+        if (!split[f]) {
             if ((id = geo_poly_add_facet(q, v, n)) < 0)
                 goto out;
             geo_poly_facet_plane(p, f, q->planes[id]);
@@ -1363,7 +1367,7 @@ static int split_nonplanar(geo_poly *p, uint32_t *ret_split)
         if (id < 0)
             goto out;
         geo_poly_facet_fit_plane(q, (uint32_t)id, GEO_PLANE_UNWEIGHTED,
-                                         q->planes[id]);
+                                 q->planes[id]);
     }
     geo_poly tmp = *p;
     *p = *q;
@@ -1371,7 +1375,7 @@ static int split_nonplanar(geo_poly *p, uint32_t *ret_split)
     rc = 0;
 out:
     geo_poly_free(q);
-    free(tri), free(rest);
+    free(split), free(tri), free(rest);
     return rc;
 }
 
