@@ -21,12 +21,14 @@ done
 kill -KILL "$PID"
 wait "$PID" 2>/dev/null
 wait $load
-# the jobs the killed facetd had started and not ended
+# the jobs the killed facetd had started and not logged as ended: the
+# store records an outcome before the log line, so a kill in between
+# leaves a finished job that is rightly not run again
 LOG1=$LOG
-running=$(sed -n 's/.* job=\([0-9A-Z]*\) started (attempt.*/\1/p' "$LOG1" | sort -u |
+unended=$(sed -n 's/.* job=\([0-9A-Z]*\) started (attempt.*/\1/p' "$LOG1" | sort -u |
     while read -r id; do
         grep -qE "job=$id (succeeded|failed|canceled)" "$LOG1" || echo "$id"
-    done | wc -l)
+    done)
 accepted=""
 for c in "$T"/r/*.code; do
     [ "$(cat "$c")" = 202 ] && accepted="$accepted $(jstr id "${c%.code}")"
@@ -49,11 +51,25 @@ for id in $accepted; do
     [ "$STATE_OF" = succeeded ] || notdone=$((notdone + 1))
 done
 expect_eq "every accepted job completes after the restart" 0 "$notdone"
+# each unended job is either run again or was finished in the store
+running=0 finished=0
+for id in $unended; do
+    if grep -q "job=$id started (attempt 2" "$LOG"; then
+        running=$((running + 1))
+    else
+        req GET "/v1/jobs/$id"
+        [ "$(jnum attempts)" = 1 ] && [ "$(jstr state)" = succeeded ] &&
+            finished=$((finished + 1))
+    fi
+done
+expect_eq "each job unended at the kill ran again or had finished" \
+    "$(echo $unended | wc -w)" $((running + finished))
 if [ "$running" -gt 0 ]; then
     check "the $running job(s) running at the kill were queued again" \
         grep -q "^.*$running job(s) interrupted by the last stop queued again" "$LOG"
 else
-    skip "no job was running at the kill (nothing to requeue)"
+    check "no job was queued again (none was running at the kill)" \
+        sh -c "! grep -q 'interrupted by the last stop' '$LOG'"
 fi
 
 # Graceful stop with queued work: it stays queued, and runs after a start.
