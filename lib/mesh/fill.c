@@ -1213,10 +1213,71 @@ done:
     return rc;
 }
 
-/* remove_crossing: the facets choose_removed picks removed from a copy
- * of p, which is filled; kept (swapped into p) when every hole closes.
- * 1 kept, 0 not (nothing to remove, more crossings than are listed, or a
- * hole left open: p unchanged), or a negative errno. */
+/* remove_crossing past the flaps: rings of facets grown around the
+ * crossings that remain (each ring: every facet with a vertex of a removed
+ * one), tried in turn until the holes close */
+#define REMOVE_RINGS 3
+
+/* Removes from a copy of p the facets keep[] clears and fills it; swaps
+ * it into p when every hole closes (1), else leaves p as it was (0), or a
+ * negative errno. */
+static int fill_without(geo_poly *p, const bool *keep, uint32_t nrem,
+                        const geo_mesh_fill_opts *mo, const geo_ctx *ctx,
+                        geo_mesh_fill_report *rep, geo_err *err)
+{
+    geo_poly *q = geo_poly_copy(p);
+    if (!q || geo_poly_compact(q, keep, NULL, NULL) < 0) {
+        geo_poly_free(q);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    geo_mesh_fill_opts m2 = *mo;
+    m2.remove_crossing = false;
+    geo_mesh_fill_report r2 = {0};
+    int rc = geo_fill(q, &m2, ctx, &r2, err);
+    if (rc == 0 && r2.nopen == 0) {
+        geo_poly tmp = *p;
+        *p = *q;
+        *q = tmp;
+        r2.nremoved = nrem;
+        *rep = r2;
+        rc = 1;
+    } else {
+        geo_mesh_fill_report_clear(&r2);
+    }
+    geo_poly_free(q);
+    return rc;
+}
+
+/* Clears keep[] of every facet with a vertex of a facet already cleared
+ * (mark: nverts bytes of scratch); returns how many facets are cleared
+ * in all. */
+static uint32_t grow_ring(const geo_poly *p, bool *keep, uint8_t *mark)
+{
+    memset(mark, 0, p->nverts);
+    for (uint32_t f = 0; f < p->nfacets; f++)
+        if (!keep[f])
+            for (uint32_t c = p->fstart[f]; c < p->fstart[f + 1]; c++)
+                mark[p->fidx[c]] = 1;
+    uint32_t n = 0;
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        for (uint32_t c = p->fstart[f]; c < p->fstart[f + 1] && keep[f]; c++)
+            keep[f] = !mark[p->fidx[c]];
+        n += !keep[f];
+    }
+    return n;
+}
+
+/* remove_crossing: first the flaps choose_removed picks; when crossings
+ * remain between facets that stay (two sheets through each other inside
+ * the mesh, away from any hole), both facets of each such pair go as
+ * well, and then rings around them (REMOVE_RINGS): a patch over the
+ * bare opening of one crossing facet would cross the other again, and a
+ * wider hole lets the patch pass. Each choice is filled in a copy, the
+ * first whose holes all close swapped into p: it then crosses nothing
+ * (every crossing facet is gone and every patch is checked). 1 kept, 0
+ * not (nothing to remove, more crossings than are listed, past
+ * REMOVE_MAX_FRACTION of the facets, or a hole left open: p unchanged),
+ * or a negative errno. */
 static int fill_removing(geo_poly *p, const geo_mesh_fill_opts *mo,
                          const geo_ctx *ctx, geo_mesh_fill_report *rep,
                          geo_err *err)
@@ -1233,10 +1294,10 @@ static int fill_removing(geo_poly *p, const geo_mesh_fill_opts *mo,
         geo_topo_free(t);
         return rc;
     }
+    uint32_t nf = p->nfacets;
     uint8_t *rim = calloc((size_t)p->nverts + 1, 1);
-    bool *keep = malloc(((size_t)p->nfacets + 1) * sizeof *keep);
-    geo_poly *q = NULL;
-    uint32_t nrem = 0;
+    bool *keep = malloc(((size_t)nf + 1) * sizeof *keep);
+    uint32_t nrem = 0, left = 0;
     rc = -ENOMEM;
     if (!rim || !keep)
         goto done;
@@ -1250,35 +1311,37 @@ static int fill_removing(geo_poly *p, const geo_mesh_fill_opts *mo,
         }
     if ((rc = choose_removed(p, rim, &si, keep, &nrem)) < 0)
         goto done;
-    /* a flap is a local defect: a choice past REMOVE_MAX_FRACTION of the
-     * facets would remesh the model rather than repair it (an assembly
-     * of crossing parts would lose most of itself: parts_overlap is the
-     * rule there) */
-    if (nrem == 0 || nrem > REMOVE_MAX_FRACTION * p->nfacets)
-        goto done;
-    if (!(q = geo_poly_copy(p)) || geo_poly_compact(q, keep, NULL, NULL) < 0) {
-        rc = -ENOMEM;
-        goto done;
+    for (uint32_t k = 0; k < si.npairs; k++) {
+        uint32_t a = si.pairs[k][0], b = si.pairs[k][1];
+        if (keep[a] && keep[b]) {
+            left++;
+            keep[a] = keep[b] = false;
+        }
     }
-    geo_mesh_fill_opts m2 = *mo;
-    m2.remove_crossing = false;
-    geo_mesh_fill_report r2 = {0};
-    if ((rc = geo_fill(q, &m2, ctx, &r2, err)) < 0)
+    /* a flap or a fold is a local defect: a choice past
+     * REMOVE_MAX_FRACTION of the facets would remesh the model rather
+     * than repair it (an assembly of crossing parts would lose most of
+     * itself: parts_overlap is the rule there) */
+    if (left == 0 && nrem > 0 && nrem <= REMOVE_MAX_FRACTION * nf &&
+        (rc = fill_without(p, keep, nrem, mo, ctx, rep, err)) != 0)
         goto done;
-    if (r2.nopen == 0) {
-        geo_poly tmp = *p;
-        *p = *q;
-        *q = tmp;
-        r2.nremoved = nrem;
-        *rep = r2;
-        rc = 1;
-    } else {
-        geo_mesh_fill_report_clear(&r2);
+    if (nrem == 0 && left == 0)
+        goto done;
+    /* the flaps alone left a hole open: rings around them as around any
+     * other crossing */
+    nrem = 0;
+    for (uint32_t f = 0; f < nf; f++)
+        nrem += !keep[f];
+    for (int ring = left == 0; ring <= REMOVE_RINGS && rc == 0; ring++) {
+        if (ring > 0)
+            nrem = grow_ring(p, keep, rim);
+        if (nrem > REMOVE_MAX_FRACTION * nf)
+            break;
+        rc = fill_without(p, keep, nrem, mo, ctx, rep, err);
     }
 done:
     if (rc == -ENOMEM)
         geo_err_set(err, rc, "out of memory");
-    geo_poly_free(q);
     free(rim), free(keep);
     geo_selfint_clear(&si);
     geo_topo_free(t);
@@ -1379,21 +1442,41 @@ out:
     return rc;
 }
 
-/* split_nonplanar, when p has a non-planar facet and a hole (a closed
- * mesh is left alone). */
-static int split_if_open(geo_poly *p, uint32_t *ret_split, geo_err *err)
+/* Before the holes of an open mesh (a closed one is left alone): facets
+ * inconsistent with their neighbours are reversed where the shell is
+ * orientable (a mesh from another tool often mixes both windings; no
+ * patch could make it a solid, and the loops would split at every flipped
+ * edge), and, with split, non-planar facets are split. */
+static int prepare_open(geo_poly *p, bool split, uint32_t *ret_split,
+                        uint32_t *ret_reversed, geo_err *err)
 {
-    *ret_split = 0;
-    if (!(geo_poly_max_nonplanarity(p) > geo_poly_eps(p)))
-        return 0;
+    *ret_split = *ret_reversed = 0;
     geo_topo *t = geo_topo_build(p, err);
     if (!t)
         return -ENOMEM;
+    int rc = 0;
     bool open = t->nboundary_edges > 0;
+    if (open && t->nflipped_edges > 0) {
+        uint8_t *flip = malloc((size_t)p->nfacets + 1);
+        geo_orient_report orep;
+        if (!flip || geo_orient_analyze(p, t, flip, &orep, err) < 0)
+            rc = -ENOMEM;
+        else if (orep.orientable)
+            for (uint32_t f = 0; f < p->nfacets; f++)
+                if (flip[f]) {
+                    geo_poly_flip_facet(p, f);
+                    ++*ret_reversed;
+                }
+        free(flip);
+    }
     geo_topo_free(t);
-    if (open && split_nonplanar(p, ret_split) < 0)
-        return geo_err_set(err, -ENOMEM, "out of memory");
-    return 0;
+    if (rc == 0 && open && split &&
+        geo_poly_max_nonplanarity(p) > geo_poly_eps(p) &&
+        split_nonplanar(p, ret_split) < 0)
+        rc = -ENOMEM;
+    if (rc < 0)
+        geo_err_set(err, rc, "out of memory");
+    return rc;
 }
 
 int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
@@ -1412,8 +1495,8 @@ int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
     int rc = geo_poly_validate_indices(p, err);
     if (rc < 0)
         return rc;
-    uint32_t nsplit = 0;
-    if (mo.split_nonplanar && (rc = split_if_open(p, &nsplit, err)) < 0)
+    uint32_t nsplit = 0, nrev = 0;
+    if ((rc = prepare_open(p, mo.split_nonplanar, &nsplit, &nrev, err)) < 0)
         return rc;
     if (mo.remove_crossing) {
         geo_mesh_fill_report RR = {0};
@@ -1422,6 +1505,7 @@ int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
             return rc;
         if (rc == 1) {
             RR.nsplit = nsplit;
+            RR.nreversed += nrev;
             if (rep)
                 *rep = RR;
             else
@@ -1430,7 +1514,7 @@ int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
         }
         mo.remove_crossing = false;
     }
-    geo_mesh_fill_report R = {.nsplit = nsplit};
+    geo_mesh_fill_report R = {.nsplit = nsplit, .nreversed = nrev};
     mfill M = {.p = p, .ctx = ctx};
     uint32_t *lstart = NULL, *lcorn = NULL, nloops = 0, *w = NULL;
     geo_topo *t = geo_topo_build(p, err);

@@ -3,6 +3,10 @@
  * triangulated from a surface (scans, stitched meshes, models with
  * missing facets).
  *
+ * 0. An open mesh whose facets disagree with their neighbours' winding
+ *    has them reversed where the shell is orientable (lib/inspect/orient.h:
+ *    the minority of each shell), since no patch could make it a solid
+ *    and its loops would split at every flipped edge (rep->nreversed).
  * 1. Loops: the boundary loops of lib/core/topo.h (split at non-manifold
  *    vertices, so two holes touching at a vertex are two holes). Each is
  *    handled on its own, in loop order.
@@ -122,11 +126,15 @@ typedef struct geo_mesh_fill_opts {
                            another (exact, lib/inspect/selfint.h) and has
                            a vertex on a hole's rim — a flap folded over
                            the opening — so that hole grows by it, then
-                           fill; kept only when every hole then closes
-                           and at most 5 % of the facets go (else the
-                           plain fill's result). The other
-                           facets and vertices move down in order
-                           (geo_poly_compact; rep->nremoved) */
+                           fill; when crossings remain elsewhere or a hole
+                           stays open, both facets of every crossing pair
+                           go, then up to three rings around them (every
+                           facet with a vertex of a removed one), the
+                           first choice whose holes all close kept. Only
+                           when every hole then closes and at most 5 % of
+                           the facets go (else the plain fill's result).
+                           The other facets and vertices move down in
+                           order (geo_poly_compact; rep->nremoved) */
 } geo_mesh_fill_opts;
 
 /* Fills the defaults above (fill: geo_fill_opts_default). */
@@ -157,8 +165,9 @@ typedef struct geo_mesh_fill_report {
     uint32_t nplanar;      /* filled with one planar facet */
     uint32_t nopen;        /* left open, each with its status */
     uint32_t nrejected;    /* patches taken back by the check */
-    uint32_t nreversed;    /* facets reversed because the closed result
-                              was turned inside out (see below) */
+    uint32_t nreversed;    /* facets reversed: wound against their
+                              neighbours in an open p (step 0), or the
+                              closed result turned inside out (step 5) */
     uint32_t nremoved;     /* crossing rim facets removed first
                               (remove_crossing) */
     uint32_t nsplit;       /* non-planar facets split into triangles

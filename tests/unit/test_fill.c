@@ -373,10 +373,76 @@ static void test_flap_across_the_opening_is_removed_then_filled(void **s)
     geo_poly_free(q);
     geo_poly_free(p);
 
-    /* crossing facets away from every hole: nothing is removed */
+    /* crossing facets of two parts: removing them would take more than
+     * a twentieth of the facets, so nothing is removed */
     p = open_box_with_column(-1);
     fill_leaves_hole_open(p, &o, &rep);
     geo_mesh_fill_report_clear(&rep);
+    geo_poly_free(p);
+}
+
+/* remove_crossing away from the holes: a sphere with its cap cut away
+ * and, far from the opening, one vertex pushed in through the far wall,
+ * so its fan crosses the facets there. No patch over the hole can mend
+ * that; with the option the fan and the facets it pierces go, their holes
+ * are filled with the cap's, and the result is a valid closed solid. */
+static void test_crossing_inside_the_mesh_is_removed_then_filled(void **s)
+{
+    (void)s;
+    geo_poly *p = gs_sphere(16, 1.0);
+    cut_cap(p, 0.6);
+    uint32_t far = 0; /* the vertex farthest along +x */
+    for (uint32_t v = 1; v < p->nverts; v++)
+        if (p->verts[v][0] > p->verts[far][0])
+            far = v;
+    p->verts[far][0] = -1.3;
+    geo_poly_compute_planes(p, GEO_PLANE_UNWEIGHTED);
+    geo_poly *q = geo_poly_copy(p);
+    uint32_t nf = p->nfacets;
+
+    geo_mesh_fill_report rep;
+    assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(rep.nremoved, 0);
+    assert_false(is_valid(p));
+    geo_mesh_fill_report_clear(&rep);
+
+    geo_mesh_fill_opts o;
+    geo_mesh_fill_opts_default(&o);
+    o.remove_crossing = true;
+    assert_int_equal(geo_fill(q, &o, NULL, &rep, NULL), 0);
+    /* the vertex's fan and at least one facet it pierces, within the cap */
+    assert_true(rep.nremoved > 6 && rep.nremoved <= nf / 20);
+    assert_true(rep.nloops >= 3); /* the cap's and the two new openings */
+    assert_int_equal(rep.nopen, 0);
+    assert_true(is_valid(q));
+    geo_mesh_fill_report_clear(&rep);
+    geo_poly_free(q);
+    geo_poly_free(p);
+}
+
+/* A mesh from another tool may mix both windings: an open box with one
+ * wall reversed. Its facets are made consistent before the hole is
+ * filled (the wall is reversed back; facets keep their indices), and the
+ * result is a valid closed solid. */
+static void test_inconsistent_open_mesh_is_oriented_then_filled(void **s)
+{
+    (void)s;
+    const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    geo_poly *p = tu_box(lo, hi);
+    bool keep[6] = {true, false, true, true, true, true}; /* no top */
+    assert_int_equal(geo_poly_compact(p, keep, NULL, NULL), 0);
+    geo_poly *q = geo_poly_copy(p);
+    geo_poly_flip_facet(p, 2);
+    geo_mesh_fill_report rep;
+    assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(rep.nopen, 0);
+    assert_int_equal(rep.nreversed, 1);
+    assert_true(is_valid(p));
+    for (uint32_t f = 0; f < q->nfacets; f++) /* each wall as it was */
+        for (int k = 0; k < 4; k++)
+            assert_true(fabs(p->planes[f][k] - q->planes[f][k]) < 1e-12);
+    geo_mesh_fill_report_clear(&rep);
+    geo_poly_free(q);
     geo_poly_free(p);
 }
 
@@ -603,6 +669,8 @@ int main(void)
         cmocka_unit_test(test_unfillable_hole_stays_open_with_reason),
         cmocka_unit_test(test_parts_overlap_crosses_only_parts_that_crossed),
         cmocka_unit_test(test_flap_across_the_opening_is_removed_then_filled),
+        cmocka_unit_test(test_crossing_inside_the_mesh_is_removed_then_filled),
+        cmocka_unit_test(test_inconsistent_open_mesh_is_oriented_then_filled),
         cmocka_unit_test(test_open_sheet_is_closed_by_a_dome),
         cmocka_unit_test(test_rim_whose_chords_are_mesh_edges_gets_a_dome),
         cmocka_unit_test(test_every_weight_fills_a_nonplanar_hole_validly),
