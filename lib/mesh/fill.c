@@ -1214,26 +1214,65 @@ done:
 }
 
 /* remove_crossing past the flaps: rings of facets grown around the
- * crossings that remain (each ring: every facet with a vertex of a removed
- * one), tried in turn until the holes close */
+ * crossings that remain and around the holes left open (each ring: every
+ * facet with a vertex of a removed one or on such a hole), tried in turn
+ * until the holes close */
 #define REMOVE_RINGS 3
 
+/* Marks in open[] (p->nverts bytes, cleared first) the vertices of p on
+ * the loops of q that rep left open; vnew: q's vertex of each of p's. */
+static int mark_open_loops(const geo_poly *p, const geo_poly *q,
+                           const geo_topo *tq, const uint32_t *vnew,
+                           const geo_mesh_fill_report *rep, uint8_t *open)
+{
+    memset(open, 0, p->nverts);
+    uint32_t *lstart = NULL, *lcorn = NULL, nloops = 0;
+    uint8_t *qopen = calloc((size_t)q->nverts + 1, 1);
+    if (!qopen || geo_topo_boundary_loops(q, tq, &lstart, &lcorn, &nloops) < 0) {
+        free(qopen);
+        return -ENOMEM;
+    }
+    for (uint32_t h = 0; h < rep->nloops; h++) {
+        uint8_t st = rep->holes[h].status;
+        if (st != GEO_HOLE_FILLED && st != GEO_HOLE_FILLED_PLANAR &&
+            rep->holes[h].first_vertex < q->nverts)
+            qopen[rep->holes[h].first_vertex] = 1;
+    }
+    /* every loop through a vertex that starts a hole left open (two
+     * loops touching at it are both taken) */
+    for (uint32_t l = 0; l < nloops; l++) {
+        bool hit = false;
+        for (uint32_t k = lstart[l]; k < lstart[l + 1] && !hit; k++)
+            hit = qopen[q->fidx[lcorn[k]]] & 1;
+        for (uint32_t k = lstart[l]; k < lstart[l + 1] && hit; k++)
+            qopen[q->fidx[lcorn[k]]] |= 2;
+    }
+    for (uint32_t v = 0; v < p->nverts; v++)
+        open[v] = vnew[v] != UINT32_MAX && (qopen[vnew[v]] & 2);
+    free(qopen), free(lstart), free(lcorn);
+    return 0;
+}
+
 /* Removes from a copy of p the facets keep[] clears and fills it; swaps
- * it into p when every hole closes (1), else leaves p as it was (0), or a
+ * it into p when every hole closes (1), else leaves p as it was (0;
+ * open[], when given, marks p's vertices on the holes left open), or a
  * negative errno. */
 static int fill_without(geo_poly *p, const bool *keep, uint32_t nrem,
                         const geo_mesh_fill_opts *mo, const geo_ctx *ctx,
-                        geo_mesh_fill_report *rep, geo_err *err)
+                        uint8_t *open, geo_mesh_fill_report *rep,
+                        geo_err *err)
 {
     geo_poly *q = geo_poly_copy(p);
-    if (!q || geo_poly_compact(q, keep, NULL, NULL) < 0) {
-        geo_poly_free(q);
-        return geo_err_set(err, -ENOMEM, "out of memory");
-    }
+    uint32_t *vnew = malloc(((size_t)p->nverts + 1) * sizeof *vnew);
+    geo_topo *tq = NULL;
+    int rc = -ENOMEM;
+    if (!q || !vnew || geo_poly_compact(q, keep, vnew, NULL) < 0 ||
+        (open && !(tq = geo_topo_build(q, err))))
+        goto done;
     geo_mesh_fill_opts m2 = *mo;
     m2.remove_crossing = false;
     geo_mesh_fill_report r2 = {0};
-    int rc = geo_fill(q, &m2, ctx, &r2, err);
+    rc = geo_fill(q, &m2, ctx, &r2, err);
     if (rc == 0 && r2.nopen == 0) {
         geo_poly tmp = *p;
         *p = *q;
@@ -1242,18 +1281,29 @@ static int fill_without(geo_poly *p, const bool *keep, uint32_t nrem,
         *rep = r2;
         rc = 1;
     } else {
+        if (rc == 0 && open)
+            rc = mark_open_loops(p, q, tq, vnew, &r2, open);
         geo_mesh_fill_report_clear(&r2);
     }
+done:
+    if (rc == -ENOMEM)
+        geo_err_set(err, rc, "out of memory");
+    geo_topo_free(tq);
     geo_poly_free(q);
+    free(vnew);
     return rc;
 }
 
 /* Clears keep[] of every facet with a vertex of a facet already cleared
- * (mark: nverts bytes of scratch); returns how many facets are cleared
- * in all. */
-static uint32_t grow_ring(const geo_poly *p, bool *keep, uint8_t *mark)
+ * or marked in open[] (NULL: none; mark: nverts bytes of scratch);
+ * returns how many facets are cleared in all. */
+static uint32_t grow_ring(const geo_poly *p, bool *keep, const uint8_t *open,
+                          uint8_t *mark)
 {
-    memset(mark, 0, p->nverts);
+    if (open)
+        memcpy(mark, open, p->nverts);
+    else
+        memset(mark, 0, p->nverts);
     for (uint32_t f = 0; f < p->nfacets; f++)
         if (!keep[f])
             for (uint32_t c = p->fstart[f]; c < p->fstart[f + 1]; c++)
@@ -1270,9 +1320,10 @@ static uint32_t grow_ring(const geo_poly *p, bool *keep, uint8_t *mark)
 /* remove_crossing: first the flaps choose_removed picks; when crossings
  * remain between facets that stay (two sheets through each other inside
  * the mesh, away from any hole), both facets of each such pair go as
- * well, and then rings around them (REMOVE_RINGS): a patch over the
- * bare opening of one crossing facet would cross the other again, and a
- * wider hole lets the patch pass. Each choice is filled in a copy, the
+ * well, and then rings around them and around the holes the choice
+ * before left open (REMOVE_RINGS): a patch over the bare opening of one
+ * crossing facet would cross the other again, and a wider hole lets the
+ * patch pass. Each choice is filled in a copy, the
  * first whose holes all close swapped into p: it then crosses nothing
  * (every crossing facet is gone and every patch is checked). 1 kept, 0
  * not (nothing to remove, more crossings than are listed, past
@@ -1296,10 +1347,11 @@ static int fill_removing(geo_poly *p, const geo_mesh_fill_opts *mo,
     }
     uint32_t nf = p->nfacets;
     uint8_t *rim = calloc((size_t)p->nverts + 1, 1);
+    uint8_t *open = calloc((size_t)p->nverts + 1, 1);
     bool *keep = malloc(((size_t)nf + 1) * sizeof *keep);
     uint32_t nrem = 0, left = 0;
     rc = -ENOMEM;
-    if (!rim || !keep)
+    if (!rim || !open || !keep)
         goto done;
     rc = 0;
     if (si.count > si.npairs)
@@ -1323,7 +1375,7 @@ static int fill_removing(geo_poly *p, const geo_mesh_fill_opts *mo,
      * than repair it (an assembly of crossing parts would lose most of
      * itself: parts_overlap is the rule there) */
     if (left == 0 && nrem > 0 && nrem <= REMOVE_MAX_FRACTION * nf &&
-        (rc = fill_without(p, keep, nrem, mo, ctx, rep, err)) != 0)
+        (rc = fill_without(p, keep, nrem, mo, ctx, open, rep, err)) != 0)
         goto done;
     if (nrem == 0 && left == 0)
         goto done;
@@ -1334,15 +1386,15 @@ static int fill_removing(geo_poly *p, const geo_mesh_fill_opts *mo,
         nrem += !keep[f];
     for (int ring = left == 0; ring <= REMOVE_RINGS && rc == 0; ring++) {
         if (ring > 0)
-            nrem = grow_ring(p, keep, rim);
+            nrem = grow_ring(p, keep, open, rim);
         if (nrem > REMOVE_MAX_FRACTION * nf)
             break;
-        rc = fill_without(p, keep, nrem, mo, ctx, rep, err);
+        rc = fill_without(p, keep, nrem, mo, ctx, open, rep, err);
     }
 done:
     if (rc == -ENOMEM)
         geo_err_set(err, rc, "out of memory");
-    free(rim), free(keep);
+    free(rim), free(open), free(keep);
     geo_selfint_clear(&si);
     geo_topo_free(t);
     return rc;

@@ -129,7 +129,8 @@ typedef struct geo_mesh_fill_opts {
                            fill; when crossings remain elsewhere or a hole
                            stays open, both facets of every crossing pair
                            go, then up to three rings around them (every
-                           facet with a vertex of a removed one), the
+                           facet with a vertex of a removed one or on a
+                           hole the choice before left open), the
                            first choice whose holes all close kept. Only
                            when every hole then closes and at most 5 % of
                            the facets go (else the plain fill's result).
