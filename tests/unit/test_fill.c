@@ -229,12 +229,19 @@ static void test_large_curved_hole_filled_validly_at_mesh_density(void **s)
  * every disc spanning the rim crosses the column. From zlo < 0 the column
  * goes through the floor too (the two parts already cross); from zlo in
  * (0, 1) it stands free inside the box (they do not). */
-static geo_poly *open_box_with_column(double zlo)
+/* The unit box without its top: five facets, one square hole. */
+static geo_poly *open_box(void)
 {
     const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
     geo_poly *p = tu_box(lo, hi);
     bool keep[6] = {true, false, true, true, true, true}; /* no top */
     assert_int_equal(geo_poly_compact(p, keep, NULL, NULL), 0);
+    return p;
+}
+
+static geo_poly *open_box_with_column(double zlo)
+{
+    geo_poly *p = open_box();
     const double blo[3] = {0.4, 0.4, zlo}, bhi[3] = {0.6, 0.6, 50};
     geo_poly *b = tu_box(blo, bhi);
     uint32_t off = p->nverts;
@@ -427,10 +434,7 @@ static void test_crossing_inside_the_mesh_is_removed_then_filled(void **s)
 static void test_inconsistent_open_mesh_is_oriented_then_filled(void **s)
 {
     (void)s;
-    const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
-    geo_poly *p = tu_box(lo, hi);
-    bool keep[6] = {true, false, true, true, true, true}; /* no top */
-    assert_int_equal(geo_poly_compact(p, keep, NULL, NULL), 0);
+    geo_poly *p = open_box();
     geo_poly *q = geo_poly_copy(p);
     geo_poly_flip_facet(p, 2);
     geo_mesh_fill_report rep;
