@@ -4,8 +4,10 @@
  * missing facets).
  *
  * 0. An open mesh whose facets disagree with their neighbours' winding
- *    has them reversed where the shell is orientable (lib/inspect/orient.h:
- *    the minority of each shell), since no patch could make it a solid
+ *    has them reversed where the shell is orientable, as `orient` would
+ *    (lib/inspect/orient.h: the minority of each shell, and a shell whose
+ *    signed volume is negative whole; step 5 turns a closed result
+ *    outward again), since no patch could make it a solid
  *    and its loops would split at every flipped edge (rep->nreversed).
  * 1. Loops: the boundary loops of lib/core/topo.h (split at non-manifold
  *    vertices, so two holes touching at a vertex are two holes). Each is
