@@ -1052,6 +1052,85 @@ void geo_selfint_opts_default(geo_selfint_opts *o)
 {
     o->max_pairs = 1000;
     o->max_tasks = 1024;
+    o->simple_fans = NULL;
+}
+
+/* Fans of more triangles than this are left to the pair tests. */
+enum { FAN_MAX = 64 };
+
+/* geo_selfint_simple_fans for one interior vertex v. The fan's triangles
+ * in order around v, each (v, r_i, r_i+1) with r the spokes (the
+ * corners' previous vertices; the next triangle's previous vertex is this
+ * one's next), r_k+1 = r_1. With every sector of one sign s and no spoke
+ * along r_1 (either way), the fan winds w ≥ 1 times and, were w > 1, the
+ * direction of r_1 would come round again strictly inside a sector other
+ * than the first and the last (each spans less than a half-turn): so no
+ * such sector containing r_1 means w = 1. */
+static bool fan_is_simple(const geo_poly *p, const geo_topo *t, uint32_t v)
+{
+    uint32_t c0 = t->vstart[v], k = t->vstart[v + 1] - c0;
+    if (t->vertex_kind[v] != GEO_VERTEX_INTERIOR || k < 3 || k > FAN_MAX)
+        return false;
+    const uint32_t *cs = t->vcorners + c0;
+    /* every facet a triangle: corner c's facet holds corners 3⌊c/3⌋..+2 */
+#define NEXT(c) (p->fidx[(c) - (c) % 3 + ((c) % 3 + 1) % 3])
+#define PREV(c) (p->fidx[(c) - (c) % 3 + ((c) % 3 + 2) % 3])
+    uint32_t r[FAN_MAX + 1];
+    /* the fan's order as the topology stores it, either way round */
+    bool fwd = NEXT(cs[0]) == PREV(cs[1]);
+    for (uint32_t i = 0; i < k; i++) {
+        uint32_t a = cs[fwd ? i : k - 1 - i], b = cs[fwd ? (i + 1) % k
+                                                        : (2 * k - 2 - i) % k];
+        if (NEXT(a) != PREV(b))
+            return false;
+        r[i] = PREV(a);
+    }
+#undef NEXT
+#undef PREV
+    r[k] = r[0];
+    /* the axis to drop: the largest component of the fan's normal (any
+     * axis is correct; this one leaves the sectors widest) */
+    const double *o = p->verts[v];
+    double n[3] = {0, 0, 0};
+    for (uint32_t i = 0; i < k; i++) {
+        double e1[3], e2[3], x[3];
+        geo_vsub(p->verts[r[i]], o, e1);
+        geo_vsub(p->verts[r[i + 1]], o, e2);
+        geo_vcross(e1, e2, x);
+        geo_vadd(n, x, n);
+    }
+    int drop = fabs(n[0]) >= fabs(n[1]) ? (fabs(n[0]) >= fabs(n[2]) ? 0 : 2)
+                                        : (fabs(n[1]) >= fabs(n[2]) ? 1 : 2);
+    const double *r1 = p->verts[r[0]];
+    int sg = geo_orient2d_proj(o, r1, p->verts[r[1]], drop);
+    if (sg == 0)
+        return false;
+    /* side: of spoke i from r_1 */
+    int prev_side = 0;
+    for (uint32_t i = 1; i <= k; i++) {
+        const double *a = p->verts[r[i - 1]], *b = p->verts[r[i]];
+        if (i > 1 && geo_orient2d_proj(o, a, b, drop) != sg)
+            return false;
+        if (i == k)
+            break;
+        int side = sg * geo_orient2d_proj(o, r1, b, drop);
+        if (side == 0)
+            return false;
+        /* sector i−1 (from r_i−1 to r_i), not the first: r_1 strictly
+         * inside it when r_i−1 lies clockwise of r_1 and r_i
+         * counter-clockwise (with s) */
+        if (i > 1 && prev_side < 0 && side > 0)
+            return false;
+        prev_side = side;
+    }
+    return true;
+}
+
+void geo_selfint_simple_fans(const geo_poly *p, const geo_topo *t,
+                             uint8_t *ret)
+{
+    for (uint32_t v = 0; v < p->nverts; v++)
+        ret[v] = fan_is_simple(p, t, v);
 }
 
 void geo_selfint_clear(geo_selfint *r)
@@ -1119,6 +1198,7 @@ typedef struct search {
     const geo_facet_shape *shapes;
     const uint64_t *masks; /* vertex_mask of each facet */
     bool all_tri;
+    const uint8_t *fans; /* geo_selfint_opts.simple_fans (all_tri only) */
     const uint64_t *const *sorted; /* per facet: sorted keys or NULL;
                                       NULL when no facet has them */
     atomic_uchar *flags;
@@ -1172,8 +1252,8 @@ static bool free_edge_misses(const geo_poly *p, const uint32_t *x,
  * pair_test's own answers, reached without its general bookkeeping;
  * every other case (coplanar, touching a plane, straddling without a
  * shared vertex, a triangle listed twice) goes to it. */
-static bool triangles_need_test(const geo_poly *p, const uint32_t *x,
-                                const uint32_t *y)
+static bool triangles_need_test(const geo_poly *p, const uint8_t *fans,
+                                const uint32_t *x, const uint32_t *y)
 {
     /* which of y's vertices x lists (in_x, a bit per position of y) and
      * which of x's y lists (in_y): nine comparisons, once */
@@ -1187,6 +1267,12 @@ static bool triangles_need_test(const geo_poly *p, const uint32_t *x,
     unsigned in_y = (e00 | e01 | e02) | (e10 | e11 | e12) << 1 |
                     (e20 | e21 | e22) << 2;
     unsigned nshared = (in_x & 1) + (in_x >> 1 & 1) + (in_x >> 2);
+    /* both in the fan of a shared vertex shown simple: they meet only
+     * where they share (geo_selfint_simple_fans) */
+    if (fans && nshared && nshared < 3 &&
+        ((in_y & 1 && fans[x0]) || (in_y & 2 && fans[x1]) ||
+         (in_y & 4 && fans[x2])))
+        return false;
     if (nshared == 2) {
         int c = in_x == 3 ? 2 : in_x == 5 ? 1 : 0; /* y's own vertex */
         int a = in_y == 3 ? 2 : in_y == 5 ? 1 : 0; /* x's own vertex */
@@ -1251,11 +1337,12 @@ static bool visit_pair(void *user, uint32_t a, uint32_t b)
         GEO_SI_DEGENERATE)
         return true;
     /* every facet a triangle: facet f's corners are 3f..3f+2 */
-    if (s->all_tri ? !triangles_need_test(s->p, s->p->fidx + 3 * (size_t)a,
-                                      s->p->fidx + 3 * (size_t)b)
+    if (s->all_tri ? !triangles_need_test(s->p, s->fans,
+                                          s->p->fidx + 3 * (size_t)a,
+                                          s->p->fidx + 3 * (size_t)b)
                : geo_poly_facet_size(s->p, a) == 3 &&
                      geo_poly_facet_size(s->p, b) == 3 &&
-                     !triangles_need_test(s->p, geo_poly_facet(s->p, a),
+                     !triangles_need_test(s->p, NULL, geo_poly_facet(s->p, a),
                                           geo_poly_facet(s->p, b)))
         return true;
     geo_facet_shape sa, sb;
@@ -1470,6 +1557,7 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     s.p = p, s.h = bvh, s.fh = own, s.ctx = ctx;
     s.shapes = shapes, s.masks = masks;
     s.all_tri = maxn == 3;
+    s.fans = s.all_tri ? o.simple_fans : NULL;
     s.flags = flags;
     s.sorted = sorted;
     s.keep = o.max_pairs, s.maxn = maxn, s.ta = ta, s.tb = tb, s.out = out;

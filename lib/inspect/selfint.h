@@ -56,6 +56,7 @@
 #include "bvh.h"
 #include "ctx.h"
 #include "poly.h"
+#include "topo.h"
 
 /* How a facet is looked at by the exact tests (see the model above). */
 typedef struct geo_facet_shape {
@@ -120,10 +121,27 @@ typedef struct geo_selfint_opts {
     uint32_t max_pairs; /* pairs to list (the smallest in sorted order);
                            the count is always complete. Default 1000. */
     uint32_t max_tasks; /* parallel work units; default 1024 */
+    const uint8_t *simple_fans; /* NULL (default), or per vertex of a mesh
+                           of triangles geo_selfint_simple_fans' answer:
+                           pairs of triangles that share a vertex marked
+                           there are known to meet only where they share
+                           and are not tested */
 } geo_selfint_opts;
 
 /* Fills the defaults. */
 void geo_selfint_opts_default(geo_selfint_opts *o);
+
+/* For each vertex of p (every facet a triangle; t its topology,
+ * geo_topo_build or _lean) sets ret[v] (p->nverts bytes) to 1 when the
+ * triangles around v meet only at v and along their shared edges, shown
+ * exactly: v's facets form one closed fan, and dropping the coordinate
+ * its normals share most, every triangle of the fan projects with the
+ * same nonzero orientation and the fan winds once around v — then the
+ * projections overlap only on the shared rays, and a triangle not
+ * parallel to the dropped axis meets the line through v along it only
+ * at v. Else 0 (the pair tests decide). */
+void geo_selfint_simple_fans(const geo_poly *p, const geo_topo *t,
+                             uint8_t *ret);
 
 typedef struct geo_selfint {
     uint64_t count;       /* intersecting pairs f < g, plus one per facet

@@ -355,6 +355,7 @@ int geo_inspect(const geo_poly *p, const geo_inspect_opts *opts,
     else
         geo_inspect_opts_default(&o);
     int rc;
+    uint8_t *fans = NULL;
     geo_topo *t = geo_topo_build_lean(p, &rc, err);
     if (!t)
         return rc;
@@ -379,6 +380,15 @@ int geo_inspect(const geo_poly *p, const geo_inspect_opts *opts,
     if (degrees(p, t, ret) < 0 || neighbours(p, t, ret) < 0 ||
         clusters(p, t, ret) < 0)
         goto oom;
+    /* a mesh of triangles: the vertices whose fans need no pair test
+     * (a byte a vertex, while the topology is at hand) */
+    if (p->nverts > 0 && geo_poly_ncorners(p) == 3 * (size_t)p->nfacets &&
+        !o.selfint.simple_fans) {
+        if (!(fans = malloc(p->nverts)))
+            goto oom;
+        geo_selfint_simple_fans(p, t, fans);
+        o.selfint.simple_fans = fans;
+    }
     geo_topo_free(t);
     t = NULL;
     if ((rc = geo_ctx_progress(ctx, 0.1)) < 0)
@@ -391,6 +401,8 @@ int geo_inspect(const geo_poly *p, const geo_inspect_opts *opts,
     sub.progress = sub_report;
     sub.user = &sp;
     rc = geo_selfint_find(p, NULL, &o.selfint, &sub, &ret->selfint, err);
+    free(fans);
+    fans = NULL;
     if (rc < 0)
         goto fail;
     ret->self_intersecting_facets = ret->selfint.nflagged;
@@ -408,6 +420,7 @@ oom:
     rc = geo_err_set(err, -ENOMEM, "inspect: out of memory");
 fail:
     geo_topo_free(t);
+    free(fans);
     geo_stats_clear(ret);
     return rc;
 }

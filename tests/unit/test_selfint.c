@@ -739,6 +739,95 @@ static void test_random_convex_clean_until_vertex_pushed_through(void **state)
     }
 }
 
+/* The pairs, count and flags with the fans geo_selfint_simple_fans
+ * certifies must be those of the full tests; returns how many vertices
+ * were certified. */
+static uint32_t assert_fans_change_nothing(const geo_poly *p)
+{
+    geo_topo *t = geo_topo_build(p, NULL);
+    assert_non_null(t);
+    uint8_t *fans = malloc(p->nverts + 1);
+    geo_selfint_simple_fans(p, t, fans);
+    geo_topo_free(t);
+    uint32_t nfan = 0;
+    for (uint32_t v = 0; v < p->nverts; v++)
+        nfan += fans[v];
+    geo_selfint_opts o;
+    geo_selfint_opts_default(&o);
+    o.max_pairs = 1u << 20;
+    geo_selfint a, b;
+    assert_int_equal(geo_selfint_find(p, NULL, &o, NULL, &a, NULL), 0);
+    o.simple_fans = fans;
+    assert_int_equal(geo_selfint_find(p, NULL, &o, NULL, &b, NULL), 0);
+    assert_true(a.count == b.count);
+    assert_int_equal(a.npairs, b.npairs);
+    assert_memory_equal(a.pairs, b.pairs, a.npairs * sizeof *a.pairs);
+    assert_memory_equal(a.facet_flags, b.facet_flags, p->nfacets);
+    geo_selfint_clear(&a);
+    geo_selfint_clear(&b);
+    free(fans);
+    return nfan;
+}
+
+/* Skipping the pairs of a certified fan never changes the answer: on
+ * spheres whose vertices are moved a little (every fan simple), a lot
+ * (folds, fans through each other and through the far side) and onto a
+ * coarse grid (exact coplanar and collinear spokes), and on a closed
+ * double cone over a hexagon wound twice, whose two apex fans each cover
+ * their plane twice and cross themselves: those two are never
+ * certified. */
+static void test_simple_fans_change_no_answer(void **state)
+{
+    (void)state;
+    uint64_t seed = 12345;
+    for (int it = 0; it < 24; it++) {
+        geo_poly *p = gs_sphere(6 + it % 5, 1.0);
+        double amp = it % 3 == 0 ? 0.01 : it % 3 == 1 ? 0.4 : 0;
+        for (uint32_t v = 0; v < p->nverts; v++)
+            for (int k = 0; k < 3; k++) {
+                double r = (double)(geo_rand_next(&seed) % 2001) / 1000 - 1;
+                if (it % 3 == 2) /* a grid of 1/4: exact degeneracies */
+                    p->verts[v][k] = round(4 * p->verts[v][k]) / 4;
+                else if (geo_rand_next(&seed) % 4 == 0 || amp < 0.1)
+                    p->verts[v][k] += amp * r;
+            }
+        geo_poly_compute_planes(p, GEO_PLANE_UNWEIGHTED);
+        uint32_t nfan = assert_fans_change_nothing(p);
+        if (it % 3 == 0) /* small moves: the fans stay simple */
+            assert_int_equal(nfan, p->nverts);
+        geo_poly_free(p);
+    }
+    /* the double cone: ring vertices at 125° steps (twice round in six) */
+    geo_poly *p = geo_poly_new();
+    const double top[3] = {0, 0, 0.3}, bottom[3] = {0, 0, -1};
+    geo_poly_add_vertex(p, top);
+    geo_poly_add_vertex(p, bottom);
+    for (int i = 0; i < 6; i++) {
+        double a = (i * 125.0 + (i == 5 ? -30 : 0)) * M_PI / 180;
+        double x[3] = {cos(a) * (1 + 0.1 * i), sin(a) * (1 + 0.1 * i), 0};
+        geo_poly_add_vertex(p, x);
+    }
+    for (uint32_t i = 0; i < 6; i++) {
+        uint32_t a = 2 + i, b = 2 + (i + 1) % 6;
+        uint32_t up[3] = {0, a, b}, down[3] = {1, b, a};
+        geo_poly_add_facet(p, up, 3);
+        geo_poly_add_facet(p, down, 3);
+    }
+    geo_poly_compute_planes(p, GEO_PLANE_UNWEIGHTED);
+    geo_topo *t = geo_topo_build(p, NULL);
+    uint8_t fans[8];
+    geo_selfint_simple_fans(p, t, fans);
+    geo_topo_free(t);
+    assert_int_equal(fans[0], 0);
+    assert_int_equal(fans[1], 0);
+    assert_fans_change_nothing(p);
+    geo_selfint r;
+    assert_int_equal(geo_selfint_find(p, NULL, NULL, NULL, &r, NULL), 0);
+    assert_true(r.count > 0);
+    geo_selfint_clear(&r);
+    geo_poly_free(p);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -767,6 +856,7 @@ int main(void)
         cmocka_unit_test(test_exact_symmetries_do_not_change_the_answer),
         cmocka_unit_test(test_cancel_stops_with_ecanceled),
         cmocka_unit_test(test_random_convex_clean_until_vertex_pushed_through),
+        cmocka_unit_test(test_simple_fans_change_no_answer),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
