@@ -1061,11 +1061,25 @@ enum { FAN_MAX = 64 };
 /* geo_selfint_simple_fans for one interior vertex v. The fan's triangles
  * in order around v, each (v, r_i, r_i+1) with r the spokes (the
  * corners' previous vertices; the next triangle's previous vertex is this
- * one's next), r_k+1 = r_1. With every sector of one sign s and no spoke
- * along r_1 (either way), the fan winds w ≥ 1 times and, were w > 1, the
- * direction of r_1 would come round again strictly inside a sector other
- * than the first and the last (each spans less than a half-turn): so no
- * such sector containing r_1 means w = 1. */
+ * one's next), r_k+1 = r_1. With every sector of one sign s and no other
+ * spoke in the direction of r_1, the fan winds w ≥ 1 times and, were
+ * w > 1, the direction of r_1 would come round again strictly inside a
+ * sector other than the first and the last (each spans less than a
+ * half-turn; a spoke opposite r_1 bounds sectors that cannot hold it): so
+ * no such sector containing r_1 means w = 1. */
+/* a, b on one line through o in the projection dropping drop (their
+ * orient2d 0, neither at o): whether they lie on the same side of o.
+ * A difference of doubles has the sign of the exact one. */
+static bool along(const double o[3], const double a[3], const double b[3],
+                  int drop)
+{
+    int u = drop == 2 ? 0 : drop + 1, w = drop == 0 ? 2 : drop - 1;
+    double au = a[u] - o[u], bu = b[u] - o[u];
+    if (au != 0)
+        return (au > 0) == (bu > 0);
+    return (a[w] - o[w] > 0) == (b[w] - o[w] > 0);
+}
+
 static bool fan_is_simple(const geo_poly *p, const geo_topo *t, uint32_t v)
 {
     uint32_t c0 = t->vstart[v], k = t->vstart[v + 1] - c0;
@@ -1114,7 +1128,9 @@ static bool fan_is_simple(const geo_poly *p, const geo_topo *t, uint32_t v)
         if (i == k)
             break;
         int side = sg * geo_orient2d_proj(o, r1, b, drop);
-        if (side == 0)
+        /* a spoke along r_1: away from it only (a flat fan's opposite
+         * spoke; the signs of the exact differences tell the way) */
+        if (side == 0 && along(o, r1, b, drop))
             return false;
         /* sector i−1 (from r_i−1 to r_i), not the first: r_1 strictly
          * inside it when r_i−1 lies clockwise of r_1 and r_i
