@@ -219,8 +219,10 @@ static void reload(cfg *cur, int argc, char **argv, http_env *env,
         log_set_level(cur->log_level);
         apply_http_settings(env, cur);
         job_pool_set_timeout(pool, cur->job_timeout_ms);
-        job_pool_set_paused(pool, cur->paused);
+        /* logged before the workers resume: the log shows the reload
+         * before any job it lets start */
         log_msg(LOG_NOTICE, NULL, "configuration reloaded");
+        job_pool_set_paused(pool, cur->paused);
         retention(s, cur);
     }
     sd_notify(0, "READY=1");
