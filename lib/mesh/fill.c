@@ -1254,9 +1254,9 @@ static int mark_open_loops(const geo_poly *p, const geo_poly *q,
 }
 
 /* Removes from a copy of p the facets keep[] clears and fills it; swaps
- * it into p when every hole closes (1), else leaves p as it was (0;
- * open[], when given, marks p's vertices on the holes left open), or a
- * negative errno. */
+ * it into p when every hole closes (1), else leaves p as it was and marks
+ * in open[] p's vertices on the holes left open (0), or a negative
+ * errno. */
 static int fill_without(geo_poly *p, const bool *keep, uint32_t nrem,
                         const geo_mesh_fill_opts *mo, const geo_ctx *ctx,
                         uint8_t *open, geo_mesh_fill_report *rep,
@@ -1267,7 +1267,7 @@ static int fill_without(geo_poly *p, const bool *keep, uint32_t nrem,
     geo_topo *tq = NULL;
     int rc = -ENOMEM;
     if (!q || !vnew || geo_poly_compact(q, keep, vnew, NULL) < 0 ||
-        (open && !(tq = geo_topo_build(q, err))))
+        !(tq = geo_topo_build(q, err)))
         goto done;
     geo_mesh_fill_opts m2 = *mo;
     m2.remove_crossing = false;
@@ -1281,7 +1281,7 @@ static int fill_without(geo_poly *p, const bool *keep, uint32_t nrem,
         *rep = r2;
         rc = 1;
     } else {
-        if (rc == 0 && open)
+        if (rc == 0)
             rc = mark_open_loops(p, q, tq, vnew, &r2, open);
         geo_mesh_fill_report_clear(&r2);
     }
@@ -1295,15 +1295,12 @@ done:
 }
 
 /* Clears keep[] of every facet with a vertex of a facet already cleared
- * or marked in open[] (NULL: none; mark: nverts bytes of scratch);
- * returns how many facets are cleared in all. */
+ * or marked in open[] (mark: nverts bytes of scratch); returns how many
+ * facets are cleared in all. */
 static uint32_t grow_ring(const geo_poly *p, bool *keep, const uint8_t *open,
                           uint8_t *mark)
 {
-    if (open)
-        memcpy(mark, open, p->nverts);
-    else
-        memset(mark, 0, p->nverts);
+    memcpy(mark, open, p->nverts);
     for (uint32_t f = 0; f < p->nfacets; f++)
         if (!keep[f])
             for (uint32_t c = p->fstart[f]; c < p->fstart[f + 1]; c++)
