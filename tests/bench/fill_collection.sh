@@ -6,13 +6,17 @@
 # and every *.off/*.obj/*.ply/*.stl in the directories given (for example
 # the example meshes a geometry library ships). Each open mesh is filled
 # by `facet fill --keep-invalid --report`, then again with --parts-overlap
-# (a patch may cross another shell its own shell already crossed) and with
-# --remove-crossing (crossing facets on a rim removed first); each
+# (a patch may cross another shell its own shell already crossed), with
+# --remove-crossing (crossing facets removed first, the openings filled)
+# and with both (an assembly whose parts also have flaps); each
 # table gives holes filled / holes, meshes closed as valid solids, the
 # strategy that closed each hole and the reason each open hole was
 # refused, and the crossings each result has that its input did not:
 # none may exist (plain), none but between two parts that crossed in the
-# input (--parts-overlap). Every pair is counted (inspect --pairs).
+# input (--parts-overlap), no more pairs than the input had
+# (--remove-crossing, whose removal renumbers the facets; with both, the
+# rule of the step that gave the result). Every pair is counted
+# (inspect --pairs).
 # Usage: tests/bench/fill_collection.sh BUILD_DIR [COUNT] [DIR...]
 set -u
 B=${1:-build}
@@ -32,9 +36,12 @@ for d in "$@"; do
     find "$d" -maxdepth 1 -type f \( -name '*.off' -o -name '*.obj' -o \
         -name '*.ply' -o -name '*.stl' \) | sort >>"$list"
 done
-for mode in plain parts-overlap remove-crossing; do
-flags=
-[ "$mode" != plain ] && flags=--$mode
+for mode in plain parts-overlap remove-crossing both; do
+case $mode in
+plain) flags= ;;
+both) flags="--parts-overlap --remove-crossing" ;;
+*) flags=--$mode ;;
+esac
 echo "== facet fill $flags"
 while read -r m; do
     n=$(basename "$m")
@@ -85,12 +92,13 @@ def shells(F):
             par[find(fs[0])] = find(fs[1])
     return [find(f) for f in range(len(F))]
 
-def new_crossings(n, din, dout):
+def new_crossings(n, din, dout, removed):
     """Pairs of the result that are not the input's: all of them (plain),
     those not between two parts that crossed in the input (overlap); with
-    facets removed first (remove-crossing) the indices move, so: how many
-    more pairs the result has than its input."""
-    if mode == "remove-crossing":
+    facets removed first (remove-crossing, or both when the removal gave
+    the result) the indices move, so: how many more pairs the result has
+    than its input."""
+    if mode == "remove-crossing" or (mode == "both" and removed > 0):
         return max(0, dout["self_intersections"]["count"]
                    - din["self_intersections"]["count"])
     old = set(map(tuple, din["self_intersections"]["pairs"]))
@@ -129,7 +137,7 @@ for n in names:
     if os.path.exists(op):
         dout = json.load(open(op))
         valid = dout["valid"]
-        added += new_crossings(n, din, dout) > 0
+        added += new_crossings(n, din, dout, rep["facets_removed"]) > 0
     closed_valid += valid
     rows.append((n, rep["loops"], rep["filled"], "valid" if valid else "not valid"))
 for r in rows:
@@ -139,7 +147,8 @@ print("meshes: %d open, %d with every hole filled, %d closed as valid solids;"
 print("strategy per filled hole: " + ", ".join("%s %d" % kv for kv in strat.most_common()))
 print("refusals by reason: " + (", ".join("%s %d" % kv for kv in refusal.most_common()) or "none"))
 rule = {"plain": "none new", "parts-overlap": "only between parts that crossed",
-        "remove-crossing": "no more pairs than the input"}[mode]
+        "remove-crossing": "no more pairs than the input",
+        "both": "the rule of the step that gave the result"}[mode]
 print("results with a crossing the rule forbids (%s): %d; timeouts: %d"
       % (rule, added, timeouts))
 PY
