@@ -1491,20 +1491,53 @@ out:
     return rc;
 }
 
+/* 1 when some vertex of p is in no facet, 0 when none, -ENOMEM. */
+static int has_unused_vertex(const geo_poly *p)
+{
+    bool *used = calloc((size_t)p->nverts + 1, sizeof *used);
+    if (!used)
+        return -ENOMEM;
+    uint32_t nc = geo_poly_ncorners(p), nused = 0;
+    for (uint32_t c = 0; c < nc; c++)
+        if (!used[p->fidx[c]]) {
+            used[p->fidx[c]] = true;
+            nused++;
+        }
+    free(used);
+    return nused < p->nverts;
+}
+
 /* Before the holes of an open mesh (a closed one is left alone): facets
  * inconsistent with their neighbours are reversed where the shell is
  * orientable (a mesh from another tool often mixes both windings; no
  * patch could make it a solid, and the loops would split at every flipped
  * edge), and, with split, non-planar facets are split. */
 static int prepare_open(geo_poly *p, bool split, uint32_t *ret_split,
-                        uint32_t *ret_reversed, geo_err *err)
+                        uint32_t *ret_reversed, uint32_t *ret_unused,
+                        geo_err *err)
 {
-    *ret_split = *ret_reversed = 0;
+    *ret_split = *ret_reversed = *ret_unused = 0;
     geo_topo *t = geo_topo_build(p, err);
     if (!t)
         return -ENOMEM;
     int rc = 0;
     bool open = t->nboundary_edges > 0;
+    /* a vertex no facet uses is no part of any surface, yet a solid with
+     * one is not valid (every vertex in three facets or more) */
+    uint32_t nv = p->nverts;
+    int unused = open ? has_unused_vertex(p) : 0;
+    if (unused < 0) {
+        geo_topo_free(t);
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    }
+    if (unused) {
+        geo_topo_free(t);
+        if (geo_poly_compact(p, NULL, NULL, NULL) < 0)
+            return geo_err_set(err, -ENOMEM, "out of memory");
+        *ret_unused = nv - p->nverts;
+        if (!(t = geo_topo_build(p, err)))
+            return -ENOMEM;
+    }
     if (open && t->nflipped_edges > 0) {
         uint8_t *flip = malloc((size_t)p->nfacets + 1);
         geo_orient_report orep;
@@ -1544,8 +1577,9 @@ int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
     int rc = geo_poly_validate_indices(p, err);
     if (rc < 0)
         return rc;
-    uint32_t nsplit = 0, nrev = 0;
-    if ((rc = prepare_open(p, mo.split_nonplanar, &nsplit, &nrev, err)) < 0)
+    uint32_t nsplit = 0, nrev = 0, nunused = 0;
+    if ((rc = prepare_open(p, mo.split_nonplanar, &nsplit, &nrev, &nunused,
+                           err)) < 0)
         return rc;
     if (mo.remove_crossing) {
         geo_mesh_fill_report RR = {0};
@@ -1554,6 +1588,7 @@ int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
             return rc;
         if (rc == 1) {
             RR.nsplit = nsplit;
+            RR.nunused = nunused;
             RR.nreversed += nrev;
             if (rep)
                 *rep = RR;
@@ -1563,7 +1598,8 @@ int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
         }
         mo.remove_crossing = false;
     }
-    geo_mesh_fill_report R = {.nsplit = nsplit, .nreversed = nrev};
+    geo_mesh_fill_report R = {
+        .nsplit = nsplit, .nreversed = nrev, .nunused = nunused};
     mfill M = {.p = p, .ctx = ctx};
     uint32_t *lstart = NULL, *lcorn = NULL, nloops = 0, *w = NULL;
     geo_topo *t = geo_topo_build(p, err);

@@ -9,6 +9,8 @@
  *    signed volume is negative whole; step 5 turns a closed result
  *    outward again), since no patch could make it a solid
  *    and its loops would split at every flipped edge (rep->nreversed).
+ *    Vertices no facet uses are removed (rep->nunused): meshes from
+ *    other tools often carry them, and a solid cannot.
  * 1. Loops: the boundary loops of lib/core/topo.h (split at non-manifold
  *    vertices, so two holes touching at a vertex are two holes). Each is
  *    handled on its own, in loop order.
@@ -57,8 +59,8 @@
  *    reversed (rep->nreversed).
  *
  * Output: vertices and facets of p keep their indices (unless
- * remove_crossing removed some; a facet split_nonplanar splits keeps its
- * index as its first triangle); new vertices and facets are appended,
+ * remove_crossing removed some, or an open p had vertices no facet used;
+ * a facet split_nonplanar splits keeps its index as its first triangle); new vertices and facets are appended,
  * hole after hole. Ownership: p is modified in
  * place (left unchanged on error); rep->holes is malloc'd (release with
  * geo_mesh_fill_report_clear). Errors: -EINVAL (invalid indices or
@@ -175,6 +177,7 @@ typedef struct geo_mesh_fill_report {
                               (remove_crossing) */
     uint32_t nsplit;       /* non-planar facets split into triangles
                               first (split_nonplanar) */
+    uint32_t nunused;      /* vertices no facet used, removed first */
     uint32_t verts_added, facets_added;
     double max_dihedral_deg; /* over every filled hole */
     geo_mesh_hole *holes;  /* nloops entries, in loop order */

@@ -224,11 +224,6 @@ static void test_large_curved_hole_filled_validly_at_mesh_density(void **s)
     geo_poly_free(p);
 }
 
-/* A unit box without its top and a closed column 0.2 wide standing in the
- * opening from z = zlo to 50, far taller than any dome the lift tries:
- * every disc spanning the rim crosses the column. From zlo < 0 the column
- * goes through the floor too (the two parts already cross); from zlo in
- * (0, 1) it stands free inside the box (they do not). */
 /* The unit box without its top: five facets, one square hole. */
 static geo_poly *open_box(void)
 {
@@ -238,6 +233,12 @@ static geo_poly *open_box(void)
     assert_int_equal(geo_poly_compact(p, keep, NULL, NULL), 0);
     return p;
 }
+
+/* A unit box without its top and a closed column 0.2 wide standing in the
+ * opening from z = zlo to 50, far taller than any dome the lift tries:
+ * every disc spanning the rim crosses the column. From zlo < 0 the column
+ * goes through the floor too (the two parts already cross); from zlo in
+ * (0, 1) it stands free inside the box (they do not). */
 
 static geo_poly *open_box_with_column(double zlo)
 {
@@ -447,6 +448,36 @@ static void test_inconsistent_open_mesh_is_oriented_then_filled(void **s)
             assert_true(fabs(p->planes[f][k] - q->planes[f][k]) < 1e-12);
     geo_mesh_fill_report_clear(&rep);
     geo_poly_free(q);
+    geo_poly_free(p);
+}
+
+/* A vertex no facet uses (other tools' files often carry them) would
+ * leave the filled box invalid: an open mesh loses it first; a closed one
+ * is left alone. */
+static void test_unused_vertex_of_an_open_mesh_is_removed(void **s)
+{
+    (void)s;
+    const double far[3] = {5, 5, 5};
+    geo_poly *p = open_box();
+    uint32_t nv = p->nverts;
+    assert_true(geo_poly_add_vertex(p, far) >= 0);
+    geo_mesh_fill_report rep;
+    assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(rep.nopen, 0);
+    assert_int_equal(rep.nunused, 1);
+    assert_int_equal(p->nverts, nv);
+    assert_true(is_valid(p));
+    geo_mesh_fill_report_clear(&rep);
+    geo_poly_free(p);
+
+    const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    p = tu_box(lo, hi);
+    nv = p->nverts;
+    assert_true(geo_poly_add_vertex(p, far) >= 0);
+    assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
+    assert_int_equal(rep.nunused, 0);
+    assert_int_equal(p->nverts, nv + 1);
+    geo_mesh_fill_report_clear(&rep);
     geo_poly_free(p);
 }
 
@@ -675,6 +706,7 @@ int main(void)
         cmocka_unit_test(test_flap_across_the_opening_is_removed_then_filled),
         cmocka_unit_test(test_crossing_inside_the_mesh_is_removed_then_filled),
         cmocka_unit_test(test_inconsistent_open_mesh_is_oriented_then_filled),
+        cmocka_unit_test(test_unused_vertex_of_an_open_mesh_is_removed),
         cmocka_unit_test(test_open_sheet_is_closed_by_a_dome),
         cmocka_unit_test(test_rim_whose_chords_are_mesh_edges_gets_a_dome),
         cmocka_unit_test(test_every_weight_fills_a_nonplanar_hole_validly),
