@@ -1507,7 +1507,8 @@ static int has_unused_vertex(const geo_poly *p)
     return nused < p->nverts;
 }
 
-/* Before the holes of an open mesh (a closed one is left alone): facets
+/* Before the holes of an open mesh (a closed one is left alone): vertices
+ * no facet uses are removed, facets
  * inconsistent with their neighbours are reversed where the shell is
  * orientable (a mesh from another tool often mixes both windings; no
  * patch could make it a solid, and the loops would split at every flipped

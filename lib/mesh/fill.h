@@ -60,9 +60,9 @@
  *
  * Output: vertices and facets of p keep their indices (unless
  * remove_crossing removed some, or an open p had vertices no facet used;
- * a facet split_nonplanar splits keeps its index as its first triangle); new vertices and facets are appended,
- * hole after hole. Ownership: p is modified in
- * place (left unchanged on error); rep->holes is malloc'd (release with
+ * a facet split_nonplanar splits keeps its index as its first triangle);
+ * new vertices and facets are appended, hole after hole. Ownership: p is
+ * modified in place (left unchanged on error); rep->holes is malloc'd (release with
  * geo_mesh_fill_report_clear). Errors: -EINVAL (invalid indices or
  * options), -ENOMEM, -ECANCELED. Not thread-safe for one p. */
 #ifndef GEO_FILL_H

@@ -239,7 +239,6 @@ static geo_poly *open_box(void)
  * every disc spanning the rim crosses the column. From zlo < 0 the column
  * goes through the floor too (the two parts already cross); from zlo in
  * (0, 1) it stands free inside the box (they do not). */
-
 static geo_poly *open_box_with_column(double zlo)
 {
     geo_poly *p = open_box();
