@@ -49,7 +49,7 @@ json_t *proto_fill_report_to_json(const geo_mesh_fill_report *r)
         }
     }
     return json_pack("{s:I, s:I, s:I, s:I, s:I, s:I, s:I, s:I, s:I, s:I, s:I, "
-                     "s:f, s:o}",
+                     "s:I, s:f, s:o}",
                      "loops", (json_int_t)r->nloops, "filled",
                      (json_int_t)r->nfilled, "planar", (json_int_t)r->nplanar,
                      "left_open", (json_int_t)r->nopen, "rejected_patches",
@@ -57,7 +57,8 @@ json_t *proto_fill_report_to_json(const geo_mesh_fill_report *r)
                      (json_int_t)r->nremoved, "facets_split",
                      (json_int_t)r->nsplit, "facets_reversed",
                      (json_int_t)r->nreversed, "vertices_unused",
-                     (json_int_t)r->nunused, "vertices_added",
+                     (json_int_t)r->nunused, "vertices_welded",
+                     (json_int_t)r->nwelded, "vertices_added",
                      (json_int_t)r->verts_added, "facets_added",
                      (json_int_t)r->facets_added, "max_dihedral_deg",
                      r->max_dihedral_deg, "holes", holes);

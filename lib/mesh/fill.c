@@ -21,6 +21,7 @@
 #include "selfint.h"
 #include "topo.h"
 #include "vec.h"
+#include "weld.h"
 
 const char *geo_fill_attempt_name(enum geo_fill_attempt a)
 {
@@ -1508,16 +1509,16 @@ static int has_unused_vertex(const geo_poly *p)
 }
 
 /* Before the holes of an open mesh (a closed one is left alone): vertices
- * no facet uses are removed, facets
+ * no facet uses are removed, seams welded (lib/mesh/weld.h), facets
  * inconsistent with their neighbours are reversed where the shell is
  * orientable (a mesh from another tool often mixes both windings; no
  * patch could make it a solid, and the loops would split at every flipped
  * edge), and, with split, non-planar facets are split. */
 static int prepare_open(geo_poly *p, bool split, uint32_t *ret_split,
                         uint32_t *ret_reversed, uint32_t *ret_unused,
-                        geo_err *err)
+                        uint32_t *ret_welded, geo_err *err)
 {
-    *ret_split = *ret_reversed = *ret_unused = 0;
+    *ret_split = *ret_reversed = *ret_unused = *ret_welded = 0;
     geo_topo *t = geo_topo_build(p, err);
     if (!t)
         return -ENOMEM;
@@ -1538,6 +1539,16 @@ static int prepare_open(geo_poly *p, bool split, uint32_t *ret_split,
         *ret_unused = nv - p->nverts;
         if (!(t = geo_topo_build(p, err)))
             return -ENOMEM;
+    }
+    /* a seam whose sides repeat their vertices reads as a hole that no
+     * patch fills (its sides coincide): weld it first */
+    if (open) {
+        geo_topo_free(t);
+        if (geo_weld_boundary(p, ret_welded, err) < 0)
+            return -ENOMEM;
+        if (!(t = geo_topo_build(p, err)))
+            return -ENOMEM;
+        open = t->nboundary_edges > 0;
     }
     if (open && t->nflipped_edges > 0) {
         uint8_t *flip = malloc((size_t)p->nfacets + 1);
@@ -1578,9 +1589,9 @@ int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
     int rc = geo_poly_validate_indices(p, err);
     if (rc < 0)
         return rc;
-    uint32_t nsplit = 0, nrev = 0, nunused = 0;
+    uint32_t nsplit = 0, nrev = 0, nunused = 0, nwelded = 0;
     if ((rc = prepare_open(p, mo.split_nonplanar, &nsplit, &nrev, &nunused,
-                           err)) < 0)
+                           &nwelded, err)) < 0)
         return rc;
     if (mo.remove_crossing) {
         geo_mesh_fill_report RR = {0};
@@ -1590,6 +1601,7 @@ int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
         if (rc == 1) {
             RR.nsplit = nsplit;
             RR.nunused = nunused;
+            RR.nwelded = nwelded;
             RR.nreversed += nrev;
             if (rep)
                 *rep = RR;
@@ -1600,7 +1612,8 @@ int geo_fill(geo_poly *p, const geo_mesh_fill_opts *opts,
         mo.remove_crossing = false;
     }
     geo_mesh_fill_report R = {
-        .nsplit = nsplit, .nreversed = nrev, .nunused = nunused};
+        .nsplit = nsplit, .nreversed = nrev, .nunused = nunused,
+        .nwelded = nwelded};
     mfill M = {.p = p, .ctx = ctx};
     uint32_t *lstart = NULL, *lcorn = NULL, nloops = 0, *w = NULL;
     geo_topo *t = geo_topo_build(p, err);

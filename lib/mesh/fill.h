@@ -10,7 +10,9 @@
  *    outward again), since no patch could make it a solid
  *    and its loops would split at every flipped edge (rep->nreversed).
  *    Vertices no facet uses are removed (rep->nunused): meshes from
- *    other tools often carry them, and a solid cannot.
+ *    other tools often carry them, and a solid cannot. Seams whose sides
+ *    repeat their vertices are welded (lib/mesh/weld.h, rep->nwelded):
+ *    they read as holes whose sides coincide, which no patch fills.
  * 1. Loops: the boundary loops of lib/core/topo.h (split at non-manifold
  *    vertices, so two holes touching at a vertex are two holes). Each is
  *    handled on its own, in loop order.
@@ -59,7 +61,8 @@
  *    reversed (rep->nreversed).
  *
  * Output: vertices and facets of p keep their indices (unless
- * remove_crossing removed some, or an open p had vertices no facet used;
+ * remove_crossing removed some, or an open p had vertices no facet used
+ * or welded;
  * a facet split_nonplanar splits keeps its index as its first triangle);
  * new vertices and facets are appended, hole after hole. Ownership: p is
  * modified in place (left unchanged on error); rep->holes is malloc'd (release with
@@ -178,6 +181,8 @@ typedef struct geo_mesh_fill_report {
     uint32_t nsplit;       /* non-planar facets split into triangles
                               first (split_nonplanar) */
     uint32_t nunused;      /* vertices no facet used, removed first */
+    uint32_t nwelded;      /* vertices welded into another at the same
+                              point first (lib/mesh/weld.h) */
     uint32_t verts_added, facets_added;
     double max_dihedral_deg; /* over every filled hole */
     geo_mesh_hole *holes;  /* nloops entries, in loop order */
