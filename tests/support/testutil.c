@@ -5,6 +5,8 @@
 #include <stdlib.h>
 #include <sys/stat.h>
 
+#include "stats.h"
+
 const char *tu_models_dir(void)
 {
     const char *env = getenv("FACET_MODELS");
@@ -75,4 +77,14 @@ geo_poly *tu_notch_cube(void)
                                    10, 15, 13, 11, 9, 14, 15, 10};
     static const uint32_t start[] = {0, 4, 12, 16, 20, 24, 32, 36, 40, 44, 48};
     return geo_poly_from_arrays(16, &v[0][0], 10, start, idx, NULL, NULL);
+}
+
+bool tu_is_valid(const geo_poly *p)
+{
+    geo_stats st;
+    if (geo_inspect(p, NULL, NULL, &st, NULL) < 0)
+        return false;
+    bool v = st.valid;
+    geo_stats_clear(&st);
+    return v;
 }

@@ -4,6 +4,7 @@
 #define FACET_TESTUTIL_H
 
 #include <stdarg.h>
+#include <stdbool.h>
 #include <stddef.h>
 #include <setjmp.h>
 #include <stdint.h>
@@ -26,5 +27,9 @@ geo_poly *tu_seed003_example(void);
 
 /* The sample models' notch cube (volume 936) built in code. */
 geo_poly *tu_notch_cube(void);
+
+/* geo_inspect's verdict on p: a valid closed solid (false also when the
+ * inspection itself fails: bad indices, out of memory). */
+bool tu_is_valid(const geo_poly *p);
 
 #endif

@@ -28,15 +28,6 @@ static geo_poly *load(const char *name)
     return p;
 }
 
-static bool is_valid(const geo_poly *p)
-{
-    geo_stats st;
-    assert_int_equal(geo_inspect(p, NULL, NULL, &st, NULL), 0);
-    bool v = st.valid;
-    geo_stats_clear(&st);
-    return v;
-}
-
 static void test_missing_planar_facets_come_back_as_one_facet_each(void **s)
 {
     (void)s;
@@ -53,7 +44,7 @@ static void test_missing_planar_facets_come_back_as_one_facet_each(void **s)
     assert_int_equal(p->nverts, nv);
     double v = geo_poly_volume(p), vt = geo_poly_volume(truth);
     assert_true(fabs(v - vt) <= 1e-9 * vt);
-    assert_true(is_valid(p));
+    assert_true(tu_is_valid(p));
     for (uint32_t h = 0; h < 2; h++) {
         assert_int_equal(rep.holes[h].status, GEO_HOLE_FILLED_PLANAR);
         assert_int_equal(rep.holes[h].facets_added, 1);
@@ -146,7 +137,7 @@ static void test_planar_hole_sharing_two_edges_with_a_facet_is_triangulated(
     assert_int_equal(rep.nloops, 1);
     assert_int_equal(rep.nfilled, 1);
     assert_int_equal(rep.holes[0].status, GEO_HOLE_FILLED);
-    assert_true(is_valid(p));
+    assert_true(tu_is_valid(p));
     assert_true(fabs(geo_poly_volume(p) - 4.0) < 1e-12);
     geo_mesh_fill_report_clear(&rep);
     geo_poly_free(p);
@@ -180,7 +171,7 @@ static void test_holes_touching_at_a_vertex_are_two_loops(void **s)
     /* each hole got its own square: the pinch is one fan again */
     for (uint32_t h = 0; h < 2; h++)
         assert_int_equal(rep.holes[h].nverts, 4);
-    assert_true(is_valid(p));
+    assert_true(tu_is_valid(p));
     geo_mesh_fill_report_clear(&rep);
     geo_poly_free(p);
 }
@@ -214,7 +205,7 @@ static void test_large_curved_hole_filled_validly_at_mesh_density(void **s)
     assert_int_equal(p->nverts, nv0 + h->verts_added);
     assert_true(h->verts_added > 1000);
     assert_true(h->edge_ratio > 0.5 && h->edge_ratio < 2.0);
-    assert_true(is_valid(p));
+    assert_true(tu_is_valid(p));
     /* faired, not flat: the patch rises towards the sphere's pole */
     double top = 0;
     for (uint32_t v = nv0; v < p->nverts; v++)
@@ -366,7 +357,7 @@ static void test_flap_across_the_opening_is_removed_then_filled(void **s)
     geo_mesh_fill_report rep;
     assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
     assert_int_equal(rep.nremoved, 0);
-    assert_false(is_valid(p));
+    assert_false(tu_is_valid(p));
     geo_mesh_fill_report_clear(&rep);
 
     geo_mesh_fill_opts o;
@@ -375,7 +366,7 @@ static void test_flap_across_the_opening_is_removed_then_filled(void **s)
     assert_int_equal(geo_fill(q, &o, NULL, &rep, NULL), 0);
     assert_int_equal(rep.nremoved, 1);
     assert_int_equal(rep.nopen, 0);
-    assert_true(is_valid(q));
+    assert_true(tu_is_valid(q));
     geo_mesh_fill_report_clear(&rep);
     geo_poly_free(q);
     geo_poly_free(p);
@@ -410,7 +401,7 @@ static void test_crossing_inside_the_mesh_is_removed_then_filled(void **s)
     geo_mesh_fill_report rep;
     assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
     assert_int_equal(rep.nremoved, 0);
-    assert_false(is_valid(p));
+    assert_false(tu_is_valid(p));
     geo_mesh_fill_report_clear(&rep);
 
     geo_mesh_fill_opts o;
@@ -421,7 +412,7 @@ static void test_crossing_inside_the_mesh_is_removed_then_filled(void **s)
     assert_true(rep.nremoved > 6 && rep.nremoved <= nf / 20);
     assert_true(rep.nloops >= 3); /* the cap's and the two new openings */
     assert_int_equal(rep.nopen, 0);
-    assert_true(is_valid(q));
+    assert_true(tu_is_valid(q));
     geo_mesh_fill_report_clear(&rep);
     geo_poly_free(q);
     geo_poly_free(p);
@@ -441,7 +432,7 @@ static void test_inconsistent_open_mesh_is_oriented_then_filled(void **s)
     assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
     assert_int_equal(rep.nopen, 0);
     assert_int_equal(rep.nreversed, 1);
-    assert_true(is_valid(p));
+    assert_true(tu_is_valid(p));
     for (uint32_t f = 0; f < q->nfacets; f++) /* each wall as it was */
         for (int k = 0; k < 4; k++)
             assert_true(fabs(p->planes[f][k] - q->planes[f][k]) < 1e-12);
@@ -465,7 +456,7 @@ static void test_unused_vertex_of_an_open_mesh_is_removed(void **s)
     assert_int_equal(rep.nopen, 0);
     assert_int_equal(rep.nunused, 1);
     assert_int_equal(p->nverts, nv);
-    assert_true(is_valid(p));
+    assert_true(tu_is_valid(p));
     geo_mesh_fill_report_clear(&rep);
     geo_poly_free(p);
 
@@ -596,7 +587,7 @@ static void test_every_weight_fills_a_nonplanar_hole_validly(void **s)
             assert_int_equal(rep.holes[0].status, GEO_HOLE_FILLED);
             /* the weight asked for gave a valid patch by itself */
             assert_int_equal(rep.holes[0].attempt, GEO_ATTEMPT_AS_ASKED);
-            assert_true(is_valid(p));
+            assert_true(tu_is_valid(p));
             geo_mesh_fill_report_clear(&rep);
             geo_poly_free(p);
         }
@@ -654,7 +645,7 @@ static void test_nonplanar_facets_are_split_when_filling(void **s)
     assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
     assert_int_equal(rep.nsplit, 1);
     assert_int_equal(rep.nfilled, 1);
-    assert_true(is_valid(p));
+    assert_true(tu_is_valid(p));
     /* a split facet keeps its index as a triangle of its own corners;
      * the planar ones keep theirs as they were */
     for (uint32_t f = 0; f < q->nfacets; f++) {
@@ -680,7 +671,7 @@ static void test_nonplanar_facets_are_split_when_filling(void **s)
     p = geo_poly_copy(q);
     assert_int_equal(geo_fill(p, &o, NULL, &rep, NULL), 0);
     assert_int_equal(rep.nsplit, 0);
-    assert_false(is_valid(p));
+    assert_false(tu_is_valid(p));
     geo_mesh_fill_report_clear(&rep);
     geo_poly_free(q);
     geo_poly_free(p);

@@ -44,15 +44,6 @@ static geo_poly *part(const geo_poly *s, int axis, double lo, double hi)
     return p;
 }
 
-static bool is_valid(const geo_poly *p)
-{
-    geo_stats st;
-    assert_int_equal(geo_inspect(p, NULL, NULL, &st, NULL), 0);
-    bool v = st.valid;
-    geo_stats_clear(&st);
-    return v;
-}
-
 static void test_halves_of_a_sphere_become_one_valid_solid(void **s)
 {
     (void)s;
@@ -68,7 +59,7 @@ static void test_halves_of_a_sphere_become_one_valid_solid(void **s)
     assert_true(rep.rows > 2); /* the 0.4 gap is several edges long */
     assert_int_equal(out->nverts,
                      top->nverts + bot->nverts + rep.band_vertices);
-    assert_true(is_valid(out));
+    assert_true(tu_is_valid(out));
     double h = sim_hausdorff(out, sp, 500);
     assert_true(h < 0.02);
     assert_true(fabs(geo_poly_volume(out) - geo_poly_volume(sp)) <
@@ -89,7 +80,7 @@ static void test_second_mesh_turned_over_is_oriented_back(void **s)
     geo_stitch_report rep;
     assert_int_equal(geo_stitch(top, bot, NULL, NULL, out, &rep, NULL), 0);
     assert_true(rep.flipped2);
-    assert_true(is_valid(out));
+    assert_true(tu_is_valid(out));
     assert_true(geo_poly_volume(out) > 0.9 * geo_poly_volume(st));
     geo_stitch_report_clear(&rep);
     geo_poly_free(out), geo_poly_free(top), geo_poly_free(bot);
@@ -106,7 +97,7 @@ static void test_loops_of_very_different_lengths_are_bridged(void **s)
     assert_int_equal(geo_stitch(top, bot, NULL, NULL, out, &rep, NULL), 0);
     assert_true(rep.nloop1 > 5 * rep.nloop2);
     assert_int_equal(rep.meridians, rep.nloop1);
-    assert_true(is_valid(out));
+    assert_true(tu_is_valid(out));
     geo_stitch_report_clear(&rep);
     geo_poly_free(out), geo_poly_free(top), geo_poly_free(bot);
     geo_poly_free(fine), geo_poly_free(coarse);
@@ -140,7 +131,7 @@ static void test_twist_is_chosen_whatever_the_loops_start(void **s)
         geo_stitch_report rep;
         assert_int_equal(geo_stitch(top, b2, NULL, NULL, out, &rep, NULL), 0);
         len[k] = rep.meridian_length;
-        assert_true(is_valid(out));
+        assert_true(tu_is_valid(out));
         geo_stitch_report_clear(&rep);
         geo_poly_free(out), geo_poly_free(b2);
     }
@@ -165,7 +156,7 @@ static void test_side_by_side_meshes_bridge_facing_vertices(void **s)
     /* the rest of the loops is one opening: the cap's rim, closed */
     assert_int_equal(rep.fill.nloops, 1);
     assert_int_equal(rep.fill.nfilled, 1);
-    assert_true(is_valid(out));
+    assert_true(tu_is_valid(out));
     geo_stitch_report_clear(&rep);
     geo_poly_free(out), geo_poly_free(left), geo_poly_free(right);
     geo_poly_free(cap), geo_poly_free(sp);
@@ -191,7 +182,7 @@ static void test_halves_whose_loops_coincide_are_welded(void **s)
     assert_int_equal(rep.fill.nloops, 0);
     assert_int_equal(out->nverts, sp->nverts);
     assert_int_equal(out->nfacets, sp->nfacets);
-    assert_true(is_valid(out));
+    assert_true(tu_is_valid(out));
     assert_true(fabs(geo_poly_volume(out) - geo_poly_volume(sp)) <
                 1e-12 * geo_poly_volume(sp));
     geo_stitch_report_clear(&rep);
@@ -201,7 +192,7 @@ static void test_halves_whose_loops_coincide_are_welded(void **s)
     assert_int_equal(geo_stitch(top, bot, NULL, NULL, out, &rep, NULL), 0);
     assert_true(rep.flipped2);
     assert_int_equal(rep.welded, rep.nloop1);
-    assert_true(is_valid(out));
+    assert_true(tu_is_valid(out));
     geo_stitch_report_clear(&rep);
     geo_poly_free(out), geo_poly_free(top), geo_poly_free(bot);
     geo_poly_free(sp);
@@ -241,7 +232,7 @@ static void test_every_pair_of_coinciding_loops_is_welded(void **s)
 {
     (void)s;
     geo_poly *t = torus(24, 12);
-    assert_true(is_valid(t));
+    assert_true(tu_is_valid(t));
     geo_poly *l = part(t, 0, -9, 0.0), *r = part(t, 0, 0.0, 9);
     geo_poly *out = geo_poly_new();
     geo_stitch_report rep;
@@ -252,7 +243,7 @@ static void test_every_pair_of_coinciding_loops_is_welded(void **s)
     assert_int_equal(rep.welded, 2 * 12);
     assert_int_equal(rep.fill.nloops, 0);
     assert_int_equal(out->nverts, t->nverts);
-    assert_true(is_valid(out));
+    assert_true(tu_is_valid(out));
     assert_true(fabs(geo_poly_volume(out) - geo_poly_volume(t)) <
                 1e-12 * geo_poly_volume(t));
     geo_stitch_report_clear(&rep);
@@ -300,7 +291,7 @@ static void test_gem_halves_cut_unevenly_are_joined_as_a_band(void **s)
     assert_true(rep.band);
     assert_false(rep.flipped2);
     assert_int_equal(rep.fill.nopen, 0);
-    assert_true(is_valid(out));
+    assert_true(tu_is_valid(out));
     double hd;
     assert_int_equal(geo_hausdorff(out, m, &hd, NULL), 0);
     if (!(hd < 0.1))
@@ -355,7 +346,7 @@ static void test_convex_stone_comes_back_from_its_facet_planes(void **s)
     geo_poly *out = geo_poly_new();
     geo_stitch_report rep;
     assert_int_equal(geo_stitch(a, b, NULL, NULL, out, &rep, NULL), 0);
-    assert_true(is_valid(out));
+    assert_true(tu_is_valid(out));
     double hd;
     assert_int_equal(geo_hausdorff(out, m, &hd, NULL), 0);
     if (!(hd < 0.05))
@@ -374,7 +365,7 @@ static void test_convex_stone_comes_back_from_its_facet_planes(void **s)
     assert_int_equal(geo_stitch(a, b, NULL, NULL, out, &rep, NULL), 0);
     assert_true(rep.flipped2);
     assert_int_equal(rep.method, GEO_STITCH_PLANES);
-    assert_true(is_valid(out));
+    assert_true(tu_is_valid(out));
     if (!(fabs(geo_poly_volume(out) - vh) <= 1e-9 * vh))
         fail_msg("turned over: volume %.12f, of all the half-spaces %.12f",
                  geo_poly_volume(out), vh);
@@ -403,7 +394,7 @@ static void test_random_convex_halves_are_valid(void **s)
         geo_poly *out = geo_poly_new();
         geo_stitch_report rep;
         assert_int_equal(geo_stitch(a, b, NULL, NULL, out, &rep, NULL), 0);
-        if (!is_valid(out))
+        if (!tu_is_valid(out))
             fail_msg("case %d (method %s) not valid", i,
                      geo_stitch_method_name(rep.method));
         if (rep.method == GEO_STITCH_PLANES) {
@@ -448,7 +439,7 @@ static void test_overlapping_halves_are_trimmed_back_to_the_body(void **s)
             geo_poly *out = geo_poly_new();
             geo_stitch_report rep;
             assert_int_equal(geo_stitch(a, b, NULL, NULL, out, &rep, NULL), 0);
-            if (!is_valid(out))
+            if (!tu_is_valid(out))
                 fail_msg("case %d (%s) not valid", i, gap ? "gap" : "overlap");
             assert_int_equal(rep.trimmed, !gap);
             if (!gap) {
@@ -489,7 +480,7 @@ static void test_non_convex_pair_is_joined_by_the_band(void **s)
         geo_poly_add_facet(m, q, 4);
     }
     geo_poly_compute_planes(m, GEO_PLANE_UNWEIGHTED);
-    assert_true(is_valid(m));
+    assert_true(tu_is_valid(m));
     double n[3] = {0, 0, 1};
     geo_poly *a, *b;
     halves(m, n, 0.1, 0.4, &a, &b);
@@ -498,7 +489,7 @@ static void test_non_convex_pair_is_joined_by_the_band(void **s)
     assert_int_equal(geo_stitch(a, b, NULL, NULL, out, &rep, NULL), 0);
     assert_int_equal(rep.method, GEO_STITCH_BAND);
     assert_true(rep.band_facets > 0);
-    assert_true(is_valid(out));
+    assert_true(tu_is_valid(out));
     double hd;
     assert_int_equal(geo_hausdorff(out, m, &hd, NULL), 0);
     if (!(hd < 1e-6))
@@ -531,7 +522,7 @@ static void test_halves_on_one_polyline_sampled_differently_are_welded(void **s)
     assert_int_equal(rep.welded, rep.nloop1);
     assert_int_equal(rep.inserted, rep.nloop1);
     assert_int_equal(rep.band_facets, 0);
-    assert_true(is_valid(out));
+    assert_true(tu_is_valid(out));
     assert_int_equal(out->nverts, a->nverts + b->nverts - rep.welded);
     double hd;
     assert_int_equal(geo_hausdorff(out, m, &hd, NULL), 0);
@@ -568,7 +559,7 @@ static void test_small_loop_off_axis_still_faces_across_the_gap(void **s)
     geo_stitch_report rep;
     assert_int_equal(geo_stitch(a, b, NULL, NULL, out, &rep, NULL), 0);
     assert_true(rep.band);
-    assert_true(is_valid(out));
+    assert_true(tu_is_valid(out));
     double hd;
     assert_int_equal(geo_hausdorff(out, m, &hd, NULL), 0);
     if (!(hd < 1e-6))
@@ -597,7 +588,7 @@ static void test_pipeline_form_needs_exactly_two_pieces(void **s)
     geo_poly *out = geo_poly_new();
     geo_stitch_report rep;
     assert_int_equal(geo_stitch_pieces(two, NULL, NULL, out, &rep, NULL), 0);
-    assert_true(is_valid(out));
+    assert_true(tu_is_valid(out));
     geo_stitch_report_clear(&rep);
     geo_err err;
     assert_int_equal(geo_stitch_pieces(top, NULL, NULL, out, &rep, &err),

@@ -9,15 +9,6 @@
 #include "stats.h"
 #include "weld.h"
 
-static bool is_valid(const geo_poly *p)
-{
-    geo_stats st;
-    assert_int_equal(geo_inspect(p, NULL, NULL, &st, NULL), 0);
-    bool v = st.valid;
-    geo_stats_clear(&st);
-    return v;
-}
-
 /* The unit box with the two vertices of its edge x = 1, y = 0 repeated
  * for the front facet (y = 0): a seam along that edge, which reads as a
  * hole of two coinciding sides. */
@@ -50,13 +41,13 @@ static void test_seam_is_welded_and_the_box_is_closed(void **s)
 {
     (void)s;
     geo_poly *p = box_with_seam();
-    assert_false(is_valid(p));
+    assert_false(tu_is_valid(p));
     uint32_t welded = 0;
     assert_int_equal(geo_weld_boundary(p, &welded, NULL), 0);
     assert_int_equal(welded, 2);
     assert_int_equal(p->nverts, 8);
     assert_int_equal(p->nfacets, 6);
-    assert_true(is_valid(p));
+    assert_true(tu_is_valid(p));
     geo_poly_free(p);
 
     /* fill welds first: no hole is left to fill */
@@ -65,7 +56,7 @@ static void test_seam_is_welded_and_the_box_is_closed(void **s)
     assert_int_equal(geo_fill(p, NULL, NULL, &rep, NULL), 0);
     assert_int_equal(rep.nwelded, 2);
     assert_int_equal(rep.nloops, 0);
-    assert_true(is_valid(p));
+    assert_true(tu_is_valid(p));
     geo_mesh_fill_report_clear(&rep);
     geo_poly_free(p);
 }
