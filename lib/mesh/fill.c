@@ -1543,12 +1543,16 @@ static int prepare_open(geo_poly *p, bool split, uint32_t *ret_split,
     /* a seam whose sides repeat their vertices reads as a hole that no
      * patch fills (its sides coincide): weld it first */
     if (open) {
-        geo_topo_free(t);
-        if (geo_weld_boundary(p, ret_welded, err) < 0)
+        if (geo_weld_boundary(p, t, ret_welded, err) < 0) {
+            geo_topo_free(t);
             return -ENOMEM;
-        if (!(t = geo_topo_build(p, err)))
-            return -ENOMEM;
-        open = t->nboundary_edges > 0;
+        }
+        if (*ret_welded) {
+            geo_topo_free(t);
+            if (!(t = geo_topo_build(p, err)))
+                return -ENOMEM;
+            open = t->nboundary_edges > 0;
+        }
     }
     if (open && t->nflipped_edges > 0) {
         uint8_t *flip = malloc((size_t)p->nfacets + 1);

@@ -6,8 +6,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "topo.h"
-
 /* Orders vertex indices by their coordinates, then by index. */
 static int cmp_position(const void *a, const void *b, void *user)
 {
@@ -40,12 +38,10 @@ static bool has_repeated_vertex(const geo_poly *p)
     return false;
 }
 
-int geo_weld_boundary(geo_poly *p, uint32_t *ret_welded, geo_err *err)
+int geo_weld_boundary(geo_poly *p, const geo_topo *t, uint32_t *ret_welded,
+                      geo_err *err)
 {
     *ret_welded = 0;
-    geo_topo *t = geo_topo_build(p, err);
-    if (!t)
-        return -ENOMEM;
     uint32_t nv = p->nverts, nc = geo_poly_ncorners(p), nb = 0;
     uint32_t *bv = malloc(((size_t)nv + 1) * sizeof *bv);
     uint32_t *to = malloc(((size_t)nv + 1) * sizeof *to);
@@ -106,7 +102,6 @@ done:
     if (rc == -ENOMEM)
         geo_err_set(err, rc, "out of memory");
     geo_topo_free(tq);
-    geo_topo_free(t);
     geo_poly_free(q);
     free(bv), free(to), free(on);
     return rc;

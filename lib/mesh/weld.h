@@ -19,10 +19,13 @@
 
 #include "ctx.h"
 #include "poly.h"
+#include "topo.h"
 
-/* Welds p's coincident boundary vertices as above; *ret_welded is the
- * number of vertices removed (0: p unchanged). 0 or -ENOMEM (err set,
- * p unchanged). */
-int geo_weld_boundary(geo_poly *p, uint32_t *ret_welded, geo_err *err);
+/* Welds p's coincident boundary vertices as above, t being p's topology
+ * (no longer p's when a weld is kept); *ret_welded is the number of
+ * vertices removed (0: p unchanged). 0 or -ENOMEM (err set, p
+ * unchanged). */
+int geo_weld_boundary(geo_poly *p, const geo_topo *t, uint32_t *ret_welded,
+                      geo_err *err);
 
 #endif

@@ -9,6 +9,16 @@
 #include "stats.h"
 #include "weld.h"
 
+/* geo_weld_boundary with p's own topology. */
+static int weld(geo_poly *p, uint32_t *ret_welded)
+{
+    geo_topo *t = geo_topo_build(p, NULL);
+    assert_non_null(t);
+    int r = geo_weld_boundary(p, t, ret_welded, NULL);
+    geo_topo_free(t);
+    return r;
+}
+
 /* The unit box with the two vertices of its edge x = 1, y = 0 repeated
  * for the front facet (y = 0): a seam along that edge, which reads as a
  * hole of two coinciding sides. */
@@ -43,7 +53,7 @@ static void test_seam_is_welded_and_the_box_is_closed(void **s)
     geo_poly *p = box_with_seam();
     assert_false(tu_is_valid(p));
     uint32_t welded = 0;
-    assert_int_equal(geo_weld_boundary(p, &welded, NULL), 0);
+    assert_int_equal(weld(p, &welded), 0);
     assert_int_equal(welded, 2);
     assert_int_equal(p->nverts, 8);
     assert_int_equal(p->nfacets, 6);
@@ -77,7 +87,7 @@ static void test_weld_at_a_single_point_is_refused(void **s)
     assert_true(geo_poly_add_facet(p, t2, 3) >= 0);
     geo_poly *q = geo_poly_copy(p);
     uint32_t welded = 7;
-    assert_int_equal(geo_weld_boundary(p, &welded, NULL), 0);
+    assert_int_equal(weld(p, &welded), 0);
     assert_int_equal(welded, 0);
     assert_int_equal(p->nverts, q->nverts);
     assert_memory_equal(p->fidx, q->fidx, 6 * sizeof *p->fidx);
@@ -97,7 +107,7 @@ static void test_weld_inside_one_facet_is_refused(void **s)
     const uint32_t q4[4] = {0, 1, 2, 3};
     assert_true(geo_poly_add_facet(p, q4, 4) >= 0);
     uint32_t welded = 7;
-    assert_int_equal(geo_weld_boundary(p, &welded, NULL), 0);
+    assert_int_equal(weld(p, &welded), 0);
     assert_int_equal(welded, 0);
     assert_int_equal(p->nverts, 4);
     assert_int_equal(p->fidx[2], 2);
