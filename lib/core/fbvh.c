@@ -1,6 +1,7 @@
 /* fbvh.c — the Morton-ordered hierarchy of 16-bit grid boxes and its
  * pair search. */
 #include "fbvh.h"
+#include "fbvh_pairs.h"
 
 #include <errno.h>
 #include <math.h>
@@ -69,20 +70,6 @@ static void qbox_union(geo_qbox *b, const geo_qbox *o)
         b->lo[k] = o->lo[k] < b->lo[k] ? o->lo[k] : b->lo[k];
         b->hi[k] = o->hi[k] > b->hi[k] ? o->hi[k] : b->hi[k];
     }
-}
-
-static inline bool qbox_overlap(const geo_qbox *a, const geo_qbox *b)
-{
-    return a->lo[0] <= b->hi[0] && b->lo[0] <= a->hi[0] &&
-           a->lo[1] <= b->hi[1] && b->lo[1] <= a->hi[1] &&
-           a->lo[2] <= b->hi[2] && b->lo[2] <= a->hi[2];
-}
-
-/* The sum of the sides, in cells (cubic cells: as the sum in mm). */
-static int32_t qbox_extent(const geo_qbox *b)
-{
-    return ((int32_t)b->hi[0] - b->lo[0]) + ((int32_t)b->hi[1] - b->lo[1]) +
-           ((int32_t)b->hi[2] - b->lo[2]);
 }
 
 geo_fbvh *geo_fbvh_free(geo_fbvh *h)
@@ -310,40 +297,7 @@ geo_fbvh *geo_fbvh_build_facets(const geo_poly *p, geo_err *err)
 bool geo_fbvh_pairs(const geo_fbvh *h, uint32_t na, uint32_t nb,
                     geo_bvh_pair_fn visit, void *user)
 {
-    const geo_fbvh_node *a = &h->nodes[na], *b = &h->nodes[nb];
-    if (na == nb) {
-        if (a->count) {
-            for (uint32_t i = a->child; i < a->child + a->count; i++)
-                for (uint32_t j = i + 1; j < a->child + a->count; j++)
-                    if (qbox_overlap(&h->boxes[i], &h->boxes[j]) &&
-                        !visit(user, h->items[i], h->items[j]))
-                        return false;
-            return true;
-        }
-        return geo_fbvh_pairs(h, a->child, a->child, visit, user) &&
-               geo_fbvh_pairs(h, a->child + 1, a->child + 1, visit, user) &&
-               geo_fbvh_pairs(h, a->child, a->child + 1, visit, user);
-    }
-    if (!qbox_overlap(&a->box, &b->box))
-        return true;
-    if (a->count && b->count) {
-        for (uint32_t i = a->child; i < a->child + a->count; i++) {
-            if (!qbox_overlap(&h->boxes[i], &b->box))
-                continue;
-            for (uint32_t j = b->child; j < b->child + b->count; j++)
-                if (qbox_overlap(&h->boxes[i], &h->boxes[j]) &&
-                    !visit(user, h->items[i], h->items[j]))
-                    return false;
-        }
-        return true;
-    }
-    bool split_a = !a->count &&
-                   (b->count || qbox_extent(&a->box) >= qbox_extent(&b->box));
-    if (split_a)
-        return geo_fbvh_pairs(h, a->child, nb, visit, user) &&
-               geo_fbvh_pairs(h, a->child + 1, nb, visit, user);
-    return geo_fbvh_pairs(h, na, b->child, visit, user) &&
-           geo_fbvh_pairs(h, na, b->child + 1, visit, user);
+    return geo_fbvh_pairs_with(h, na, nb, visit, user);
 }
 
 uint32_t geo_fbvh_pair_tasks(const geo_fbvh *h, uint32_t *ret_a,

@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "fbvh.h"
+#include "fbvh_pairs.h"
 #include "predicates.h"
 #include "vec.h"
 
@@ -1256,6 +1257,26 @@ static bool free_edge_misses(const geo_poly *p, const uint32_t *x,
     return pos && neg;
 }
 
+/* Triangles x and y share one or two vertices and one of them has a fan
+ * shown simple (geo_selfint_simple_fans): they meet only where they
+ * share. Nine index comparisons and at most three bytes of fans: the
+ * test most candidate pairs of a mesh end at (on a scan, nine in ten),
+ * so it runs before anything else of the pair is read. */
+static inline bool shares_simple_fan(const uint8_t *fans, const uint32_t *x,
+                                     const uint32_t *y)
+{
+    /* without branches: the outcomes follow no pattern a predictor
+     * learns, and the three bytes of fans are in cache */
+    uint32_t x0 = x[0], x1 = x[1], x2 = x[2], y0 = y[0], y1 = y[1],
+             y2 = y[2];
+    unsigned s0 = (x0 == y0) | (x0 == y1) | (x0 == y2);
+    unsigned s1 = (x1 == y0) | (x1 == y1) | (x1 == y2);
+    unsigned s2 = (x2 == y0) | (x2 == y1) | (x2 == y2);
+    unsigned hit = (s0 & fans[x0]) | (s1 & fans[x1]) | (s2 & fans[x2]);
+    /* three shared: the same triangle twice, for pair_test */
+    return hit & (s0 + s1 + s2 != 3);
+}
+
 /* Two triangles x, y (distinct, non-degenerate): false when one or two
  * exact signs show them apart, true when pair_test must decide. A
  * triangle is exactly planar and its reference plane is its own, so:
@@ -1268,8 +1289,8 @@ static bool free_edge_misses(const geo_poly *p, const uint32_t *x,
  * pair_test's own answers, reached without its general bookkeeping;
  * every other case (coplanar, touching a plane, straddling without a
  * shared vertex, a triangle listed twice) goes to it. */
-static bool triangles_need_test(const geo_poly *p, const uint8_t *fans,
-                                const uint32_t *x, const uint32_t *y)
+static bool triangles_need_test(const geo_poly *p, const uint32_t *x,
+                                const uint32_t *y)
 {
     /* which of y's vertices x lists (in_x, a bit per position of y) and
      * which of x's y lists (in_y): nine comparisons, once */
@@ -1283,12 +1304,6 @@ static bool triangles_need_test(const geo_poly *p, const uint8_t *fans,
     unsigned in_y = (e00 | e01 | e02) | (e10 | e11 | e12) << 1 |
                     (e20 | e21 | e22) << 2;
     unsigned nshared = (in_x & 1) + (in_x >> 1 & 1) + (in_x >> 2);
-    /* both in the fan of a shared vertex shown simple: they meet only
-     * where they share (geo_selfint_simple_fans) */
-    if (fans && nshared && nshared < 3 &&
-        ((in_y & 1 && fans[x0]) || (in_y & 2 && fans[x1]) ||
-         (in_y & 4 && fans[x2])))
-        return false;
     if (nshared == 2) {
         int c = in_x == 3 ? 2 : in_x == 5 ? 1 : 0; /* y's own vertex */
         int a = in_y == 3 ? 2 : in_y == 5 ? 1 : 0; /* x's own vertex */
@@ -1347,18 +1362,22 @@ static bool visit_pair(void *user, uint32_t a, uint32_t b)
         a = b;
         b = t;
     }
+    /* before anything else of the pair is read (a pair of a degenerate
+     * triangle is skipped below either way) */
+    if (s->fans && shares_simple_fan(s->fans, s->p->fidx + 3 * (size_t)a,
+                                     s->p->fidx + 3 * (size_t)b))
+        return true;
     /* the degenerate flag was set with the shape and never changes */
     if ((atomic_load_explicit(&s->flags[a], memory_order_relaxed) |
          atomic_load_explicit(&s->flags[b], memory_order_relaxed)) &
         GEO_SI_DEGENERATE)
         return true;
     /* every facet a triangle: facet f's corners are 3f..3f+2 */
-    if (s->all_tri ? !triangles_need_test(s->p, s->fans,
-                                          s->p->fidx + 3 * (size_t)a,
+    if (s->all_tri ? !triangles_need_test(s->p, s->p->fidx + 3 * (size_t)a,
                                           s->p->fidx + 3 * (size_t)b)
                : geo_poly_facet_size(s->p, a) == 3 &&
                      geo_poly_facet_size(s->p, b) == 3 &&
-                     !triangles_need_test(s->p, NULL, geo_poly_facet(s->p, a),
+                     !triangles_need_test(s->p, geo_poly_facet(s->p, a),
                                           geo_poly_facet(s->p, b)))
         return true;
     geo_facet_shape sa, sb;
@@ -1458,7 +1477,7 @@ static void run_task(void *arg, size_t i)
         return;
     }
     if (s->fh)
-        geo_fbvh_pairs(s->fh, s->ta[t], s->tb[t], visit_pair, &vs);
+        geo_fbvh_pairs_with(s->fh, s->ta[t], s->tb[t], visit_pair, &vs);
     else
         geo_bvh_pairs(s->h, s->ta[t], s->tb[t], visit_pair, &vs);
     if (heap)
