@@ -519,6 +519,56 @@ static void test_numbers_read_like_strtod(void **state)
     }
 }
 
+/* proto_json_number (the model reader's number) agrees with the
+ * tokenizer on short byte strings of digits, signs, points, exponents,
+ * ends and bytes of 0x80 and above, at every distance from the end of the
+ * data: true exactly where the tokenizer reads a number whose next byte
+ * is below 0x80, with its end, kind and value. */
+static void test_json_number_agrees_with_the_tokenizer(void **state)
+{
+    (void)state;
+    static const char alphabet[] = "0123456789000111-.eE+,] \x80\xfa\xff";
+    unsigned char s[24];
+    for (int it = 0; it < 400000; it++) {
+        size_t len = 1 + rnd() % 12, pre = 1 + rnd() % 10;
+        s[0] = '[';
+        for (size_t k = 1; k < pre + len; k++)
+            s[k] = k < pre && rnd() % 2 ? ' '
+                                        : (unsigned char)
+                                              alphabet[rnd() % (sizeof alphabet - 1)];
+        size_t n = pre + len, start = pre;
+        if (s[start] != '-' && (s[start] < '0' || s[start] > '9'))
+            s[start] = (unsigned char)('1' + rnd() % 9);
+        size_t end;
+        bool is_int;
+        int64_t integer = 0;
+        double real = 0;
+        bool ok = proto_json_number(s, n, start, &end, &is_int, &integer,
+                                    &real);
+        /* the tokenizer on the same bytes as an array's first element */
+        s[start - 1] = '[';
+        proto_jpull j;
+        proto_jpull_init(&j, s + start - 1, n - start + 1);
+        assert_int_equal(proto_jpull_next(&j), PROTO_JT_ARRAY);
+        proto_jtok t = proto_jpull_next(&j);
+        size_t tend = start - 1 + j.tok_end;
+        bool tok_number = (t == PROTO_JT_INTEGER || t == PROTO_JT_REAL) &&
+                          (tend >= n || s[tend] < 0x80);
+        if (ok != tok_number)
+            fail_msg("'%.*s': number %d, tokenizer %d", (int)(n - start),
+                     (const char *)s + start, ok, (int)t);
+        if (ok) {
+            assert_int_equal(end, tend);
+            assert_int_equal(is_int, t == PROTO_JT_INTEGER);
+            if (is_int)
+                assert_true(integer == j.integer);
+            else
+                assert_memory_equal(&real, &j.real, sizeof real);
+        }
+        proto_jpull_clear(&j);
+    }
+}
+
 static void test_duplicate_keys_are_refused_per_object(void **state)
 {
     (void)state;
@@ -745,6 +795,7 @@ int main(void)
         cmocka_unit_test(test_escapes_decode_to_utf8),
         cmocka_unit_test(test_numbers),
         cmocka_unit_test(test_numbers_read_like_strtod),
+        cmocka_unit_test(test_json_number_agrees_with_the_tokenizer),
         cmocka_unit_test(test_duplicate_keys_are_refused_per_object),
         cmocka_unit_test(test_nesting_limit_is_janssons),
         cmocka_unit_test(test_huge_inputs),
