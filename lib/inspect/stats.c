@@ -144,13 +144,35 @@ static double unit_normal(const geo_poly *p, uint32_t f, double ret[3])
     return geo_vnormalize(ret);
 }
 
+/* The last unit normals computed, by facet modulo their number: a facet's
+ * neighbours above it are, in a mesh's usual orders, a few hundred facets
+ * further on, and each is asked for up to three times as a neighbour and
+ * once as itself. A hit gives the same bits; a miss computes them. */
+enum { NORMAL_CACHE = 2048 };
+typedef struct normal_cache {
+    uint32_t f[NORMAL_CACHE];
+    double n[NORMAL_CACHE][4]; /* unit normal, length */
+} normal_cache;
+
+static double cached_normal(const geo_poly *p, normal_cache *c, uint32_t f,
+                            double ret[3])
+{
+    uint32_t k = f % NORMAL_CACHE;
+    if (c->f[k] != f) {
+        c->n[k][3] = unit_normal(p, f, c->n[k]);
+        c->f[k] = f;
+    }
+    memcpy(ret, c->n[k], 3 * sizeof *ret);
+    return c->n[k][3];
+}
+
 /* Adjacent facet pairs (each once) whose normals are within each
  * threshold; facets winding against their plane; the total area.
  * Each facet's neighbours above it are gathered through its corners with
  * a stamp per facet, so a pair sharing several edges counts once (as
  * agreeing when any of its edges agrees). A neighbour's normal is
- * computed again where it is needed (the same bits) rather than kept for
- * every facet: 24 bytes per facet. */
+ * computed again where it is needed (the same bits; cached_normal keeps
+ * the last ones) rather than kept for every facet: 24 bytes per facet. */
 static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
 {
     uint32_t nf = p->nfacets;
@@ -161,8 +183,9 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
         if (geo_poly_facet_size(p, f) > maxn)
             maxn = geo_poly_facet_size(p, f);
     uint32_t *list = malloc((size_t)maxn * sizeof *list);
-    if (!stamp || !agree || !list) {
-        free(stamp), free(agree), free(list);
+    normal_cache *nc = malloc(sizeof *nc);
+    if (!stamp || !agree || !list || !nc) {
+        free(stamp), free(agree), free(list), free(nc);
         return -ENOMEM;
     }
     for (uint32_t f = 0; f < nf; f++)
@@ -181,9 +204,11 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
         double deg = s->coplanar_deg[k];
         tan_k[k] = deg >= 1e-6 && deg <= 89 ? tan(deg * M_PI / 180.0) : 0;
     }
+    for (uint32_t k = 0; k < NORMAL_CACHE; k++)
+        nc->f[k] = GEO_NONE;
     for (uint32_t f = 0; f < nf; f++) {
         double nrm[3];
-        s->area += 0.5 * unit_normal(p, f, nrm);
+        s->area += 0.5 * cached_normal(p, nc, f, nrm);
         /* an implicit plane's normal is nrm itself, bit for bit (the
          * same Newell vector normalised by the same geo_vnormalize), and
          * a dot product of a vector with itself is never negative: no
@@ -210,7 +235,7 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
         for (uint32_t i = 0; i < nl; i++) {
             uint32_t g = list[i];
             double n2[3], x[3];
-            unit_normal(p, g, n2);
+            cached_normal(p, nc, g, n2);
             geo_vscale(n2, agree[g] ? 1.0 : -1.0, n2);
             geo_vcross(nrm, n2, x);
             double yy = geo_vdot(x, x), dot = geo_vdot(nrm, n2);
@@ -238,7 +263,7 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
                     s->near_coplanar[k]++;
         }
     }
-    free(stamp), free(agree), free(list);
+    free(stamp), free(agree), free(list), free(nc);
     return 0;
 }
 
