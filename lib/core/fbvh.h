@@ -37,7 +37,7 @@
 
 #include "bvh.h"
 
-#define GEO_FBVH_LEAF 8
+#define GEO_FBVH_LEAF 16
 #define GEO_FBVH_CELLS 65534
 
 typedef struct geo_qbox {

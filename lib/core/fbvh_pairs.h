@@ -26,6 +26,7 @@ static inline unsigned qbox_meets(const geo_qbox *a, const geo_qbox *b)
 
 /* The items of leaf range [lo, lo + n) whose boxes meet box: bit k for
  * item lo + k (n ≤ GEO_FBVH_LEAF ≤ 32). */
+_Static_assert(GEO_FBVH_LEAF <= 32, "a leaf's items are bits of a mask");
 static inline uint32_t qbox_meets_mask(const geo_fbvh *h, const geo_qbox *box,
                                        uint32_t lo, uint32_t n)
 {
