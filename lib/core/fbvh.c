@@ -253,6 +253,9 @@ static int build(geo_fbvh *h, const box_source *src)
     }
     for (uint32_t k = 0; k < n; k++)
         h->boxes[k] = byitem[h->items[k]];
+    /* the spare slot: the pair search's vector load of the last box
+     * reads 4 bytes into it (fbvh_pairs.h) */
+    qbox_empty(&h->boxes[n]);
     if (n > 0) {
         builder mb = {h, code};
         h->nnodes = 1;

@@ -54,7 +54,8 @@ typedef struct geo_fbvh {
     uint32_t nnodes, nitems;
     geo_fbvh_node *nodes; /* nnodes; nodes[0] is the root (if nitems > 0) */
     uint32_t *items;      /* nitems item indices in leaf order */
-    geo_qbox *boxes;      /* nitems: boxes[k] is the box of items[k] */
+    geo_qbox *boxes;      /* nitems: boxes[k] is the box of items[k];
+                             then a spare slot (an empty box) */
     double origin[3], scale; /* the grid: g(x) = (x − origin)·scale */
 } geo_fbvh;
 

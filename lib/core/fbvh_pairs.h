@@ -8,6 +8,10 @@
 
 #include "fbvh.h"
 
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
 static inline bool qbox_overlap(const geo_qbox *a, const geo_qbox *b)
 {
     return a->lo[0] <= b->hi[0] && b->lo[0] <= a->hi[0] &&
@@ -25,14 +29,37 @@ static inline unsigned qbox_meets(const geo_qbox *a, const geo_qbox *b)
 }
 
 /* The items of leaf range [lo, lo + n) whose boxes meet box: bit k for
- * item lo + k (n ≤ GEO_FBVH_LEAF ≤ 32). */
+ * item lo + k (n ≤ GEO_FBVH_LEAF ≤ 32). With SSE2 a box is one vector:
+ * lanes 0-2 hold lo_b − hi_a and lanes 3-5 lo_a − hi_b as saturating
+ * differences, all 0 exactly when the boxes meet; lanes 6-7 (the next
+ * box's first bytes, or the array's spare slot after the last box) come
+ * out 0 whatever they hold. */
 _Static_assert(GEO_FBVH_LEAF <= 32, "a leaf's items are bits of a mask");
 static inline uint32_t qbox_meets_mask(const geo_fbvh *h, const geo_qbox *box,
                                        uint32_t lo, uint32_t n)
 {
     uint32_t m = 0;
+#ifdef __SSE2__
+    const __m128i hi_a =
+        _mm_setr_epi16((short)box->hi[0], (short)box->hi[1],
+                       (short)box->hi[2], -1, -1, -1, -1, -1);
+    const __m128i lo_a =
+        _mm_setr_epi16(0, 0, 0, (short)box->lo[0], (short)box->lo[1],
+                       (short)box->lo[2], 0, 0);
+    const __m128i zero = _mm_setzero_si128();
+    for (uint32_t k = 0; k < n; k++) {
+        __m128i b = _mm_loadu_si128(
+            (const __m128i *)(const void *)&h->boxes[lo + k]);
+        __m128i d = _mm_or_si128(_mm_subs_epu16(b, hi_a),
+                                 _mm_subs_epu16(lo_a, b));
+        m |= (uint32_t)(_mm_movemask_epi8(_mm_cmpeq_epi16(d, zero)) ==
+                        0xFFFF)
+             << k;
+    }
+#else
     for (uint32_t k = 0; k < n; k++)
         m |= qbox_meets(box, &h->boxes[lo + k]) << k;
+#endif
     return m;
 }
 
