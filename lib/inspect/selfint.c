@@ -15,7 +15,6 @@
 #include <string.h>
 
 #include "fbvh.h"
-#include "fbvh_pairs.h"
 #include "predicates.h"
 #include "vec.h"
 
@@ -1477,7 +1476,7 @@ static void run_task(void *arg, size_t i)
         return;
     }
     if (s->fh)
-        geo_fbvh_pairs_with(s->fh, s->ta[t], s->tb[t], visit_pair, &vs);
+        geo_fbvh_pairs(s->fh, s->ta[t], s->tb[t], visit_pair, &vs);
     else
         geo_bvh_pairs(s->h, s->ta[t], s->tb[t], visit_pair, &vs);
     if (heap)
