@@ -55,10 +55,11 @@ typedef struct job_decoded {
 } job_decoded;
 
 /* Runs one job: job is the claimed record, input its input blob; ctx has
- * progress and cancel wired (and the pool's parallel_for). decoded is
- * NULL, or the input as it was primed (job_pool_prime; input is then
- * NULL): the executor may take decoded->data (setting it NULL), else the
- * pool releases it after the call. Returns 0 on success (outcome
+ * progress and cancel wired (and the pool's parallel_for while no other
+ * job runs). decoded is NULL, or the input as it was primed
+ * (job_pool_prime; input is then NULL): the executor may take
+ * decoded->data (setting it NULL), else the pool releases it after the
+ * call. Returns 0 on success (outcome
  * filled), -ECANCELED when ctx asked it to stop, any other negative
  * errno on failure (outcome->error says why). Called on a worker thread;
  * must be thread-safe. */
