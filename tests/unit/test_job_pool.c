@@ -1,7 +1,8 @@
 /* test_job_pool.c — the worker pool runs queued jobs and records their
  * outcome, turns a cancel (local or flagged in the store) into the
- * canceled state, enforces the time limit, and on shutdown puts an
- * unfinished job back in the queue instead of ending it. */
+ * canceled state, enforces the time limit, on shutdown puts an
+ * unfinished job back in the queue instead of ending it, and gives a job
+ * the shared parallel_for only while it runs alone. */
 #include "testutil.h"
 
 #include <errno.h>
@@ -21,8 +22,27 @@ typedef struct fixture {
     atomic_int done;
 } fixture;
 
-/* Input "ok" succeeds, "fail" fails, "spin" reports progress every
- * millisecond until canceled. A primed input (a string) is used in place
+/* Loops the pool's parallel_for was given (fake_parallel_for). */
+static atomic_int pool_loops;
+
+static void fake_parallel_for(void *user, size_t n,
+                              void (*fn)(void *arg, size_t i), void *arg)
+{
+    (void)user;
+    atomic_fetch_add(&pool_loops, 1);
+    for (size_t i = 0; i < n; i++)
+        fn(arg, i);
+}
+
+static void count_index(void *arg, size_t i)
+{
+    (void)i;
+    atomic_fetch_add((atomic_int *)arg, 1);
+}
+
+/* Input "ok" succeeds, "fail" fails, "par" runs a loop of 4 through the
+ * context and says in its summary how many indices ran, "spin" reports
+ * progress every millisecond until canceled. A primed input (a string) is used in place
  * of the stored one; "take" is taken over (and freed here) and read as
  * "ok", any other is left to the pool. */
 static int exec(void *user, const job_rec *job, const void *input,
@@ -46,6 +66,14 @@ static int exec(void *user, const job_rec *job, const void *input,
         ret->model = strdup("MODEL");
         ret->model_len = 5;
         ret->summary = strdup("{\"facets\":1}");
+        return 0;
+    }
+    if (len == 3 && memcmp(input, "par", 3) == 0) {
+        atomic_int ran = 0;
+        geo_ctx_parallel_for(ctx, 4, count_index, &ran);
+        char text[32];
+        snprintf(text, sizeof text, "{\"ran\":%d}", atomic_load(&ran));
+        ret->summary = strdup(text);
         return 0;
     }
     if (len == 4 && memcmp(input, "fail", 4) == 0) {
@@ -100,8 +128,8 @@ static job_pool *start(fixture *f, unsigned workers, uint64_t timeout_ms)
 {
     job_pool_config c = {
         .workers = workers, .job_timeout_ms = timeout_ms,
-        .progress_every_ms = 10, .exec = exec, .notify = on_notify,
-        .done = on_done, .cb_user = f,
+        .progress_every_ms = 10, .parallel_for = fake_parallel_for,
+        .exec = exec, .notify = on_notify, .done = on_done, .cb_user = f,
     };
     geo_err err;
     job_pool *p = job_pool_start(f->s, &c, &err);
@@ -300,6 +328,33 @@ static void test_jobs_queued_before_start_are_found_without_a_wake(void **state)
     job_pool_stop(p, 1000);
 }
 
+/* A job alone gets the pool's parallel_for; one that runs beside another
+ * runs its loops on its own thread, every index still run once. */
+static void test_the_pool_serves_a_job_running_alone(void **state)
+{
+    fixture *f = *state;
+    job_pool *p = start(f, 2, 60000);
+    atomic_store(&pool_loops, 0);
+    char a[27], b[27], c[27];
+    submit(f, p, "par", a);
+    job_rec r = wait_state(f, a, JOB_SUCCEEDED);
+    assert_string_equal(r.summary, "{\"ran\":4}");
+    job_rec_clear(&r);
+    assert_int_equal(atomic_load(&pool_loops), 1);
+    submit(f, p, "spin", b);
+    r = wait_state(f, b, JOB_RUNNING);
+    job_rec_clear(&r);
+    submit(f, p, "par", c);
+    r = wait_state(f, c, JOB_SUCCEEDED);
+    assert_string_equal(r.summary, "{\"ran\":4}");
+    job_rec_clear(&r);
+    assert_int_equal(atomic_load(&pool_loops), 1);
+    assert_int_equal(job_pool_cancel(p, b), 1);
+    r = wait_state(f, b, JOB_CANCELED);
+    job_rec_clear(&r);
+    job_pool_stop(p, 1000);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -311,6 +366,7 @@ int main(void)
         T(test_time_limit_fails_the_job),
         T(test_shutdown_requeues_unfinished_jobs),
         T(test_jobs_queued_before_start_are_found_without_a_wake),
+        T(test_the_pool_serves_a_job_running_alone),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
