@@ -55,8 +55,8 @@ struct job_pool {
     bool stopping;
     bool paused;
     unsigned pending;      /* wake-ups not yet consumed */
-    unsigned busy;
-    atomic_uint running;   /* busy, read without the lock (pool_parallel_for) */
+    atomic_uint busy;      /* changed under lock; pool_parallel_for reads
+                              it without */
     atomic_uint_fast64_t timeout_ms;
     slot *slots;
     unsigned nslots;
@@ -211,7 +211,7 @@ static void pool_parallel_for(void *user, size_t n,
 {
     job_pool *p = user;
     if (p->c.parallel_for &&
-        atomic_load_explicit(&p->running, memory_order_relaxed) <= 1) {
+        atomic_load_explicit(&p->busy, memory_order_relaxed) <= 1) {
         p->c.parallel_for(p->c.pf_user, n, fn, arg);
         return;
     }
@@ -232,7 +232,6 @@ static void run_job(slot *sl, job_rec *job)
     atomic_store(&sl->cancel, 0);
     atomic_store(&sl->reason, R_NONE);
     p->busy++;
-    atomic_fetch_add_explicit(&p->running, 1, memory_order_relaxed);
     pthread_mutex_unlock(&p->lock);
     sl->last_report = t0;
     log_msg(LOG_INFO, job->id, "started (attempt %d, source %s)",
@@ -330,7 +329,6 @@ static void run_job(slot *sl, job_rec *job)
     pthread_mutex_lock(&p->lock);
     sl->busy = false;
     p->busy--;
-    atomic_fetch_sub_explicit(&p->running, 1, memory_order_relaxed);
     pthread_cond_broadcast(&p->idle);
     pthread_mutex_unlock(&p->lock);
     notify(p, job->id, false);
@@ -513,7 +511,7 @@ job_pool *job_pool_start(store *s, const job_pool_config *c, geo_err *err)
     pthread_mutex_init(&p->err_lock, NULL);
     pthread_mutex_init(&p->primed_lock, NULL);
     atomic_init(&p->store_failing, 0);
-    atomic_init(&p->running, 0);
+    atomic_init(&p->busy, 0);
     pthread_condattr_t ca;
     pthread_condattr_init(&ca);
     pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);

@@ -431,12 +431,20 @@ static uint64_t load8(const unsigned char *p)
     return v;
 }
 
+/* Non-zero in each byte of v that is no ASCII digit, at least up to the
+ * first such byte (a carry of the +6 moves only bytes above a byte of
+ * 0xFA or more, itself no digit). */
+static uint64_t nondigits(uint64_t v)
+{
+    return ((v & 0xF0F0F0F0F0F0F0F0u) ^ 0x3030303030303030u) |
+           (((v + 0x0606060606060606u) & 0xF0F0F0F0F0F0F0F0u) ^
+            0x3030303030303030u);
+}
+
 /* True when all eight bytes of v are ASCII digits. */
 static bool eight_digits(uint64_t v)
 {
-    return ((v & 0xF0F0F0F0F0F0F0F0u) |
-            (((v + 0x0606060606060606u) & 0xF0F0F0F0F0F0F0F0u) >> 4)) ==
-           0x3333333333333333u;
+    return nondigits(v) == 0;
 }
 
 /* The value of eight digit bytes, first byte most significant. */
@@ -616,15 +624,12 @@ bool proto_json_number(const void *data, size_t len, size_t start,
         return false;
     /* A short integer — 1 to 7 digits, no leading zero, then a byte that
      * continues no number: a model's indices, two numbers in three —
-     * read from one word, without a branch per digit. The first byte of
-     * the word that is no digit ends it (a carry of the +6 moves only
-     * bytes above a byte of 0xFA or more, itself no digit); the digits,
-     * moved to the word's top with '0's below them, are its value. */
+     * read from one word, without a branch per digit: the first byte of
+     * the word that is no digit ends it; the digits, moved to the word's
+     * top with '0's below them, are its value. */
     if (len - start >= 8) {
         uint64_t v = load8(d + start);
-        uint64_t bad = ((v & 0xF0F0F0F0F0F0F0F0u) ^ 0x3030303030303030u) |
-                       (((v + 0x0606060606060606u) & 0xF0F0F0F0F0F0F0F0u) ^
-                        0x3030303030303030u);
+        uint64_t bad = nondigits(v);
         unsigned nd = bad ? (unsigned)__builtin_ctzll(bad) / 8 : 8;
         unsigned next = nd < 8 ? (unsigned)(v >> 8 * nd) & 0xFF : 0;
         if (nd >= 1 && nd < 8 && (nd == 1 || (v & 0xFF) != '0') &&
