@@ -56,6 +56,14 @@ typedef struct geo_convex_planes {
     uint32_t *group;      /* p->nfacets: group of each scan facet */
     uint32_t *kept;       /* ngroups: index into planes, or GEO_NONE */
     uint32_t dropped;     /* groups dropped as unsupported (step 3) */
+    /* the dropped groups, kept for the second look of geo_correct_convex
+     * (a cut below the roofs of the neighbours' fitted planes may still
+     * be a true facet's): */
+    uint32_t nspare;
+    double (*spare)[4];    /* nspare: their fitted planes */
+    double *spare_allow;   /* nspare: their allowance, as allow */
+    double *spare_roof;    /* nspare: the roof over each, mm */
+    uint32_t *spare_group; /* nspare: the group of each */
 } geo_convex_planes;
 
 /* Releases the arrays and zeroes r; accepts NULL. */
@@ -124,6 +132,9 @@ typedef struct geo_convex_report {
                             them */
     uint32_t clipped;    /* silhouette planes added where the result
                             reached outside the scan */
+    uint32_t readmitted; /* dropped groups given back after the
+                            adjustment: their cut and the scan's need of
+                            them beyond the noise (convex.c, readmit) */
     bool adjusted;       /* the planes are the ones adjusted to the
                             silhouettes (else the fitted ones: the
                             adjusted did not pass the checks) */

@@ -519,6 +519,10 @@ void geo_convex_planes_clear(geo_convex_planes *r)
     free(r->allow);
     free(r->group);
     free(r->kept);
+    free(r->spare);
+    free(r->spare_allow);
+    free(r->spare_roof);
+    free(r->spare_group);
     memset(r, 0, sizeof *r);
 }
 
@@ -823,31 +827,45 @@ int geo_convex_planes_find_topo(const geo_poly *p, const geo_topo *t,
     }
     r = support(ret, (const double(*)[4])gpl, garea, groof, nstart, nlist,
                 (const double(*)[4])box, cut_min, geo_poly_eps(p), drop);
-    free(groof);
-    if (r < 0)
+    if (r < 0) {
+        free(groof);
         goto done;
+    }
     r = -ENOMEM;
     ret->planes = malloc(((size_t)ng + 1) * sizeof *ret->planes);
     ret->area = malloc(((size_t)ng + 1) * sizeof *ret->area);
     ret->allow = malloc(((size_t)ng + 1) * sizeof *ret->allow);
-    if (!ret->planes || !ret->area || !ret->allow)
+    ret->spare = malloc(((size_t)ng + 1) * sizeof *ret->spare);
+    ret->spare_allow = malloc(((size_t)ng + 1) * sizeof *ret->spare_allow);
+    ret->spare_roof = malloc(((size_t)ng + 1) * sizeof *ret->spare_roof);
+    ret->spare_group = malloc(((size_t)ng + 1) * sizeof *ret->spare_group);
+    if (!ret->planes || !ret->area || !ret->allow || !ret->spare ||
+        !ret->spare_allow || !ret->spare_roof || !ret->spare_group) {
+        free(groof);
         goto done;
+    }
     ret->dev0 = f.dev0;
     for (uint32_t g = 0; g < ng; g++) {
+        double q[4], width = 0;
+        if (!mom_plane(&gm[g], f.o, gpl[g], q, &width))
+            width = 0;
+        double allow =
+            f.dev0 + ROOF * width * f.step * hypot(gpl[g][0], gpl[g][1]);
         if (drop[g]) {
             ret->kept[g] = GEO_NONE;
             ret->dropped++;
+            memcpy(ret->spare[ret->nspare], gpl[g], sizeof gpl[0]);
+            ret->spare_allow[ret->nspare] = allow;
+            ret->spare_roof[ret->nspare] = groof[g];
+            ret->spare_group[ret->nspare++] = g;
             continue;
         }
         ret->kept[g] = ret->nplanes;
         memcpy(ret->planes[ret->nplanes], gpl[g], sizeof gpl[0]);
-        double q[4], width = 0;
-        if (!mom_plane(&gm[g], f.o, gpl[g], q, &width))
-            width = 0;
-        ret->allow[ret->nplanes] = f.dev0 + ROOF * width * f.step *
-                                   hypot(gpl[g][0], gpl[g][1]);
+        ret->allow[ret->nplanes] = allow;
         ret->area[ret->nplanes++] = garea[g];
     }
+    free(groof);
     r = 0;
 done:
     if (r < 0) {
