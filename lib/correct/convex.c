@@ -48,10 +48,10 @@
  * roof) and the corner it cuts off from outside the scan both exceed the
  * noise (the support test's unit, drop_unneeded's margin) and one of
  * them by READMIT times. On the fixed suite 51 dropped groups pass; all
- * but two are taken out again by the narrow and unneeded tests, and the
- * two left add a facet each to their scans. The seven facets a fancy's
- * rounded end lost (test_convex) come back, their corners 2.4–3.7
- * margins outside the scan. */
+ * but three are taken out again by the narrow and unneeded tests, and
+ * the three left add a facet each to their scans. The seven facets a
+ * fancy's rounded end lost (test_convex) come back, their corners
+ * 2.4–3.7 margins outside the scan. */
 #define READMIT 2.0
 
 /* The silhouettes a result may be clipped by (clip_to_scan): a few
@@ -689,18 +689,72 @@ static uint32_t narrow_planes(const geo_convex_planes *cp, const geo_poly *q,
     return n;
 }
 
+/* Appends the planes marked in gone to cp's spares (their groups found
+ * through kept, their roofs from their allowances), for the second look:
+ * a true narrow facet (a small culet, where eight planes meet at a
+ * point) may go here, on fitted planes whose roofs the bound allows.
+ * 0 or -ENOMEM. */
+static int spare_gone(geo_convex_planes *cp, const uint8_t *gone)
+{
+    uint32_t add = 0;
+    for (uint32_t i = 0; i < cp->nplanes; i++)
+        add += gone[i];
+    size_t n = (size_t)cp->nspare + add + 1;
+    double(*sp)[4] = realloc(cp->spare, n * sizeof *sp);
+    if (sp)
+        cp->spare = sp;
+    double *sa = sp ? realloc(cp->spare_allow, n * sizeof *sa) : NULL;
+    if (sa)
+        cp->spare_allow = sa;
+    double *sr = sa ? realloc(cp->spare_roof, n * sizeof *sr) : NULL;
+    if (sr)
+        cp->spare_roof = sr;
+    uint32_t *sg = sr ? realloc(cp->spare_group, n * sizeof *sg) : NULL;
+    if (!sg)
+        return -ENOMEM;
+    cp->spare_group = sg;
+    for (uint32_t g = 0; g < cp->ngroups; g++) {
+        uint32_t i = cp->kept[g];
+        if (i == GEO_NONE || i >= cp->nplanes || !gone[i])
+            continue;
+        memcpy(cp->spare[cp->nspare], cp->planes[i], sizeof cp->spare[0]);
+        cp->spare_allow[cp->nspare] = cp->allow[i];
+        cp->spare_roof[cp->nspare] = fmax(0, cp->allow[i] - cp->dev0);
+        cp->spare_group[cp->nspare++] = g;
+    }
+    return 0;
+}
+
+/* without, the planes it removes kept as spares in the result. */
+static int without_spared(const geo_poly *p, geo_convex_planes *cp,
+                          const uint8_t *gone, double allow, double tol,
+                          geo_convex_planes *ret_cp, geo_poly **ret_q,
+                          uint32_t **ret_src)
+{
+    uint32_t before = cp->nspare;
+    if (spare_gone(cp, gone) < 0)
+        return -ENOMEM;
+    int r = without(p, cp, gone, allow, tol, ret_cp, ret_q, ret_src);
+    cp->nspare = before; /* the copy has them; cp is as it was */
+    return r;
+}
+
 /* A facet narrower than the scan can resolve (NARROW noise bounds) is
  * usually a bevel the support test let through at a corner where many
  * planes meet: its plane goes and the rest are intersected again, up to
  * NARROW_ROUNDS rounds — but only where the stone without it still lies
- * within the scan's bound (outside_allow, the check's own). A true narrow
- * facet (a step cut's corner) is needed by the silhouettes: without it
- * its neighbours' planes meet beyond the scan, and the whole correction
- * used to be declined for it. A round's narrow planes go all at once when
- * that passes, else each alone, narrowest first. 0 or -ENOMEM. */
+ * within the scan's bound (outside_allow, the check's own, which allows
+ * for fitted planes' roofs), or within three noise bounds of it when the
+ * planes are the adjusted ones (adjusted). A true narrow facet (a step
+ * cut's corner) is needed by the silhouettes: without it its neighbours'
+ * planes meet beyond the scan, and the whole correction used to be
+ * declined for it. A round's narrow planes go all at once when that
+ * passes, else each alone, narrowest first; those that go are kept as
+ * spares for readmit. 0 or -ENOMEM. */
 static int drop_narrow(const geo_poly *p, geo_convex_planes *cp,
-                       double max_dev, double tol, geo_poly **q,
-                       uint32_t **src, geo_convex_report *rep, geo_err *err)
+                       double max_dev, bool adjusted, double tol,
+                       geo_poly **q, uint32_t **src, geo_convex_report *rep,
+                       geo_err *err)
 {
     uint8_t *gone = calloc((size_t)cp->nplanes + 1, 1);
     double *width = malloc(((size_t)cp->nplanes + 1) * sizeof *width);
@@ -710,13 +764,18 @@ static int drop_narrow(const geo_poly *p, geo_convex_planes *cp,
         uint32_t ncand = narrow_planes(cp, *q, *src, wmin, width);
         if (ncand == 0)
             break;
-        double allow = outside_allow(cp, max_dev);
+        /* fitted planes: the check's bound, which allows for their
+         * roofs; adjusted ones have none, and a facet whose loss puts
+         * the stone more than the noise outside the scan is needed */
+        double allow = adjusted ? OUTSIDE_FACTOR * fmax(cp->dev0,
+                                                        cp->hinge_noise)
+                                : outside_allow(cp, max_dev);
         geo_convex_planes t;
         geo_poly *qt;
         uint32_t *st;
         for (uint32_t i = 0; i < cp->nplanes; i++)
             gone[i] = width[i] < INFINITY;
-        r = without(p, cp, gone, allow, tol, &t, &qt, &st);
+        r = without_spared(p, cp, gone, allow, tol, &t, &qt, &st);
         if (r == 0) {
             adopt(cp, q, src, &t, qt, st);
             rep->narrow += ncand;
@@ -738,7 +797,7 @@ static int drop_narrow(const geo_poly *p, geo_convex_planes *cp,
             width[best] = INFINITY;
             memset(gone, 0, cp->nplanes);
             gone[best] = 1;
-            r = without(p, cp, gone, allow, tol, &t, &qt, &st);
+            r = without_spared(p, cp, gone, allow, tol, &t, &qt, &st);
             if (r != 0)
                 continue;
             /* the planes past best move down by one */
@@ -795,12 +854,15 @@ static int adjust(const geo_poly *p, geo_convex_planes *ca,
  * deeper than its own roof plus the support test's noise unit and the
  * corner it cuts off lies outside the scan by more than need (the
  * question drop_unneeded asks of every plane), one of the two by READMIT
- * times; all such at once. They are intersected with ca (narrow facets
- * dropped as in step 5), adjusted with them from there, and finished
- * (unneeded planes, planarity, the checks). Returns 0 when that stone passes and a readmitted plane bounds
- * a facet of it (ca, q, src and rep replaced by the finished ones), 1
- * when nothing came back (all left as they were, q still to be
- * finished), -ENOMEM. */
+ * times; all such at once, and so the planes step 5 took for narrow
+ * bevels (a culet where eight planes meet can go there). They are
+ * intersected with ca (narrow facets dropped as in step 5, but against
+ * three noise bounds: adjusted planes have no roof to allow for),
+ * adjusted with them from there, and finished (unneeded planes,
+ * planarity, the checks). Returns 0 when that stone passes and a
+ * readmitted plane bounds a facet of it (ca, q, src and rep replaced by
+ * the finished ones), 1 when nothing came back (all left as they were, q
+ * still to be finished), -ENOMEM. */
 static int readmit(const geo_poly *p, geo_convex_planes *cp, geo_poly **q,
                    uint32_t **src, double max_dev, double need, double tol,
                    geo_convex_report *rep, geo_err *err)
@@ -860,7 +922,7 @@ static int readmit(const geo_poly *p, geo_convex_planes *cp, geo_poly **q,
     int r = intersect(&cr, tol, "the readmitted planes", 170, &qe, &srce,
                       &rr, err);
     if (r == 0)
-        r = drop_narrow(p, &cr, max_dev, tol, &qe, &srce, &rr, err);
+        r = drop_narrow(p, &cr, max_dev, true, tol, &qe, &srce, &rr, err);
     /* adjusted again with them: a readmitted plane is a fitted one, up
      * to its roof off, and its neighbours move with it */
     if (r == 0)
@@ -935,7 +997,7 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
                   err);
     if (r != 0)
         goto done;
-    r = drop_narrow(p, &cp, max_dev, merge_tol, &q, &src, rep, err);
+    r = drop_narrow(p, &cp, max_dev, false, merge_tol, &q, &src, rep, err);
     if (r != 0)
         goto done;
     if (fit == GEO_CONVEX_FIT_SILHOUETTE) {
