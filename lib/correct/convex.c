@@ -318,12 +318,8 @@ static int planes_copy_room(geo_convex_planes *dst,
     dst->kept = malloc(ng * sizeof *dst->kept);
     dst->group = malloc(((size_t)nf + 1) * sizeof *dst->group);
     dst->spare = malloc(ns * sizeof *dst->spare);
-    dst->spare_allow = malloc(ns * sizeof *dst->spare_allow);
-    dst->spare_roof = malloc(ns * sizeof *dst->spare_roof);
-    dst->spare_group = malloc(ns * sizeof *dst->spare_group);
     if (!dst->planes || !dst->allow || !dst->kept || !dst->group ||
-        !dst->spare || !dst->spare_allow || !dst->spare_roof ||
-        !dst->spare_group) {
+        !dst->spare) {
         geo_convex_planes_clear(dst);
         return -ENOMEM;
     }
@@ -332,12 +328,6 @@ static int planes_copy_room(geo_convex_planes *dst,
     memcpy(dst->kept, src->kept, src->ngroups * sizeof *dst->kept);
     memcpy(dst->group, src->group, nf * sizeof *dst->group);
     memcpy(dst->spare, src->spare, src->nspare * sizeof *dst->spare);
-    memcpy(dst->spare_allow, src->spare_allow,
-           src->nspare * sizeof *dst->spare_allow);
-    memcpy(dst->spare_roof, src->spare_roof,
-           src->nspare * sizeof *dst->spare_roof);
-    memcpy(dst->spare_group, src->spare_group,
-           src->nspare * sizeof *dst->spare_group);
     return 0;
 }
 
@@ -699,28 +689,20 @@ static int spare_gone(geo_convex_planes *cp, const uint8_t *gone)
     uint32_t add = 0;
     for (uint32_t i = 0; i < cp->nplanes; i++)
         add += gone[i];
-    size_t n = (size_t)cp->nspare + add + 1;
-    double(*sp)[4] = realloc(cp->spare, n * sizeof *sp);
-    if (sp)
-        cp->spare = sp;
-    double *sa = sp ? realloc(cp->spare_allow, n * sizeof *sa) : NULL;
-    if (sa)
-        cp->spare_allow = sa;
-    double *sr = sa ? realloc(cp->spare_roof, n * sizeof *sr) : NULL;
-    if (sr)
-        cp->spare_roof = sr;
-    uint32_t *sg = sr ? realloc(cp->spare_group, n * sizeof *sg) : NULL;
-    if (!sg)
+    geo_convex_spare *sp = realloc(
+        cp->spare, ((size_t)cp->nspare + add + 1) * sizeof *sp);
+    if (!sp)
         return -ENOMEM;
-    cp->spare_group = sg;
+    cp->spare = sp;
     for (uint32_t g = 0; g < cp->ngroups; g++) {
         uint32_t i = cp->kept[g];
         if (i == GEO_NONE || i >= cp->nplanes || !gone[i])
             continue;
-        memcpy(cp->spare[cp->nspare], cp->planes[i], sizeof cp->spare[0]);
-        cp->spare_allow[cp->nspare] = cp->allow[i];
-        cp->spare_roof[cp->nspare] = fmax(0, cp->allow[i] - cp->dev0);
-        cp->spare_group[cp->nspare++] = g;
+        geo_convex_spare *e = &cp->spare[cp->nspare++];
+        memcpy(e->plane, cp->planes[i], sizeof e->plane);
+        e->allow = cp->allow[i];
+        e->roof = fmax(0, cp->allow[i] - cp->dev0);
+        e->group = g;
     }
     return 0;
 }
@@ -878,13 +860,13 @@ static int readmit(const geo_poly *p, geo_convex_planes *cp, geo_poly **q,
          * asked only past the first test, and only as far as it matters) */
         double depth = -INFINITY, outside = -INFINITY;
         for (uint32_t v = 0; v < g->nverts; v++)
-            depth = fmax(depth, geo_plane_eval(cp->spare[i], g->verts[v]));
-        double cut = depth - cp->spare_roof[i];
+            depth = fmax(depth, geo_plane_eval(cp->spare[i].plane, g->verts[v]));
+        double cut = depth - cp->spare[i].roof;
         if (!(cut > cp->cut_min))
             continue;
         for (uint32_t v = 0; v < g->nverts && outside <= READMIT * need;
              v++) {
-            if (!(geo_plane_eval(cp->spare[i], g->verts[v]) > 0))
+            if (!(geo_plane_eval(cp->spare[i].plane, g->verts[v]) > 0))
                 continue;
             for (uint32_t f = 0; f < p->nfacets; f++)
                 outside = fmax(outside,
@@ -903,16 +885,14 @@ static int readmit(const geo_poly *p, geo_convex_planes *cp, geo_poly **q,
     }
     uint32_t ns = 0;
     for (uint32_t i = 0; i < cp->nspare; i++) {
+        const geo_convex_spare *e = &cp->spare[i];
         if (!take[i]) {
-            memcpy(cr.spare[ns], cp->spare[i], sizeof cr.spare[0]);
-            cr.spare_allow[ns] = cp->spare_allow[i];
-            cr.spare_roof[ns] = cp->spare_roof[i];
-            cr.spare_group[ns++] = cp->spare_group[i];
+            cr.spare[ns++] = *e;
             continue;
         }
-        cr.kept[cp->spare_group[i]] = cr.nplanes;
-        memcpy(cr.planes[cr.nplanes], cp->spare[i], sizeof cr.planes[0]);
-        cr.allow[cr.nplanes++] = cp->spare_allow[i];
+        cr.kept[e->group] = cr.nplanes;
+        memcpy(cr.planes[cr.nplanes], e->plane, sizeof cr.planes[0]);
+        cr.allow[cr.nplanes++] = e->allow;
     }
     cr.nspare = ns;
     free(take);
@@ -936,7 +916,7 @@ static int readmit(const geo_poly *p, geo_convex_planes *cp, geo_poly **q,
      * then the one before, not a second adjustment of it) */
     uint32_t kept = 0;
     for (uint32_t i = 0; r == 0 && i < cp->nspare; i++) {
-        uint32_t at = cr.kept[cp->spare_group[i]];
+        uint32_t at = cr.kept[cp->spare[i].group];
         bool bounds = false;
         for (uint32_t f = 0; at != GEO_NONE && f < qr->nfacets && !bounds;
              f++)

@@ -41,6 +41,16 @@
 #include "poly.h"
 #include "topo.h"
 
+/* A group the support or narrow test took out, kept for the second look
+ * of geo_correct_convex (a cut below the roofs of the neighbours' fitted
+ * planes may still be a true facet's). */
+typedef struct geo_convex_spare {
+    double plane[4]; /* its fitted plane */
+    double allow;    /* its allowance, as geo_convex_planes.allow */
+    double roof;     /* the roof over it, mm */
+    uint32_t group;
+} geo_convex_spare;
+
 typedef struct geo_convex_planes {
     uint32_t nplanes;     /* kept planes */
     double (*planes)[4];  /* nplanes unit outward planes */
@@ -56,14 +66,8 @@ typedef struct geo_convex_planes {
     uint32_t *group;      /* p->nfacets: group of each scan facet */
     uint32_t *kept;       /* ngroups: index into planes, or GEO_NONE */
     uint32_t dropped;     /* groups dropped as unsupported (step 3) */
-    /* the dropped groups, kept for the second look of geo_correct_convex
-     * (a cut below the roofs of the neighbours' fitted planes may still
-     * be a true facet's): */
-    uint32_t nspare;
-    double (*spare)[4];    /* nspare: their fitted planes */
-    double *spare_allow;   /* nspare: their allowance, as allow */
-    double *spare_roof;    /* nspare: the roof over each, mm */
-    uint32_t *spare_group; /* nspare: the group of each */
+    uint32_t nspare;          /* groups taken out, for a second look */
+    geo_convex_spare *spare;  /* nspare */
 } geo_convex_planes;
 
 /* Releases the arrays and zeroes r; accepts NULL. */

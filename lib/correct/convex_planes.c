@@ -520,9 +520,6 @@ void geo_convex_planes_clear(geo_convex_planes *r)
     free(r->group);
     free(r->kept);
     free(r->spare);
-    free(r->spare_allow);
-    free(r->spare_roof);
-    free(r->spare_group);
     memset(r, 0, sizeof *r);
 }
 
@@ -836,11 +833,7 @@ int geo_convex_planes_find_topo(const geo_poly *p, const geo_topo *t,
     ret->area = malloc(((size_t)ng + 1) * sizeof *ret->area);
     ret->allow = malloc(((size_t)ng + 1) * sizeof *ret->allow);
     ret->spare = malloc(((size_t)ng + 1) * sizeof *ret->spare);
-    ret->spare_allow = malloc(((size_t)ng + 1) * sizeof *ret->spare_allow);
-    ret->spare_roof = malloc(((size_t)ng + 1) * sizeof *ret->spare_roof);
-    ret->spare_group = malloc(((size_t)ng + 1) * sizeof *ret->spare_group);
-    if (!ret->planes || !ret->area || !ret->allow || !ret->spare ||
-        !ret->spare_allow || !ret->spare_roof || !ret->spare_group) {
+    if (!ret->planes || !ret->area || !ret->allow || !ret->spare) {
         free(groof);
         goto done;
     }
@@ -854,10 +847,11 @@ int geo_convex_planes_find_topo(const geo_poly *p, const geo_topo *t,
         if (drop[g]) {
             ret->kept[g] = GEO_NONE;
             ret->dropped++;
-            memcpy(ret->spare[ret->nspare], gpl[g], sizeof gpl[0]);
-            ret->spare_allow[ret->nspare] = allow;
-            ret->spare_roof[ret->nspare] = groof[g];
-            ret->spare_group[ret->nspare++] = g;
+            geo_convex_spare *sp = &ret->spare[ret->nspare++];
+            memcpy(sp->plane, gpl[g], sizeof sp->plane);
+            sp->allow = allow;
+            sp->roof = groof[g];
+            sp->group = g;
             continue;
         }
         ret->kept[g] = ret->nplanes;
