@@ -725,16 +725,16 @@ static int without_spared(const geo_poly *p, geo_convex_planes *cp,
  * usually a bevel the support test let through at a corner where many
  * planes meet: its plane goes and the rest are intersected again, up to
  * NARROW_ROUNDS rounds — but only where the stone without it still lies
- * within the scan's bound (outside_allow, the check's own, which allows
- * for fitted planes' roofs), or within three noise bounds of it when the
- * planes are the adjusted ones (adjusted). A true narrow facet (a step
+ * within reach of the scan: reach mm outside it, or, when reach is 0, the
+ * scan's bound (outside_allow, the check's own, which allows for fitted
+ * planes' roofs). A true narrow facet (a step
  * cut's corner) is needed by the silhouettes: without it its neighbours'
  * planes meet beyond the scan, and the whole correction used to be
  * declined for it. A round's narrow planes go all at once when that
  * passes, else each alone, narrowest first; those that go are kept as
  * spares for readmit. 0 or -ENOMEM. */
 static int drop_narrow(const geo_poly *p, geo_convex_planes *cp,
-                       double max_dev, bool adjusted, double tol,
+                       double max_dev, double reach, double tol,
                        geo_poly **q, uint32_t **src, geo_convex_report *rep,
                        geo_err *err)
 {
@@ -746,12 +746,7 @@ static int drop_narrow(const geo_poly *p, geo_convex_planes *cp,
         uint32_t ncand = narrow_planes(cp, *q, *src, wmin, width);
         if (ncand == 0)
             break;
-        /* fitted planes: the check's bound, which allows for their
-         * roofs; adjusted ones have none, and a facet whose loss puts
-         * the stone more than the noise outside the scan is needed */
-        double allow = adjusted ? OUTSIDE_FACTOR * fmax(cp->dev0,
-                                                        cp->hinge_noise)
-                                : outside_allow(cp, max_dev);
+        double allow = reach > 0 ? reach : outside_allow(cp, max_dev);
         geo_convex_planes t;
         geo_poly *qt;
         uint32_t *st;
@@ -825,8 +820,9 @@ static int adjust(const geo_poly *p, geo_convex_planes *ca,
 }
 
 /* The second look at the dropped groups (the end of step 6 on the
- * kernel's page), on the adjusted planes ca and their intersection q
- * before it is finished. The support test drops a group whose cut is
+ * kernel's page), on the planes cp and their intersection q before it is
+ * finished: the adjusted planes (adjusted), or the fitted ones when the
+ * adjustment was declined. The support test drops a group whose cut is
  * within the noise and the roofs of its neighbours' fitted planes: a
  * bevel along a true edge, where two raised planes make even a strip on
  * the true edge cut that deep — but also a small true facet between
@@ -841,13 +837,22 @@ static int adjust(const geo_poly *p, geo_convex_planes *ca,
  * intersected with ca (narrow facets dropped as in step 5, but against
  * three noise bounds: adjusted planes have no roof to allow for),
  * adjusted with them from there, and finished (unneeded planes,
- * planarity, the checks). Returns 0 when that stone passes and a
+ * planarity, the checks).
+ *
+ * On fitted planes the cut says little (the neighbours' roofs raise the
+ * corner it cuts as much as a true facet would), so there a group that cuts comes
+ * back on the reach alone — its corner READMIT times need outside the
+ * scan, which the true stone, inside the scan to the noise, cannot
+ * reach — and a narrow plane goes again only where the stone without it
+ * stays within need of the scan (the fitted check's bound allows the
+ * roofs: 10 µm on a heart, where its girdle's dropped corners reached
+ * 10 µm); nothing is adjusted. Returns 0 when that stone passes and a
  * readmitted plane bounds a facet of it (ca, q, src and rep replaced by
  * the finished ones), 1 when nothing came back (all left as they were, q
  * still to be finished), -ENOMEM. */
-static int readmit(const geo_poly *p, geo_convex_planes *cp, geo_poly **q,
-                   uint32_t **src, double max_dev, double need, double tol,
-                   geo_convex_report *rep, geo_err *err)
+static int readmit(const geo_poly *p, geo_convex_planes *cp, bool adjusted,
+                   geo_poly **q, uint32_t **src, double max_dev, double need,
+                   double tol, geo_convex_report *rep, geo_err *err)
 {
     uint32_t n = 0;
     uint8_t *take = calloc((size_t)cp->nspare + 1, 1);
@@ -874,8 +879,10 @@ static int readmit(const geo_poly *p, geo_convex_planes *cp, geo_poly **q,
         }
         /* both beyond the noise, one of them clearly: the support test's
          * no is overturned only on evidence well beyond it */
-        take[i] = outside > need &&
-                  (cut > READMIT * cp->cut_min || outside > READMIT * need);
+        take[i] = adjusted ? outside > need &&
+                                 (cut > READMIT * cp->cut_min ||
+                                  outside > READMIT * need)
+                           : outside > READMIT * need;
         n += take[i];
     }
     geo_convex_planes cr;
@@ -902,11 +909,19 @@ static int readmit(const geo_poly *p, geo_convex_planes *cp, geo_poly **q,
     int r = intersect(&cr, tol, "the readmitted planes", 170, &qe, &srce,
                       &rr, err);
     if (r == 0)
-        r = drop_narrow(p, &cr, max_dev, true, tol, &qe, &srce, &rr, err);
+        r = drop_narrow(p, &cr, max_dev,
+                        adjusted ? OUTSIDE_FACTOR * fmax(cp->dev0,
+                                                         cp->hinge_noise)
+                                 : need,
+                        tol, &qe, &srce, &rr, err);
     /* adjusted again with them: a readmitted plane is a fitted one, up
      * to its roof off, and its neighbours move with it */
-    if (r == 0)
+    if (r == 0 && adjusted)
         r = adjust(p, &cr, qe, srce, &need, tol, &qr, &srcr, &rr, err);
+    else if (r == 0) {
+        qr = qe, srcr = srce;
+        qe = NULL, srce = NULL;
+    }
     if (r == 0)
         r = finish(p, &cr, max_dev, need, tol, &qr, &srcr, &rr, err);
     geo_poly_free(qe);
@@ -977,7 +992,7 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
                   err);
     if (r != 0)
         goto done;
-    r = drop_narrow(p, &cp, max_dev, false, merge_tol, &q, &src, rep, err);
+    r = drop_narrow(p, &cp, max_dev, 0, merge_tol, &q, &src, rep, err);
     if (r != 0)
         goto done;
     if (fit == GEO_CONVEX_FIT_SILHOUETTE) {
@@ -995,8 +1010,8 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
         geo_convex_report ra = *rep;
         r = adjust(p, &ca, q, src, &need, merge_tol, &qa, &srca, &ra, err);
         if (r == 0) {
-            r = readmit(p, &ca, &qa, &srca, max_dev, need, merge_tol, &ra,
-                        err);
+            r = readmit(p, &ca, true, &qa, &srca, max_dev, need, merge_tol,
+                        &ra, err);
             if (r == 1)
                 r = finish(p, &ca, max_dev, need, merge_tol, &qa, &srca, &ra,
                            err);
@@ -1015,8 +1030,14 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
             r = geo_err_set(err, r, "out of memory");
             goto done;
         }
-        if (r != 0)
-            r = finish(p, &cp, max_dev, need, merge_tol, &q, &src, rep, err);
+        /* declined: the fitted planes, with their own second look */
+        if (r != 0) {
+            r = readmit(p, &cp, false, &q, &src, max_dev, need, merge_tol,
+                        rep, err);
+            if (r == 1)
+                r = finish(p, &cp, max_dev, need, merge_tol, &q, &src, rep,
+                           err);
+        }
     } else {
         r = finish(p, &cp, max_dev, need, merge_tol, &q, &src, rep, err);
     }

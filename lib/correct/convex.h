@@ -136,9 +136,11 @@ typedef struct geo_convex_report {
                             them */
     uint32_t clipped;    /* silhouette planes added where the result
                             reached outside the scan */
-    uint32_t readmitted; /* dropped groups given back after the
-                            adjustment: their cut and the scan's need of
-                            them beyond the noise (convex.c, readmit) */
+    uint32_t readmitted; /* dropped groups given back by the second
+                            look, on the adjusted planes or, when those
+                            were declined, the fitted ones: the scan's
+                            need of them beyond the noise (convex.c,
+                            readmit) */
     bool adjusted;       /* the planes are the ones adjusted to the
                             silhouettes (else the fitted ones: the
                             adjusted did not pass the checks) */
