@@ -878,7 +878,8 @@ static int readmit(const geo_poly *p, geo_convex_planes *cp, bool adjusted,
                                geo_plane_eval(p->planes[f], g->verts[v]));
         }
         /* both beyond the noise, one of them clearly: the support test's
-         * no is overturned only on evidence well beyond it */
+         * no is overturned only on evidence well beyond it (on fitted
+         * planes the reach alone, clearly: their roofs raise the cut) */
         take[i] = adjusted ? outside > need &&
                                  (cut > READMIT * cp->cut_min ||
                                   outside > READMIT * need)
