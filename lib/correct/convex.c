@@ -834,22 +834,22 @@ static int adjust(const geo_poly *p, geo_convex_planes *ca,
  * question drop_unneeded asks of every plane), one of the two by READMIT
  * times; all such at once, and so the planes step 5 took for narrow
  * bevels (a culet where eight planes meet can go there). They are
- * intersected with ca (narrow facets dropped as in step 5, but against
+ * intersected with cp's (narrow facets dropped as in step 5, but against
  * three noise bounds: adjusted planes have no roof to allow for),
  * adjusted with them from there, and finished (unneeded planes,
  * planarity, the checks).
  *
  * On fitted planes the cut says little (the neighbours' roofs raise the
- * corner it cuts as much as a true facet would), so there a group that cuts comes
- * back on the reach alone — its corner READMIT times need outside the
- * scan, which the true stone, inside the scan to the noise, cannot
- * reach — and a narrow plane goes again only where the stone without it
- * stays within need of the scan (the fitted check's bound allows the
- * roofs: 10 µm on a heart, where its girdle's dropped corners reached
- * 10 µm); nothing is adjusted. Returns 0 when that stone passes and a
- * readmitted plane bounds a facet of it (ca, q, src and rep replaced by
- * the finished ones), 1 when nothing came back (all left as they were, q
- * still to be finished), -ENOMEM. */
+ * corner it cuts as much as a true facet would), so there a group that
+ * cuts comes back on the reach alone — its corner READMIT times need
+ * outside the scan, which the true stone, inside the scan to the noise,
+ * cannot reach — and a narrow plane goes again only where the stone
+ * without it stays within need of the scan (the fitted check's bound
+ * allows the roofs: 10 µm on a heart, where its girdle's dropped corners
+ * reached 10 µm); nothing is adjusted. Returns 0 when that stone passes
+ * and a readmitted plane bounds a facet of it (cp, q, src and rep
+ * replaced by the finished ones), 1 when nothing came back (all left as
+ * they were, q still to be finished), -ENOMEM. */
 static int readmit(const geo_poly *p, geo_convex_planes *cp, bool adjusted,
                    geo_poly **q, uint32_t **src, double max_dev, double need,
                    double tol, geo_convex_report *rep, geo_err *err)
