@@ -8,13 +8,13 @@
 
 #include "vec.h"
 
-void geo_sym3_eigen(double m[3][3], double ret_values[3],
-                    double ret_vectors[3][3])
+void geo_sym3_eigen_jacobi(const double a0[3][3], double ret_values[3],
+                           double ret_vectors[3][3])
 {
     double a[3][3], v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++)
-            a[i][j] = i <= j ? m[i][j] : m[j][i];
+            a[i][j] = i <= j ? a0[i][j] : a0[j][i];
 
     for (int sweep = 0; sweep < 50; sweep++) {
         double off = fabs(a[0][1]) + fabs(a[0][2]) + fabs(a[1][2]);
@@ -63,6 +63,128 @@ void geo_sym3_eigen(double m[3][3], double ret_values[3],
     }
 }
 
+/* Unit x perpendicular to the rows of m, from the largest of the rows'
+ * pairwise cross products; its squared length, relative to the scale of
+ * m, in *ret_q. */
+static void null_vector(const double m[3][3], double x[3], double *ret_q)
+{
+    double c[3][3], best = -1;
+    int k = 0;
+    geo_vcross(m[0], m[1], c[0]);
+    geo_vcross(m[0], m[2], c[1]);
+    geo_vcross(m[1], m[2], c[2]);
+    for (int i = 0; i < 3; i++) {
+        double q = geo_vdot(c[i], c[i]);
+        if (q > best) {
+            best = q;
+            k = i;
+        }
+    }
+    double f = geo_vdot(m[0], m[0]) + geo_vdot(m[1], m[1]) +
+               geo_vdot(m[2], m[2]);
+    *ret_q = f > 0 ? best / (f * f) : 0;
+    memcpy(x, c[k], sizeof c[k]);
+    geo_vnormalize(x);
+}
+
+static double quad(const double a[3][3], const double u[3], const double v[3])
+{
+    double r = 0;
+    for (int i = 0; i < 3; i++)
+        r += u[i] * (a[i][0] * v[0] + a[i][1] * v[1] + a[i][2] * v[2]);
+    return r;
+}
+
+/* The closed form (Smith 1961) gives the three eigenvalues at the cost of
+ * one acos and two cos. The one farthest from the other two is
+ * well-conditioned: its eigenvector is the null vector of A − λI, and
+ * the other two are the exact 2×2 problem in the plane perpendicular to
+ * it (one Jacobi rotation). The plane fits call this for every facet a
+ * group takes in, and four Jacobi sweeps cost four times as much.
+ * Nearly scalar matrices (spread below 1e-6 of the mean, where the
+ * eigenvalues' rounding approaches their gaps) go to Jacobi. */
+void geo_sym3_eigen(double m[3][3], double ret_values[3],
+                    double ret_vectors[3][3])
+{
+    double a[3][3];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            a[i][j] = i <= j ? m[i][j] : m[j][i];
+    const double(*ca)[3] = (const double(*)[3])a;
+    double q = (a[0][0] + a[1][1] + a[2][2]) / 3;
+    double p1 = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+    double p2 = (a[0][0] - q) * (a[0][0] - q) + (a[1][1] - q) * (a[1][1] - q) +
+                (a[2][2] - q) * (a[2][2] - q) + 2 * p1;
+    double pp = sqrt(p2 / 6);
+    if (!(pp > 1e-6 * fabs(q)) || !isfinite(pp)) {
+        geo_sym3_eigen_jacobi(ca, ret_values, ret_vectors);
+        return;
+    }
+    double b[3][3];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            b[i][j] = (a[i][j] - (i == j ? q : 0)) / pp;
+    double r = (b[0][0] * (b[1][1] * b[2][2] - b[1][2] * b[2][1]) -
+                b[0][1] * (b[1][0] * b[2][2] - b[1][2] * b[2][0]) +
+                b[0][2] * (b[1][0] * b[2][1] - b[1][1] * b[2][0])) / 2;
+    double phi = acos(fmin(fmax(r, -1), 1)) / 3;
+    double hi = q + 2 * pp * cos(phi);
+    double lo = q + 2 * pp * cos(phi + 2 * M_PI / 3);
+    double mid = 3 * q - hi - lo;
+    /* the isolated one: lo unless lo and mid are the closer pair */
+    double lam = mid - lo >= hi - mid ? lo : hi;
+    double mm[3][3], x[3], qual;
+    memcpy(mm, a, sizeof mm);
+    for (int i = 0; i < 3; i++)
+        mm[i][i] -= lam;
+    null_vector((const double(*)[3])mm, x, &qual);
+    /* exactly, qual is at least 1/20 (the isolated one's gaps are at
+     * least half the spread); far below it, λ was not accurate */
+    if (!(qual > 1e-3)) {
+        geo_sym3_eigen_jacobi(ca, ret_values, ret_vectors);
+        return;
+    }
+    /* u, w: an orthonormal basis of the plane perpendicular to x */
+    int k = fabs(x[0]) <= fabs(x[1]) && fabs(x[0]) <= fabs(x[2]) ? 0
+            : fabs(x[1]) <= fabs(x[2])                           ? 1
+                                                                 : 2;
+    double e[3] = {0, 0, 0}, u[3], w[3];
+    e[k] = 1;
+    geo_vcross(x, e, u);
+    geo_vnormalize(u);
+    geo_vcross(x, u, w);
+    double uu = quad(ca, u, u), uw = quad(ca, u, w), ww = quad(ca, w, w);
+    double val[3] = {quad(ca, x, x), uu, ww}, vec[3][3];
+    memcpy(vec[0], x, sizeof x);
+    memcpy(vec[1], u, sizeof u);
+    memcpy(vec[2], w, sizeof w);
+    if (uw != 0) {
+        double theta = (ww - uu) / (2 * uw);
+        double t = (theta >= 0 ? 1.0 : -1.0) /
+                   (fabs(theta) + sqrt(theta * theta + 1));
+        double c = 1 / sqrt(t * t + 1), sn = t * c;
+        val[1] = uu - t * uw;
+        val[2] = ww + t * uw;
+        for (int i = 0; i < 3; i++) {
+            vec[1][i] = c * u[i] - sn * w[i];
+            vec[2][i] = sn * u[i] + c * w[i];
+        }
+    }
+    int order[3] = {0, 1, 2};
+    for (int i = 0; i < 3; i++)
+        for (int j = i + 1; j < 3; j++)
+            if (val[order[j]] < val[order[i]]) {
+                int t = order[i];
+                order[i] = order[j];
+                order[j] = t;
+            }
+    for (int i = 0; i < 3; i++) {
+        ret_values[i] = val[order[i]];
+        memcpy(ret_vectors[i], vec[order[i]], sizeof vec[0]);
+        geo_vnormalize(ret_vectors[i]);
+    }
+}
+
 int geo_plane_fit(const double *pts, const double *w, size_t n,
                   const double orient[3], double ret[4])
 {
@@ -87,7 +209,7 @@ int geo_plane_fit(const double *pts, const double *w, size_t n,
                 cov[r][s] += wi * d[r] * d[s];
     }
     double values[3], vectors[3][3];
-    geo_sym3_eigen(cov, values, vectors);
+    geo_sym3_eigen_jacobi((const double(*)[3])cov, values, vectors);
     /* collinear (or coincident) points: two vanishing eigenvalues */
     if (!(values[1] > 1e-24 * (values[2] > 0 ? values[2] : 1.0)) ||
         !(values[2] > 0))

@@ -56,10 +56,22 @@ bool geo_plane_triples_meet(const geo_plane_triples *t, uint32_t a,
 void geo_plane_triples_free(geo_plane_triples *t);
 
 /* Eigen-decomposition of the symmetric 3×3 matrix m (row-major, only the
- * upper triangle read, m not modified) by cyclic Jacobi rotations: ret_values ascending,
- * ret_vectors[k] the unit eigenvector of ret_values[k]. */
+ * upper triangle read, m not modified): ret_values ascending,
+ * ret_vectors[k] the unit eigenvector of ret_values[k]. The closed form
+ * (eigenvalues from the characteristic cubic, the isolated one's vector
+ * as a null vector, the other two by one exact 2×2 rotation), accurate to
+ * a few ulps of the largest eigenvalue over the gaps; a nearly scalar
+ * matrix goes to Jacobi. For the moment fits that run once per facet a
+ * group takes in. */
 void geo_sym3_eigen(double m[3][3], double ret_values[3],
                     double ret_vectors[3][3]);
+
+/* The same by cyclic Jacobi rotations (the upper triangle read): four times
+ * slower, and what geo_plane_fit uses, so that the planes fitted to the
+ * facets of a model read without them — and every statistic from them —
+ * stay as they were. */
+void geo_sym3_eigen_jacobi(const double m[3][3], double ret_values[3],
+                           double ret_vectors[3][3]);
 
 /* Adds the area moments of polygon fv[0..n) of verts about the point o, as
  * the fan from fv[0] (exact for a convex planar polygon): its area to *a,

@@ -156,6 +156,22 @@ static bool fits(finder *f, const mom *m, const double pl[4], uint32_t h,
                  double cosmax, double ret[4])
 {
     const geo_poly *p = f->p;
+    uint32_t n = geo_poly_facet_size(p, h);
+    const uint32_t *v = geo_poly_facet(p, h);
+    /* the tests are pure: the one on h's own moments against the group's
+     * plane comes first, as it rejects most candidates without the
+     * eigensolve of the plane with h */
+    if (f->noise > 0) {
+        double lo[3] = {INFINITY, INFINITY, INFINITY},
+               hi[3] = {-INFINITY, -INFINITY, -INFINITY}, d[3];
+        for (uint32_t i = 0; i < n; i++)
+            for (int k = 0; k < 3; k++)
+                geo_minmax(p->verts[v[i]][k], &lo[k], &hi[k]);
+        geo_vsub(hi, lo, d);
+        double tol = RMS_NOISE * f->noise + RMS_STEP * geo_vlen(d) * f->step;
+        if (mom_rms(&f->fm[h], f->o, pl) > tol)
+            return false;
+    }
     mom m2 = *m;
     mom_add(&m2, &f->fm[h]);
     double q[4], width;
@@ -165,25 +181,12 @@ static bool fits(finder *f, const mom *m, const double pl[4], uint32_t h,
         return false;
     double sin_incl = hypot(q[0], q[1]);
     double dmax = f->dev0 + ROOF * width * f->step * sin_incl;
-    uint32_t n = geo_poly_facet_size(p, h);
-    const uint32_t *v = geo_poly_facet(p, h);
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (uint32_t i = 0; i < n; i++) {
+    for (uint32_t i = 0; i < n; i++)
         if (fabs(geo_plane_eval(q, p->verts[v[i]])) > dmax)
             return false;
-        for (int k = 0; k < 3; k++)
-            geo_minmax(p->verts[v[i]][k], &lo[k], &hi[k]);
-    }
     for (uint32_t i = 0; i < f->nvs; i++)
         if (fabs(geo_plane_eval(q, p->verts[f->vs[i]])) > dmax)
             return false;
-    if (f->noise > 0) {
-        double d[3];
-        geo_vsub(hi, lo, d);
-        double tol = RMS_NOISE * f->noise + RMS_STEP * geo_vlen(d) * f->step;
-        if (mom_rms(&f->fm[h], f->o, pl) > tol)
-            return false;
-    }
     memcpy(ret, q, sizeof q);
     return true;
 }

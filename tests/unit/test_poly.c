@@ -2,6 +2,7 @@
  * boundary loops, non-manifold detection), plane fitting. */
 #include "testutil.h"
 
+#include <float.h>
 #include <math.h>
 #include <errno.h>
 #include <stdlib.h>
@@ -234,6 +235,111 @@ static void test_sym3_eigen_and_spd_solve(void **state)
     assert_false(geo_spd3_solve(notpd, b, x));
 }
 
+static double eig_rand(uint64_t *s) /* splitmix64, uniform in [0, 1) */
+{
+    uint64_t z = (*s += UINT64_C(0x9E3779B97F4A7C15));
+    z = (z ^ (z >> 30)) * UINT64_C(0xBF58476D1CE4E5B9);
+    z = (z ^ (z >> 27)) * UINT64_C(0x94D049BB133111EB);
+    return (double)((z ^ (z >> 31)) >> 11) / 9007199254740992.0;
+}
+
+/* Eigenvalues, residuals and orthonormality of a solver's answer on m =
+ * R·diag(l)·Rᵀ to rounding; with flat set, the normal as near R's first
+ * column as the rounding of m allows (a few ulps of l₂ over l₁ − l₀). */
+static void check_eigen(double m[3][3], const double l[3],
+                        const double r[3][3], bool flat, bool jacobi)
+{
+    double val[3], vec[3][3];
+    if (jacobi)
+        geo_sym3_eigen_jacobi((const double(*)[3])m, val, vec);
+    else
+        geo_sym3_eigen(m, val, vec);
+    double tol = 1e-13 * fmax(fabs(l[0]), fabs(l[2]));
+    assert_true(val[0] <= val[1] && val[1] <= val[2]);
+    for (int k = 0; k < 3; k++) {
+        assert_true(fabs(val[k] - l[k]) <= tol);
+        for (int i = 0; i < 3; i++) {
+            double mv = 0;
+            for (int j = 0; j < 3; j++)
+                mv += m[i][j] * vec[k][j];
+            assert_true(fabs(mv - val[k] * vec[k][i]) <= tol);
+        }
+        for (int j = 0; j < 3; j++)
+            assert_true(fabs(geo_vdot(vec[k], vec[j]) - (j == k)) <= 1e-13);
+    }
+    if (flat) {
+        double n[3] = {r[0][0], r[1][0], r[2][0]}, c[3];
+        geo_vcross(vec[0], n, c);
+        assert_true(geo_vlen(c) <= 8 * DBL_EPSILON * l[2] / (l[1] - l[0]));
+    }
+}
+
+/* The closed form (with its Jacobi fallback) and Jacobi itself on the
+ * matrices the plane fits give them — a facet's moments (one tiny
+ * eigenvalue), a sliver's (two unequal small ones), a segment's (two
+ * equal zeros), a disc's (two equal large ones), a scalar matrix,
+ * anything — under random rotations. */
+static void test_sym3_eigen_closed_form_on_every_spectrum(void **state)
+{
+    (void)state;
+    uint64_t rng = 7;
+    for (int trial = 0; trial < 6000; trial++) {
+        double l[3];
+        int kind = trial % 6;
+        double big = 0.1 + eig_rand(&rng);
+        switch (kind) {
+        case 0: /* a facet: noise² against mm² */
+            l[0] = 1e-12 * eig_rand(&rng), l[1] = 0.1 * big, l[2] = big;
+            break;
+        case 1: /* a sliver */
+            l[0] = 1e-10 * eig_rand(&rng), l[1] = 1e-5 * big, l[2] = big;
+            break;
+        case 2: /* a segment */
+            l[0] = l[1] = 0, l[2] = big;
+            break;
+        case 3: /* a disc */
+            l[0] = 1e-9 * eig_rand(&rng), l[1] = l[2] = big;
+            break;
+        case 4: /* scalar, or nearly */
+            l[0] = l[1] = big, l[2] = big * (1 + 1e-9 * eig_rand(&rng));
+            break;
+        default:
+            for (int k = 0; k < 3; k++)
+                l[k] = 2 * eig_rand(&rng) - 1;
+            break;
+        }
+        for (int i = 0; i < 3; i++)
+            for (int j = i + 1; j < 3; j++)
+                if (l[j] < l[i]) {
+                    double t = l[i];
+                    l[i] = l[j];
+                    l[j] = t;
+                }
+        /* R from a random unit quaternion */
+        double qv[4], qn = 0;
+        for (int k = 0; k < 4; k++) {
+            qv[k] = 2 * eig_rand(&rng) - 1;
+            qn += qv[k] * qv[k];
+        }
+        qn = sqrt(qn);
+        double w = qv[0] / qn, x = qv[1] / qn, y = qv[2] / qn, z = qv[3] / qn;
+        double r[3][3] = {
+            {1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)},
+            {2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)},
+            {2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)}};
+        double m[3][3];
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) {
+                m[i][j] = 0;
+                for (int k = 0; k < 3; k++)
+                    m[i][j] += r[i][k] * l[k] * r[j][k];
+            }
+        bool flat = kind <= 1 || kind == 3;
+        check_eigen(m, l, (const double(*)[3])r, flat, false);
+        check_eigen(m, l, (const double(*)[3])r, flat, true);
+    }
+}
+
 static void test_compact_renumbers(void **state)
 {
     (void)state;
@@ -351,6 +457,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_box_measures),
+        cmocka_unit_test(test_sym3_eigen_closed_form_on_every_spectrum),
         cmocka_unit_test(test_plane_triples_meet_as_intersect3),
         cmocka_unit_test(test_notch_cube_volume),
         cmocka_unit_test(test_from_arrays_rejects_bad_index_naming_place),
