@@ -51,9 +51,9 @@ static int directed(const geo_poly *a, const geo_poly *b, const geo_ctx *ctx,
         uint32_t n = geo_poly_facet_size(a, f);
         const uint32_t *vs = geo_poly_facet(a, f);
         double c[3] = {0, 0, 0};
-        for (uint32_t i = 0; i < n; i++) {
+        for (uint32_t i = 0, j = n - 1; i < n; j = i++) {
             double m[3];
-            uint32_t u = vs[i], w = vs[(i + 1) % n];
+            uint32_t u = vs[i], w = vs[j];
             geo_vadd(c, a->verts[u], c);
             if (!seen[u]) {
                 seen[u] = 1;

@@ -140,9 +140,10 @@ static double facet_dist2(const geo_poly *g, uint32_t f, const double p[3],
     if (h * h >= bound)
         return h * h;
     geo_vmadd(p, -h, pl, q);
+    /* edges as (previous, current) pairs: no division per edge */
     int wn = 0;
-    for (uint32_t i = 0; i < n; i++) {
-        const double *a = g->verts[vs[i]], *b = g->verts[vs[(i + 1) % n]];
+    for (uint32_t i = 0, j = n - 1; i < n; j = i++) {
+        const double *a = g->verts[vs[j]], *b = g->verts[vs[i]];
         double cr = (b[u] - a[u]) * (q[w] - a[w]) - (b[w] - a[w]) * (q[u] - a[u]);
         if (a[w] <= q[w]) {
             if (b[w] > q[w] && cr > 0)
@@ -154,8 +155,8 @@ static double facet_dist2(const geo_poly *g, uint32_t f, const double p[3],
     if (wn != 0)
         return h * h;
     double best = INFINITY; /* compared, not fmin: a libm call here */
-    for (uint32_t i = 0; i < n; i++) {
-        double d = seg_dist2(p, g->verts[vs[i]], g->verts[vs[(i + 1) % n]]);
+    for (uint32_t i = 0, j = n - 1; i < n; j = i++) {
+        double d = seg_dist2(p, g->verts[vs[j]], g->verts[vs[i]]);
         if (d < best)
             best = d;
     }
