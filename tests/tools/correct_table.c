@@ -8,6 +8,7 @@
  *                 [--ks 100,400,800] [--noise 1,...]  (µm)
  *                 [--suite N [--first I]] [--method auto|merge|planes]
  *                 [--fit area|hinge|silhouette] [--rows] [--models DIR]
+ *                 [--write DIR]
  *
  * Without --suite: every cut × seed × K × noise, views at phase 0 and
  * the stone as drawn. With --suite N: the fixed suite of N scans, scan i
@@ -18,7 +19,9 @@
  * intersected by the simulator (the planes alone, no checks); --fit
  * the convex path's plane fit (convex.h; geo_correct's by default; with
  * --method planes the silhouette fit adjusts the planes, still without
- * the checks).
+ * the checks). --write: each row's stone, scan and result also go to
+ * DIR/CUT-SEED-K.{truth,scan,corrected}.json, to look at one scan of the
+ * suite with `facet compare` or the viewer.
  *
  * One Markdown row per scan (--rows; always without --suite): cut, seed,
  * K, noise, facets truth / scan / corrected, recovered % (normal within
@@ -189,6 +192,21 @@ static void no_scan(const char *cut, unsigned seed, unsigned k,
     t->unsimulated++;
 }
 
+/* --write: where each row's models go, NULL for nowhere */
+static const char *write_dir;
+
+/* Writes m to write_dir/name.kind.json; a failure is said, not fatal. */
+static void write_model(const geo_poly *m, const char *name, const char *kind)
+{
+    if (!write_dir || !m)
+        return;
+    char path[512];
+    geo_err err;
+    snprintf(path, sizeof path, "%s/%s.%s.json", write_dir, name, kind);
+    if (proto_model_write_file(m, path, PROTO_FMT_UNKNOWN, &err) < 0)
+        fprintf(stderr, "correct_table: %s\n", err.msg);
+}
+
 /* phase: the scan's view phase (sim_scan_phase), NAN when the scan was
  * not simulated here (then no bound). */
 static void row(const char *cut, int ci, unsigned seed, unsigned k,
@@ -201,6 +219,11 @@ static void row(const char *cut, int ci, unsigned seed, unsigned k,
     geo_poly *p = correct(scan, m, &valid, msg, sizeof msg);
     double ms = (now() - t0) * 1e3;
     t->rows++;
+    char file[96];
+    snprintf(file, sizeof file, "%s-%u-%u", cut, seed, k);
+    write_model(truth, file, "truth");
+    write_model(scan, file, "scan");
+    write_model(p, file, "corrected");
     char name[96];
     snprintf(name, sizeof name, "%s seed %u K %u noise %.1f µm", cut, seed, k,
              noise_um);
@@ -330,6 +353,8 @@ int main(int argc, char **argv)
                                                  : GEO_CONVEX_FIT_AREA;
         else if (strcmp(a, "--models") == 0)
             models = v;
+        else if (strcmp(a, "--write") == 0)
+            write_dir = v;
         else {
             fprintf(stderr, "correct_table: unknown option %s\n", a);
             return 2;
