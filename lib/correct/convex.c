@@ -448,8 +448,11 @@ static int clip_to_scan(const geo_poly *p, geo_convex_planes *cp,
  * (rep->reason says why), -ENOMEM. */
 static int check_result(const geo_poly *p, const geo_poly *q,
                         const uint32_t *src, const geo_convex_planes *cp,
-                        double max_dev, geo_convex_report *rep)
+                        double max_dev, geo_convex_report *rep,
+                        uint32_t *ret_cutting)
 {
+    if (ret_cutting)
+        *ret_cutting = GEO_NONE;
     /* a vertex where four planes nearly meet is contracted to one (the
      * kernel's short-edge contraction) and then lies off one of them by
      * up to the contraction length: a result the model's planarity
@@ -544,6 +547,8 @@ static int check_result(const geo_poly *p, const geo_poly *q,
     free(near);
     free(own);
     free(ag);
+    if (worst > worst_allow && ret_cutting)
+        *ret_cutting = src[wg];
     if (worst > worst_allow)
         return decline(rep, "the scan lies %.2g mm outside the result "
                        "(bound %.2g mm)", worst, worst_allow);
@@ -582,13 +587,13 @@ static int planarize(geo_poly *q, geo_err *err)
  * result is checked. 0 (passed), 1 (declined), -ENOMEM. */
 static int finish(const geo_poly *p, geo_convex_planes *cp, double max_dev,
                   double need, double tol, geo_poly **q, uint32_t **src,
-                  geo_convex_report *rep, geo_err *err)
+                  geo_convex_report *rep, uint32_t *ret_cutting, geo_err *err)
 {
     int r = drop_unneeded(p, cp, need, tol, q, src, rep, err);
     if (r == 0)
         r = planarize(*q, err);
     if (r == 0)
-        r = check_result(p, *q, *src, cp, max_dev, rep);
+        r = check_result(p, *q, *src, cp, max_dev, rep, ret_cutting);
     if (r == 1 && rep->deviation > outside_allow(cp, max_dev)) {
         /* declined for reaching outside the scan: clipped, checked again */
         r = clip_to_scan(p, cp, max_dev, tol, q, src, rep, err);
@@ -596,7 +601,7 @@ static int finish(const geo_poly *p, geo_convex_planes *cp, double max_dev,
             rep->reason[0] = 0;
             r = planarize(*q, err);
             if (r == 0)
-                r = check_result(p, *q, *src, cp, max_dev, rep);
+                r = check_result(p, *q, *src, cp, max_dev, rep, ret_cutting);
         } else if (r == 0) {
             r = 1;
         }
@@ -802,15 +807,16 @@ static int drop_narrow(const geo_poly *p, geo_convex_planes *cp,
  * says so), -ENOMEM. *need grows to the silhouettes' own noise when the
  * adjustment measured it. */
 static int adjust(const geo_poly *p, geo_convex_planes *ca,
-                  const geo_poly *est, const uint32_t *est_src, double *need,
-                  double tol, geo_poly **ret_q, uint32_t **ret_src,
+                  const geo_poly *est, const uint32_t *est_src,
+                  const uint8_t *held, double *need, double tol,
+                  geo_poly **ret_q, uint32_t **ret_src,
                   geo_convex_report *rep, geo_err *err)
 {
     double sc;
     double cluster = GEO_CONVEX_REFINE_CLUSTER *
                      fmax(ca->dev0, ca->hinge_noise);
     int r = geo_convex_refine(p, est, est_src, cluster, ca->planes,
-                              ca->nplanes, &sc);
+                              ca->nplanes, held, &sc);
     if (r == -ENOMEM)
         return geo_err_set(err, r, "out of memory");
     if (r < 0)
@@ -920,13 +926,13 @@ static int readmit(const geo_poly *p, geo_convex_planes *cp, bool adjusted,
     /* adjusted again with them: a readmitted plane is a fitted one, up
      * to its roof off, and its neighbours move with it */
     if (r == 0 && adjusted)
-        r = adjust(p, &cr, qe, srce, &need, tol, &qr, &srcr, &rr, err);
+        r = adjust(p, &cr, qe, srce, NULL, &need, tol, &qr, &srcr, &rr, err);
     else if (r == 0) {
         qr = qe, srcr = srce;
         qe = NULL, srce = NULL;
     }
     if (r == 0)
-        r = finish(p, &cr, max_dev, need, tol, &qr, &srcr, &rr, err);
+        r = finish(p, &cr, max_dev, need, tol, &qr, &srcr, &rr, NULL, err);
     geo_poly_free(qe);
     free(srce);
     /* kept only where a readmitted plane still bounds a facet (the
@@ -951,6 +957,53 @@ static int readmit(const geo_poly *p, geo_convex_planes *cp, bool adjusted,
     free(srcr);
     geo_convex_planes_clear(&cr);
     return r < 0 ? r : 1;
+}
+
+/* When the adjusted stone is declined because the scan lies outside one
+ * of its planes — the adjustment took a wrong pair of vertices for that
+ * plane's silhouette edge and pushed it into the stone — the adjustment
+ * runs again from the fitted planes cp (their intersection q, src) with
+ * that plane held at its fitted place, so that its neighbours settle
+ * around it, and the stone is finished; up to RESCUE_TRIES planes, each
+ * held once and from then on. cutting: the plane of *ca the last check
+ * found cut in (GEO_NONE when it declined for another reason). 0 with
+ * *ca, *qa, *srca and *ra the passing stone, 1 when it still does not
+ * pass, -ENOMEM. */
+#define RESCUE_TRIES 4
+
+static int rescue(const geo_poly *p, const geo_convex_planes *cp,
+                  const geo_poly *q, const uint32_t *src,
+                  geo_convex_planes *ca, uint32_t cutting, double max_dev,
+                  double need, double tol, geo_poly **qa, uint32_t **srca,
+                  const geo_convex_report *rep, geo_convex_report *ra,
+                  geo_err *err)
+{
+    uint8_t *held = calloc((size_t)cp->nplanes + 1, 1);
+    if (!held)
+        return geo_err_set(err, -ENOMEM, "out of memory");
+    int r = 1;
+    for (int t = 0; r == 1 && t < RESCUE_TRIES && cutting != GEO_NONE; t++) {
+        uint32_t g = 0;
+        while (g < ca->ngroups && ca->kept[g] != cutting)
+            g++;
+        if (g == ca->ngroups || g >= cp->ngroups ||
+            cp->kept[g] == GEO_NONE || held[cp->kept[g]])
+            break;
+        held[cp->kept[g]] = 1;
+        geo_convex_planes_clear(ca);
+        if (planes_copy(ca, cp, p->nfacets) < 0) {
+            r = geo_err_set(err, -ENOMEM, "out of memory");
+            break;
+        }
+        *ra = *rep;
+        double nd = need;
+        r = adjust(p, ca, q, src, held, &nd, tol, qa, srca, ra, err);
+        ra->held = (uint32_t)t + 1;
+        if (r == 0)
+            r = finish(p, ca, max_dev, nd, tol, qa, srca, ra, &cutting, err);
+    }
+    free(held);
+    return r;
 }
 
 int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
@@ -1004,45 +1057,69 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
          * wrong pair of vertices for a silhouette edge can move a plane
          * far, and the fitted planes are then the better answer */
         geo_convex_planes ca;
+        double need0 = need;
         if (planes_copy(&ca, &cp, p->nfacets) < 0) {
             r = geo_err_set(err, -ENOMEM, "out of memory");
             goto done;
         }
         geo_poly *qa = NULL;
-        uint32_t *srca = NULL;
+        uint32_t *srca = NULL, cutting = GEO_NONE;
         geo_convex_report ra = *rep;
-        r = adjust(p, &ca, q, src, &need, merge_tol, &qa, &srca, &ra, err);
+        r = adjust(p, &ca, q, src, NULL, &need, merge_tol, &qa, &srca, &ra, err);
         if (r == 0) {
             r = readmit(p, &ca, true, &qa, &srca, max_dev, need, merge_tol,
                         &ra, err);
             if (r == 1)
                 r = finish(p, &ca, max_dev, need, merge_tol, &qa, &srca, &ra,
-                           err);
+                           &cutting, err);
         }
-        if (r == 0) {
+        bool rescued = false;
+        if (r == 1) {
+            r = rescue(p, &cp, q, src, &ca, cutting, max_dev, need0,
+                       merge_tol, &qa, &srca, rep, &ra, err);
+            rescued = r == 0;
+        }
+        if (r == 0 && !rescued) {
             *rep = ra;
             rep->adjusted = true;
             adopt(&cp, &q, &src, &ca, qa, srca);
             memset(&ca, 0, sizeof ca);
-        } else {
+        } else if (r != 0) {
             geo_poly_free(qa);
             free(srca);
+            qa = NULL, srca = NULL;
         }
-        geo_convex_planes_clear(&ca);
         if (r == -ENOMEM) {
+            geo_convex_planes_clear(&ca);
             r = geo_err_set(err, r, "out of memory");
             goto done;
         }
-        /* declined: the fitted planes, with their own second look */
-        if (r != 0) {
+        /* declined: the fitted planes, with their own second look; a
+         * rescued stone (some planes held) is taken instead only when
+         * it is the simpler one: fewer facets than the fitted stone
+         * needs to stay within the scan's bounds, or the fitted one
+         * does not pass */
+        if (r != 0 || rescued) {
             r = readmit(p, &cp, false, &q, &src, max_dev, need, merge_tol,
                         rep, err);
             if (r == 1)
                 r = finish(p, &cp, max_dev, need, merge_tol, &q, &src, rep,
-                           err);
+                           NULL, err);
+            if (rescued && r >= 0 && (r == 1 || qa->nfacets < q->nfacets)) {
+                *rep = ra;
+                rep->adjusted = true;
+                adopt(&cp, &q, &src, &ca, qa, srca);
+                memset(&ca, 0, sizeof ca);
+                r = 0;
+            } else if (rescued) {
+                geo_poly_free(qa);
+                free(srca);
+            }
         }
+        geo_convex_planes_clear(&ca);
     } else {
-        r = finish(p, &cp, max_dev, need, merge_tol, &q, &src, rep, err);
+        r = finish(p, &cp, max_dev, need, merge_tol, &q, &src, rep, NULL,
+                   err);
     }
     if (r != 0) {
         if (r == -ENOMEM)

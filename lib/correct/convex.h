@@ -124,7 +124,7 @@ int geo_convex_planes_find_topo(const geo_poly *p, const geo_topo *t,
 int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
                       const uint32_t *src, double cluster,
                       double (*planes)[4], uint32_t nplanes,
-                      double *ret_scale);
+                      const uint8_t *held, double *ret_scale);
 
 /* What geo_correct_convex did. */
 typedef struct geo_convex_report {
@@ -141,6 +141,9 @@ typedef struct geo_convex_report {
                             were declined, the fitted ones: the scan's
                             need of them beyond the noise (convex.c,
                             readmit) */
+    uint32_t held;       /* planes the adjustment pushed into the scan,
+                            held at their fitted place while the others
+                            were adjusted again (convex.c, rescue) */
     bool adjusted;       /* the planes are the ones adjusted to the
                             silhouettes (else the fitted ones: the
                             adjusted did not pass the checks) */

@@ -52,6 +52,8 @@
  * hardly see moves no more than they say (noise-free, without it the
  * solve wanders along them). */
 #define DAMP_REL 1e-9
+/* The damping of a held plane, relative to the incidences' weight. */
+#define HOLD_REL 1e6
 /* A spanning vertex lies at most this many residual scales below the
  * highest (before the first residuals: the cluster radius). */
 #define SPAN_SCALES 6.0
@@ -235,7 +237,7 @@ static void span_of(const geo_poly *scan, uint32_t j, const double (*x)[3],
 int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
                       const uint32_t *src, double cluster,
                       double (*planes)[4], uint32_t nplanes,
-                      double *ret_scale)
+                      const uint8_t *held, double *ret_scale)
 {
     uint32_t nv = est->nverts, nc = geo_poly_ncorners(est);
     *ret_scale = 0;
@@ -471,8 +473,11 @@ int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
         double damp = DAMP_REL * W + 1e-12;
         for (uint32_t i = 0; i < B.n; i++) {
             double (*d)[3] = block_at(&B, i, i);
+            /* a held plane: damped far above the incidences, so its
+             * vertices follow it and it does not move */
+            double di = i < nplanes && held && held[i] ? HOLD_REL * W : damp;
             for (int k = 0; k < 3; k++)
-                d[k][k] += damp;
+                d[k][k] += di;
         }
         /* the vertices eliminated (each couples only to its planes):
          * the planes' Schur complement S, factored, then each vertex

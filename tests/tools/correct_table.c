@@ -148,7 +148,7 @@ static geo_poly *correct(const geo_poly *scan, enum method m, bool *valid,
                 geo_convex_refine(scan, est, src,
                                   GEO_CONVEX_REFINE_CLUSTER *
                                       fmax(cp.dev0, cp.hinge_noise),
-                                  cp.planes, cp.nplanes, &sc);
+                                  cp.planes, cp.nplanes, NULL, &sc);
             geo_poly_free(est);
             free(src);
         }

@@ -397,25 +397,55 @@ static void test_a_small_culet_comes_back(void **state)
     geo_poly_free(stone);
 }
 
-/* When the adjustment is declined (on this heart at K = 400 an adjusted
- * crown plane took a wrong pair of vertices for a silhouette edge and
- * cut 26 µm into the scan), the fitted planes are finished — and used to
- * be without a second look: the small crown facets at the girdle's
- * corners stayed dropped, and the corners they cut reached 10 µm outside
- * the scan, three times the scan's distance from the stone. The true
- * stone lies inside the scan to the noise, so a corner that far out is a
- * facet missing: the dropped groups come back on that reach alone. */
+/* When the adjustment is declined and cannot be rescued (on this heart
+ * at K = 400 its planes hold no fewer facets than the fitted ones), the
+ * fitted planes are finished — and used to be without a second look:
+ * the small crown facets at the girdle's corners stayed dropped, and the
+ * corners they cut reached far outside the scan, 2.1 times the scan's
+ * distance from the stone. The true stone lies inside the scan to the
+ * noise, so a corner that far out is a facet missing: the dropped groups
+ * come back on that reach alone (now 1.04 times). */
 static void test_fitted_planes_get_a_second_look(void **state)
 {
     (void)state;
     geo_convex_report rep;
     geo_poly *stone, *q;
-    /* still nearly twice the scan's distance: the girdle's 3° facets
-     * come out in pairs (kernels/correct-convex.md, "Still short") */
-    check_design("heart.asc", 400, 1, 2.0, &rep, &stone, &q);
+    check_design("heart-random-1.asc", 400, 1, 1.5, &rep, &stone, &q);
     assert_false(rep.adjusted);
-    assert_true(rep.readmitted >= 3);
+    assert_true(rep.readmitted >= 2);
     geo_poly_free(q);
+    geo_poly_free(stone);
+}
+
+/* Scan 1 of the fixed suite (a princess, K = 100, 0.9 µm): the adjusted
+ * stone was declined, the scan lying 23 µm outside one plane the
+ * adjustment had pushed in, and the fitted stone came out with 56 facets
+ * for 29 (their roofs need bevels to stay within the scan). Held at its
+ * fitted place, that plane and three more found the same way let their
+ * neighbours settle around them: 29 facets, nearer the stone. */
+static void test_a_plane_pushed_in_is_held(void **state)
+{
+    (void)state;
+    geo_poly *stone = sim_stone(SIM_PRINCESS, 1);
+    sim_rotate_z(stone, 2.9076650091605174);
+    geo_poly *scan = sim_scan_phase(stone, 100, 0.000901919348455512,
+                                    3.0190035900558327, 1);
+    assert_non_null(scan);
+    geo_convex_report rep;
+    geo_poly *q = convex_correct(scan, GEO_CONVEX_FIT_SILHOUETTE, &rep);
+    const char *bad = ms_invalid(q);
+    if (bad)
+        fail_msg("result not valid: %s", bad);
+    assert_true(rep.adjusted);
+    if (fabs((double)q->nfacets - stone->nfacets) > 0.05 * stone->nfacets)
+        fail_msg("%u facets for %u", q->nfacets, stone->nfacets);
+    double hs = sim_hausdorff(scan, stone, 2000),
+           hq = sim_hausdorff(q, stone, 2000);
+    if (hq > 0.8 * hs)
+        fail_msg("Hausdorff to the stone %.2f µm, the scan's %.2f µm",
+                 hq * 1e3, hs * 1e3);
+    geo_poly_free(q);
+    geo_poly_free(scan);
     geo_poly_free(stone);
 }
 
@@ -434,6 +464,7 @@ int main(void)
         cmocka_unit_test(test_small_facets_between_large_ones_come_back),
         cmocka_unit_test(test_a_small_culet_comes_back),
         cmocka_unit_test(test_fitted_planes_get_a_second_look),
+        cmocka_unit_test(test_a_plane_pushed_in_is_held),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
