@@ -113,7 +113,8 @@ int geo_convex_planes_find_topo(const geo_poly *p, const geo_topo *t,
  * of the stone that span it (convex_refine.c says how and why). est is
  * their intersection (geo_halfspace_intersect) and src its facets'
  * planes; vertices of est closer than cluster (mm) are one vertex.
- * *ret_scale gets the robust scale of the residuals at the last step
+ * held (may be NULL): per plane, nonzero for one that stays where it is
+ * while the others and all vertices move. *ret_scale gets the robust scale of the residuals at the last step
  * (the planes adjusted by the steps before it): the silhouettes' own
  * noise, mm. Returns 0, -EINVAL (the normal equations not positive
  * definite: planes unchanged), -ENOMEM. */
