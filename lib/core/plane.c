@@ -8,6 +8,26 @@
 
 #include "vec.h"
 
+/* The eigenpairs val[k], vec[k] in ascending order of value, each vector
+ * made unit: both solvers' answer. */
+static void sorted_out(const double val[3], const double vec[3][3],
+                       double ret_values[3], double ret_vectors[3][3])
+{
+    int order[3] = {0, 1, 2};
+    for (int i = 0; i < 3; i++)
+        for (int j = i + 1; j < 3; j++)
+            if (val[order[j]] < val[order[i]]) {
+                int t = order[i];
+                order[i] = order[j];
+                order[j] = t;
+            }
+    for (int i = 0; i < 3; i++) {
+        ret_values[i] = val[order[i]];
+        memcpy(ret_vectors[i], vec[order[i]], sizeof vec[0]);
+        geo_vnormalize(ret_vectors[i]);
+    }
+}
+
 void geo_sym3_eigen_jacobi(const double a0[3][3], double ret_values[3],
                            double ret_vectors[3][3])
 {
@@ -47,20 +67,13 @@ void geo_sym3_eigen_jacobi(const double a0[3][3], double ret_values[3],
             }
         }
     }
-    int order[3] = {0, 1, 2};
-    for (int i = 0; i < 3; i++)
-        for (int j = i + 1; j < 3; j++)
-            if (a[order[j]][order[j]] < a[order[i]][order[i]]) {
-                int t = order[i];
-                order[i] = order[j];
-                order[j] = t;
-            }
+    double val[3], vec[3][3];
     for (int k = 0; k < 3; k++) {
-        ret_values[k] = a[order[k]][order[k]];
+        val[k] = a[k][k];
         for (int i = 0; i < 3; i++)
-            ret_vectors[k][i] = v[i][order[k]];
-        geo_vnormalize(ret_vectors[k]);
+            vec[k][i] = v[i][k];
     }
+    sorted_out(val, (const double(*)[3])vec, ret_values, ret_vectors);
 }
 
 /* Unit x perpendicular to the rows of m, from the largest of the rows'
@@ -170,19 +183,7 @@ void geo_sym3_eigen(double m[3][3], double ret_values[3],
             vec[2][i] = sn * u[i] + c * w[i];
         }
     }
-    int order[3] = {0, 1, 2};
-    for (int i = 0; i < 3; i++)
-        for (int j = i + 1; j < 3; j++)
-            if (val[order[j]] < val[order[i]]) {
-                int t = order[i];
-                order[i] = order[j];
-                order[j] = t;
-            }
-    for (int i = 0; i < 3; i++) {
-        ret_values[i] = val[order[i]];
-        memcpy(ret_vectors[i], vec[order[i]], sizeof vec[0]);
-        geo_vnormalize(ret_vectors[i]);
-    }
+    sorted_out(val, (const double(*)[3])vec, ret_values, ret_vectors);
 }
 
 int geo_plane_fit(const double *pts, const double *w, size_t n,

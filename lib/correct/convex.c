@@ -959,6 +959,18 @@ static int readmit(const geo_poly *p, geo_convex_planes *cp, bool adjusted,
     return r < 0 ? r : 1;
 }
 
+/* The adjusted stone (planes *ca, intersection qa, srca, report *ra)
+ * becomes the answer in place of cp, q, src and rep; *ca is left empty. */
+static void take_adjusted(geo_convex_report *rep, const geo_convex_report *ra,
+                          geo_convex_planes *cp, geo_poly **q, uint32_t **src,
+                          geo_convex_planes *ca, geo_poly *qa, uint32_t *srca)
+{
+    *rep = *ra;
+    rep->adjusted = true;
+    adopt(cp, q, src, ca, qa, srca);
+    memset(ca, 0, sizeof *ca);
+}
+
 /* When the adjusted stone is declined because the scan lies outside one
  * of its planes — the adjustment took a wrong pair of vertices for that
  * plane's silhouette edge and pushed it into the stone — the adjustment
@@ -1080,10 +1092,7 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
             rescued = r == 0;
         }
         if (r == 0 && !rescued) {
-            *rep = ra;
-            rep->adjusted = true;
-            adopt(&cp, &q, &src, &ca, qa, srca);
-            memset(&ca, 0, sizeof ca);
+            take_adjusted(rep, &ra, &cp, &q, &src, &ca, qa, srca);
         } else if (r != 0) {
             geo_poly_free(qa);
             free(srca);
@@ -1106,10 +1115,7 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
                 r = finish(p, &cp, max_dev, need, merge_tol, &q, &src, rep,
                            NULL, err);
             if (rescued && r >= 0 && (r == 1 || qa->nfacets < q->nfacets)) {
-                *rep = ra;
-                rep->adjusted = true;
-                adopt(&cp, &q, &src, &ca, qa, srca);
-                memset(&ca, 0, sizeof ca);
+                take_adjusted(rep, &ra, &cp, &q, &src, &ca, qa, srca);
                 r = 0;
             } else if (rescued) {
                 geo_poly_free(qa);
