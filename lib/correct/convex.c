@@ -349,15 +349,98 @@ static double outside_allow(const geo_convex_planes *cp, double max_dev)
                                  fmax(max_dev, roof_max) / 2);
 }
 
-/* How far the result q reaches outside the scan p: the largest value of
- * a scan facet's plane at a vertex of q (every pair when memory is
- * short for the tree). */
+/* The highest value of every plane of p at a vertex of the convex q, by
+ * ascent along q's edges: a linear function has no local maximum on a
+ * convex polytope but its highest vertex, and consecutive scan facets
+ * are mostly neighbours, so each plane's ascent starts at the previous
+ * plane's top and takes a few steps. q's vertices lie on its planes to
+ * the planarity tolerance, so a top is the highest within about that.
+ * 0 with *ret; 1 when q's edges do not join all its vertices or one is
+ * not finite; -ENOMEM. */
+static int reach_by_ascent(const geo_poly *p, const geo_poly *q, double *ret)
+{
+    uint32_t nv = q->nverts, nc = geo_poly_ncorners(q);
+    uint32_t *start = calloc((size_t)nv + 2, sizeof *start);
+    uint32_t *adj = malloc(((size_t)nc + 1) * sizeof *adj);
+    uint8_t *seen = calloc((size_t)nv + 1, 1);
+    uint32_t *order = malloc(((size_t)nv + 1) * sizeof *order);
+    if (!start || !adj || !seen || !order) {
+        free(start), free(adj), free(seen), free(order);
+        return -ENOMEM;
+    }
+    /* each facet edge from its corner's vertex to the next */
+    for (int pass = 0; pass < 2; pass++) {
+        for (uint32_t f = 0; f < q->nfacets; f++) {
+            uint32_t n = geo_poly_facet_size(q, f);
+            const uint32_t *fv = geo_poly_facet(q, f);
+            for (uint32_t i = 0, prev = n ? fv[n - 1] : 0; i < n;
+                 prev = fv[i++]) {
+                if (pass == 0)
+                    start[prev + 2]++;
+                else
+                    adj[start[prev + 1]++] = fv[i];
+            }
+        }
+        if (pass == 0)
+            for (uint32_t v = 0; v < nv; v++)
+                start[v + 2] += start[v + 1];
+    }
+    /* every vertex reached from the first, breadth first, and finite */
+    uint32_t ns = 0;
+    for (uint32_t v = 0; v < nv; v++)
+        if (!isfinite(q->verts[v][0] + q->verts[v][1] + q->verts[v][2]))
+            nv = 0;
+    if (nv > 0) {
+        seen[0] = 1;
+        order[ns++] = 0;
+    }
+    for (uint32_t i = 0; i < ns; i++)
+        for (uint32_t a = start[order[i]]; a < start[order[i] + 1]; a++)
+            if (!seen[adj[a]]) {
+                seen[adj[a]] = 1;
+                order[ns++] = adj[a];
+            }
+    free(seen), free(order);
+    if (nv == 0 || ns < nv) {
+        free(start), free(adj);
+        return 1;
+    }
+    double out = 0;
+    uint32_t top = 0;
+    for (uint32_t f = 0; f < p->nfacets; f++) {
+        const double *pl = p->planes[f];
+        double s = geo_plane_eval(pl, q->verts[top]);
+        for (uint32_t at = GEO_NONE; at != top;) {
+            at = top;
+            for (uint32_t a = start[at]; a < start[at + 1]; a++) {
+                double t = geo_plane_eval(pl, q->verts[adj[a]]);
+                if (t > s) {
+                    s = t;
+                    top = adj[a];
+                }
+            }
+        }
+        if (s > out)
+            out = s;
+    }
+    free(start), free(adj);
+    *ret = out;
+    return 0;
+}
+
+/* How far the result q (convex: an intersection of half-spaces) reaches
+ * outside the scan p: the largest value of a scan facet's plane at a
+ * vertex of q, by ascent; when q's edges do not join its vertices, by
+ * the tree of its vertices (every pair when memory is short for it). */
 static double reach_outside(const geo_poly *p, const geo_poly *q)
 {
+    double out = 0;
+    if (reach_by_ascent(p, q, &out) == 0)
+        return out;
     const double(*x)[3] = (const double(*)[3])q->verts;
     const double(*pl)[4] = (const double(*)[4])p->planes;
     geo_ptree *t = NULL;
-    double out = 0;
+    out = 0;
     if (geo_ptree_build(x, q->nverts, &t) == 0 &&
         geo_ptree_reach(t, x, pl, p->nfacets, &out) == 0) {
         geo_ptree_free(t);
