@@ -2,7 +2,8 @@
  * above this plane" (the convex correction's check of a scan's vertices
  * against a result's planes: most pairs are far below the bound) and
  * "how far do the points reach above these planes" (its check of the
- * result's vertices against the scan's planes).
+ * result's vertices against the scan's planes, where an ascent along the
+ * result's edges cannot be used).
  *
  * The points are split at the median of their box's longest side down
  * to a few a leaf; each node keeps the ball about its box's centre that
