@@ -1101,7 +1101,8 @@ static int rescue(const geo_poly *p, const geo_convex_planes *cp,
     return r;
 }
 
-int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
+int geo_correct_convex(const geo_poly *p, const geo_topo *t,
+                       uint32_t views, double noise,
                        double max_dev, enum geo_convex_fit fit,
                        const geo_ctx *ctx, geo_poly **ret,
                        geo_convex_report *report, geo_err *err)
@@ -1109,24 +1110,24 @@ int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
     geo_convex_report local, *rep = report ? report : &local;
     memset(rep, 0, sizeof *rep);
     *ret = NULL;
-    geo_topo *t = geo_topo_build(p, err);
-    if (!t)
+    geo_topo *own = NULL;
+    if (!t && !(t = own = geo_topo_build(p, err)))
         return -ENOMEM;
     rep->concavity = concavity(p, t);
     if (rep->concavity > max_dev) {
-        geo_topo_free(t);
+        geo_topo_free(own);
         return decline(rep, "not convex: a concavity %.2g mm deep (bound "
                        "%.2g mm)", rep->concavity, max_dev);
     }
     if (geo_ctx_canceled(ctx)) {
-        geo_topo_free(t);
+        geo_topo_free(own);
         return geo_err_set(err, -ECANCELED, "correction canceled");
     }
     geo_convex_planes cp;
     geo_err perr;
     int r = geo_convex_planes_find_topo(p, t, views, noise, fit, ctx, &cp,
                                         &perr);
-    geo_topo_free(t);
+    geo_topo_free(own);
     if (r == -EINVAL)
         return decline(rep, "not a closed manifold");
     if (r < 0)

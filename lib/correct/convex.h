@@ -166,8 +166,10 @@ typedef struct geo_convex_report {
  * of p farther outside the result than its group's roof allows. Returns 0 (*ret a new
  * model, the caller frees it), 1 when the path does not apply or a check
  * fails (*ret NULL, rep->reason says which), -ENOMEM or -ECANCELED (err
- * set). p is never modified. rep may be NULL. */
-int geo_correct_convex(const geo_poly *p, uint32_t views, double noise,
+ * set). p is never modified. rep may be NULL; t is p's topology, or NULL
+ * to build it. */
+int geo_correct_convex(const geo_poly *p, const geo_topo *t,
+                       uint32_t views, double noise,
                        double max_dev, enum geo_convex_fit fit,
                        const geo_ctx *ctx, geo_poly **ret,
                        geo_convex_report *rep, geo_err *err);

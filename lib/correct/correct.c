@@ -91,6 +91,9 @@ int geo_correct(geo_poly *p, const geo_correct_opts *opts,
     if (r < 0)
         return r;
     geo_poly *q = geo_poly_copy(p);
+    /* the input's topology, built once for the steps that read it while
+     * q is still p (none when the full statistics build their own) */
+    geo_topo *t = NULL;
     uint32_t nin = p->nverts;
     uint32_t *cur = malloc(((size_t)nin + 1) * sizeof *cur);
     if (!q || !cur) {
@@ -102,8 +105,12 @@ int geo_correct(geo_poly *p, const geo_correct_opts *opts,
     rep->vertices_before = p->nverts;
     rep->facets_before = p->nfacets;
     rep->volume_before = geo_poly_volume(p);
+    if (!o.input_stats && !(t = geo_topo_build(p, err))) {
+        r = -ENOMEM;
+        goto done;
+    }
     if ((r = o.input_stats ? geo_inspect(p, NULL, ctx, &rep->before, err)
-                           : geo_inspect_topology(p, &rep->before, err)) < 0)
+                           : geo_inspect_topology(p, t, &rep->before, err)) < 0)
         goto done;
     if (p->nfacets == 0) {
         r = geo_err_set(err, -EINVAL, "the model has no facets: nothing to "
@@ -123,6 +130,7 @@ int geo_correct(geo_poly *p, const geo_correct_opts *opts,
         if ((r = geo_orient_repair(q, &orr, err)) < 0)
             goto done;
         rep->reoriented_facets += orr.nflipped;
+        t = geo_topo_free(t); /* facets turned: no longer q's */
     }
 
     /* the steps inside honour cancellation but report no progress of
@@ -140,7 +148,7 @@ int geo_correct(geo_poly *p, const geo_correct_opts *opts,
         goto done;
     }
     if (o.merge.noise == 0 &&
-        (r = geo_merge_surface_noise(q, &o.merge, ctx, &o.merge.noise,
+        (r = geo_merge_surface_noise(q, t, &o.merge, ctx, &o.merge.noise,
                                      err)) < 0)
         goto done;
     if (o.merge.noise == 0)
@@ -151,7 +159,7 @@ int geo_correct(geo_poly *p, const geo_correct_opts *opts,
     if (o.convex) {
         rep->convex_tried = true;
         geo_poly *c = NULL;
-        r = geo_correct_convex(q, o.merge.views, rep->noise,
+        r = geo_correct_convex(q, t, o.merge.views, rep->noise,
                                geo_merge_max_deviation(&o.merge, q),
                                o.convex_fit, &sub, &c,
                                &rep->convex_report, err);
@@ -205,14 +213,14 @@ int geo_correct(geo_poly *p, const geo_correct_opts *opts,
 
     /* merging keeps orientation; this guards against an input whose
      * shells were consistent but one of them inside out */
-    geo_topo *t = geo_topo_build(q, err);
-    if (!t) {
+    geo_topo_free(t);
+    if (!(t = geo_topo_build(q, err))) {
         r = -ENOMEM;
         goto done;
     }
     geo_orient_report orr;
     r = geo_orient_analyze(q, t, NULL, &orr, err);
-    geo_topo_free(t);
+    t = geo_topo_free(t);
     if (r < 0)
         goto done;
     if (orr.orientation != GEO_ORIENT_OUTWARD) {
@@ -254,6 +262,7 @@ int geo_correct(geo_poly *p, const geo_correct_opts *opts,
     geo_ctx_progress(ctx, 1.0);
     r = 0;
 done:
+    geo_topo_free(t);
     geo_poly_free(q);
     free(cur);
     if (r < 0)

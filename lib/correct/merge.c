@@ -390,17 +390,19 @@ typedef struct session {
 } session;
 
 /* Opens a session on a copy of p; world: with the index of its facets
- * that merges are checked against (geo_mw_world_build). */
-static int session_open(session *s, const geo_poly *p, const geo_merge_opts *o,
-                        bool world, geo_merge_report *rep, geo_err *err)
+ * that merges are checked against (geo_mw_world_build). t: p's topology,
+ * or NULL to build it (the indices are then checked too). */
+static int session_open(session *s, const geo_poly *p, const geo_topo *t,
+                        const geo_merge_opts *o, bool world,
+                        geo_merge_report *rep, geo_err *err)
 {
     memset(s, 0, sizeof *s);
-    int r;
-    geo_topo *t = geo_topo_build_checked(p, &r, err);
-    if (!t)
+    int r = 0;
+    geo_topo *own = NULL;
+    if (!t && !(t = own = geo_topo_build_checked(p, &r, err)))
         return r;
     bool ok = geo_topo_is_closed_manifold(t);
-    geo_topo_free(t);
+    geo_topo_free(own);
     if (!ok)
         return geo_err_set(err, -EINVAL, "the model is not a closed oriented "
                            "manifold");
@@ -487,8 +489,8 @@ static int session_end(session *s, int r, geo_poly *p, geo_merge_report *rep,
  * session opened on p; for the automatic grouping also the options
  * checked and the grouping criteria *c (angle, deviation bound, the view
  * step from o->views or read off the model), recorded in *rep. On error
- * nothing is left open and *rep holds nothing. */
-static int session_begin(session *s, const geo_poly *p,
+ * nothing is left open and *rep holds nothing. t: as session_open's. */
+static int session_begin(session *s, const geo_poly *p, const geo_topo *t,
                          const geo_merge_opts *opts, bool automatic,
                          bool world, geo_merge_opts *o, geo_merge_report *rep,
                          geo_group_crit *c, geo_err *err)
@@ -504,7 +506,7 @@ static int session_begin(session *s, const geo_poly *p,
          isnan(o->noise)))
         return geo_err_set(err, -EINVAL, "max_angle_deg must be in (0, 90) "
                            "and the deviations non-negative");
-    int r = session_open(s, p, o, world, rep, err);
+    int r = session_open(s, p, t, o, world, rep, err);
     if (r < 0 || !automatic) {
         if (r < 0)
             geo_merge_report_clear(rep);
@@ -536,7 +538,7 @@ int geo_merge_groups(geo_poly *p, uint32_t ngroups, const uint32_t *gstart,
     geo_merge_opts o;
     geo_merge_report local = {0}, *rep = report ? report : &local;
     session s;
-    int r = session_begin(&s, p, opts, false, true, &o, rep, NULL, err);
+    int r = session_begin(&s, p, NULL, opts, false, true, &o, rep, NULL, err);
     if (r < 0)
         return r;
     for (uint32_t g = 0; g < ngroups && r == 0; g++) {
@@ -582,15 +584,16 @@ double geo_merge_max_deviation(const geo_merge_opts *o, const geo_poly *p)
 }
 
 
-int geo_merge_surface_noise(const geo_poly *p, const geo_merge_opts *opts,
-                            const geo_ctx *ctx, double *ret, geo_err *err)
+int geo_merge_surface_noise(const geo_poly *p, const geo_topo *t,
+                            const geo_merge_opts *opts, const geo_ctx *ctx,
+                            double *ret, geo_err *err)
 {
     geo_merge_opts o;
     geo_merge_report rep;
     session s;
     geo_group_crit c;
     /* the groups only: no merge, so no index of the facets to check one */
-    int r = session_begin(&s, p, opts, true, false, &o, &rep, &c, err);
+    int r = session_begin(&s, p, t, opts, true, false, &o, &rep, &c, err);
     if (r < 0)
         return r;
     r = geo_mw_surface_noise(s.w, &c, ctx, ret);
@@ -609,7 +612,7 @@ int geo_merge_auto(geo_poly *p, const geo_merge_opts *opts,
     geo_merge_report local = {0}, *rep = report ? report : &local;
     session s;
     geo_group_crit c;
-    int r = session_begin(&s, p, opts, true, true, &o, rep, &c, err);
+    int r = session_begin(&s, p, NULL, opts, true, true, &o, rep, &c, err);
     if (r < 0)
         return r;
     if (o.noise > 0)

@@ -55,6 +55,7 @@
 
 #include "ctx.h"
 #include "poly.h"
+#include "topo.h"
 
 /* The order in which contour points are lifted (§2.6.2). */
 enum geo_lift_order {
@@ -188,10 +189,12 @@ int geo_merge_view_grid(const geo_poly *p, uint32_t *ret_views,
 
 /* The surface noise geo_merge_auto measures when opts->noise is 0 (see
  * lib/correct/merge_scale.c), mm, 0 when p has no group of nearly coplanar
- * facets; opts NULL means defaults. Returns 0, -EINVAL (p not closed and
- * manifold), -ENOMEM, -ECANCELED (ctx may be NULL). */
-int geo_merge_surface_noise(const geo_poly *p, const geo_merge_opts *opts,
-                            const geo_ctx *ctx, double *ret, geo_err *err);
+ * facets; opts NULL means defaults; t is p's topology, or NULL to build
+ * it. Returns 0, -EINVAL (p not closed and manifold), -ENOMEM, -ECANCELED
+ * (ctx may be NULL). */
+int geo_merge_surface_noise(const geo_poly *p, const geo_topo *t,
+                            const geo_merge_opts *opts, const geo_ctx *ctx,
+                            double *ret, geo_err *err);
 
 /* Merges the group of n facets of p (indices into p) in place. Returns 0
  * when merged; -EINVAL when the group cannot be merged or the result

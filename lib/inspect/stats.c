@@ -356,15 +356,16 @@ static int topology_stats(const geo_poly *p, const geo_topo *t,
     return 0;
 }
 
-int geo_inspect_topology(const geo_poly *p, geo_stats *ret, geo_err *err)
+int geo_inspect_topology(const geo_poly *p, const geo_topo *t,
+                         geo_stats *ret, geo_err *err)
 {
     memset(ret, 0, sizeof *ret);
     int rc;
-    geo_topo *t = geo_topo_build_lean(p, &rc, err);
-    if (!t)
+    geo_topo *own = NULL;
+    if (!t && !(t = own = geo_topo_build_lean(p, &rc, err)))
         return rc;
     rc = topology_stats(p, t, ret, err);
-    geo_topo_free(t);
+    geo_topo_free(own);
     if (rc < 0)
         memset(ret, 0, sizeof *ret);
     return rc;

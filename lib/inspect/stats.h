@@ -107,10 +107,11 @@ int geo_inspect(const geo_poly *p, const geo_inspect_opts *opts,
 /* Of geo_inspect's statistics only the counts, the topology (closed,
  * boundary and non-manifold edges and vertices) and the orientation
  * (orientation, inconsistent facets, shells, orientable); the rest zero.
- * For a caller that decides on these alone: it costs a topology build,
- * where geo_inspect adds the self-intersection search. Errors as
- * geo_inspect's (*ret zeroed). */
-int geo_inspect_topology(const geo_poly *p, geo_stats *ret, geo_err *err);
+ * For a caller that decides on these alone: it costs a topology build
+ * (none when t, p's topology, is given), where geo_inspect adds the
+ * self-intersection search. Errors as geo_inspect's (*ret zeroed). */
+int geo_inspect_topology(const geo_poly *p, const geo_topo *t,
+                         geo_stats *ret, geo_err *err);
 
 /* Releases the arrays of s and zeroes it; accepts NULL. */
 void geo_stats_clear(geo_stats *s);

@@ -130,7 +130,7 @@ static geo_poly *correct(const geo_poly *scan, enum method m, bool *valid,
         geo_merge_opts_default(&mo);
         geo_convex_planes cp;
         if (geo_merge_view_grid(scan, &views, NULL) < 0 ||
-            geo_merge_surface_noise(scan, &mo, NULL, &noise, &err) < 0 ||
+            geo_merge_surface_noise(scan, NULL, &mo, NULL, &noise, &err) < 0 ||
             geo_convex_planes_find(scan, views, noise, fit, NULL, &cp, &err) < 0) {
             snprintf(msg, len, "%s", err.msg);
             return geo_poly_free(p);

@@ -30,7 +30,7 @@ static void scan_scale(const geo_poly *scan, uint32_t *views, double *noise)
     geo_merge_opts_default(&mo);
     geo_err err;
     assert_int_equal(geo_merge_view_grid(scan, views, NULL), 0);
-    assert_int_equal(geo_merge_surface_noise(scan, &mo, NULL, noise, &err), 0);
+    assert_int_equal(geo_merge_surface_noise(scan, NULL, &mo, NULL, noise, &err), 0);
 }
 
 static geo_poly *convex_correct(const geo_poly *scan, enum geo_convex_fit fit,
@@ -43,7 +43,7 @@ static geo_poly *convex_correct(const geo_poly *scan, enum geo_convex_fit fit,
     geo_err err;
     geo_merge_opts mo;
     geo_merge_opts_default(&mo);
-    int r = geo_correct_convex(scan, views, noise, geo_merge_max_deviation(&mo, scan),
+    int r = geo_correct_convex(scan, NULL, views, noise, geo_merge_max_deviation(&mo, scan),
                                fit, NULL, &q, rep, &err);
     if (r != 0)
         fail_msg("convex path declined: %s", r == 1 ? rep->reason : err.msg);
@@ -162,7 +162,7 @@ static uint32_t facets_of_bevelled_cube(double depth)
     geo_poly *q = NULL;
     geo_convex_report rep;
     geo_err err;
-    int r = geo_correct_convex(scan, 0, 1e-3, 1e-3, GEO_CONVEX_FIT_SILHOUETTE,
+    int r = geo_correct_convex(scan, NULL, 0, 1e-3, 1e-3, GEO_CONVEX_FIT_SILHOUETTE,
                                NULL, &q, &rep, &err);
     if (r != 0)
         fail_msg("declined: %s", r == 1 ? rep.reason : err.msg);
@@ -192,7 +192,7 @@ static void test_non_convex_model_is_declined_untouched(void **state)
     geo_poly *q = (geo_poly *)1;
     geo_convex_report rep;
     geo_err err;
-    assert_int_equal(geo_correct_convex(p, 0, 0, 1e-3, GEO_CONVEX_FIT_AREA, NULL,
+    assert_int_equal(geo_correct_convex(p, NULL, 0, 0, 1e-3, GEO_CONVEX_FIT_AREA, NULL,
                                         &q, &rep, &err), 1);
     assert_null(q);
     assert_non_null(strstr(rep.reason, "not convex"));

@@ -379,7 +379,7 @@ static void test_surface_noise_follows_the_scanners_noise(void **state)
         geo_poly *scan = sim_scan(stone, 100, sigma[i], 2);
         assert_non_null(scan);
         geo_err err = {{0}};
-        assert_int_equal(geo_merge_surface_noise(scan, NULL, NULL, &est[i], &err), 0);
+        assert_int_equal(geo_merge_surface_noise(scan, NULL, NULL, NULL, &est[i], &err), 0);
         /* a fraction of the silhouette noise: one facet's slivers lie
          * within it of their common plane */
         assert_true(est[i] > 0.1 * sigma[i] && est[i] < sigma[i]);

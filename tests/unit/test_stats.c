@@ -516,7 +516,7 @@ static void test_topology_only_matches_inspect(void **state)
         geo_poly *p = load(names[i]);
         geo_stats full = inspect(p, NULL), top;
         geo_err err = {{0}};
-        assert_int_equal(geo_inspect_topology(p, &top, &err), 0);
+        assert_int_equal(geo_inspect_topology(p, NULL, &top, &err), 0);
         assert_int_equal(top.vertices, full.vertices);
         assert_int_equal(top.facets, full.facets);
         assert_int_equal(top.edges, full.edges);
