@@ -20,16 +20,13 @@ static double above(const geo_surface *s, const double p[3], double worst,
     return d > worst ? d : worst;
 }
 
-static int directed(const geo_poly *a, const geo_poly *b, const geo_ctx *ctx,
-                    double *ret, geo_err *err)
+/* The largest distance from a's samples to s (b's surface), visiting a's
+ * facets in order (NULL: index order). */
+static int directed_to(const geo_poly *a, const uint32_t *order,
+                       const geo_surface *s, const geo_ctx *ctx, double *ret,
+                       geo_err *err)
 {
-    if (b->nfacets == 0)
-        return geo_err_set(err, -EINVAL, "hausdorff: the second surface has "
-                           "no facets");
-    geo_surface *s;
-    int rc = geo_surface_new(b, &s, err);
-    if (rc < 0)
-        return rc;
+    int rc = 0;
     double worst = 0;
     uint32_t hint = UINT32_MAX;
     uint8_t *seen = calloc((size_t)a->nverts + 1, 1);
@@ -39,12 +36,12 @@ static int directed(const geo_poly *a, const geo_poly *b, const geo_ctx *ctx,
     geo_edgemap edges = {0};
     if (!seen || geo_edgemap_init(&edges, geo_poly_ncorners(a) / 2 + 1) < 0) {
         free(seen);
-        geo_surface_free(s);
         return geo_err_set(err, -ENOMEM, "out of memory");
     }
-    for (uint32_t f = 0; f < a->nfacets; f++) {
+    for (uint32_t k = 0; k < a->nfacets; k++) {
+        uint32_t f = order ? order[k] : k;
         /* a sample near a large non-convex facet costs O(its size) */
-        if ((f & 255) == 255 && geo_ctx_canceled(ctx)) {
+        if ((k & 255) == 255 && geo_ctx_canceled(ctx)) {
             rc = geo_err_set(err, -ECANCELED, "hausdorff: canceled");
             break;
         }
@@ -79,26 +76,59 @@ static int directed(const geo_poly *a, const geo_poly *b, const geo_ctx *ctx,
     }
     free(seen);
     geo_edgemap_destroy(&edges);
-    geo_surface_free(s);
     *ret = sqrt(worst);
     return rc;
+}
+
+static int no_facets(geo_err *err)
+{
+    return geo_err_set(err, -EINVAL, "hausdorff: the second surface has no "
+                       "facets");
 }
 
 int geo_hausdorff_directed(const geo_poly *a, const geo_poly *b, double *ret,
                            geo_err *err)
 {
-    return directed(a, b, NULL, ret, err);
+    if (b->nfacets == 0)
+        return no_facets(err);
+    geo_surface *s;
+    int r = geo_surface_new(b, &s, err);
+    if (r == 0)
+        r = directed_to(a, NULL, s, NULL, ret, err);
+    geo_surface_free(s);
+    return r;
 }
 
+/* Both surfaces are indexed first: each one's leaf order is the order its
+ * samples are queried in against the other (the samples of one scan
+ * facet after another in file order jump across the stone, and a hint
+ * from far away prunes nothing). */
 int geo_hausdorff_ctx(const geo_poly *a, const geo_poly *b,
                       const geo_ctx *ctx, double *ret, geo_err *err)
 {
-    double ab, ba;
-    int r = directed(a, b, ctx, &ab, err);
+    if (b->nfacets == 0 || a->nfacets == 0)
+        return no_facets(err);
+    geo_surface *sa = NULL, *sb = NULL;
+    uint32_t *oa = malloc(((size_t)a->nfacets + 1) * sizeof *oa);
+    uint32_t *ob = malloc(((size_t)b->nfacets + 1) * sizeof *ob);
+    int r = oa && ob ? 0 : geo_err_set(err, -ENOMEM, "out of memory");
     if (r == 0)
-        r = directed(b, a, ctx, &ba, err);
+        r = geo_surface_new(b, &sb, err);
+    if (r == 0)
+        r = geo_surface_new(a, &sa, err);
+    double ab, ba;
+    if (r == 0) {
+        geo_surface_facet_order(sa, oa);
+        geo_surface_facet_order(sb, ob);
+        r = directed_to(a, oa, sb, ctx, &ab, err);
+    }
+    if (r == 0)
+        r = directed_to(b, ob, sa, ctx, &ba, err);
     if (r == 0)
         *ret = fmax(ab, ba);
+    geo_surface_free(sa);
+    geo_surface_free(sb);
+    free(oa), free(ob);
     return r;
 }
 

@@ -107,6 +107,23 @@ void geo_surface_free(geo_surface *s)
     free(s);
 }
 
+void geo_surface_facet_order(const geo_surface *s, uint32_t *order)
+{
+    const geo_bvh *h = s->bvh;
+    if (!s->origin) {
+        memcpy(order, h->items, (size_t)h->nitems * sizeof *order);
+        return;
+    }
+    /* a fanned facet's pieces are consecutive in the fanned copy: the
+     * facet is placed where its first piece is met in leaf order */
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < h->nitems; i++) {
+        uint32_t piece = h->items[i], f = s->origin[piece];
+        if (piece == 0 || s->origin[piece - 1] != f)
+            order[n++] = f;
+    }
+}
+
 static double seg_dist2(const double p[3], const double a[3], const double b[3])
 {
     double ab[3], ap[3];

@@ -28,6 +28,11 @@ int geo_surface_new(const geo_poly *b, geo_surface **ret, geo_err *err);
 
 void geo_surface_free(geo_surface *s);
 
+/* Every facet of b once, in the order of the surface's leaves (near
+ * facets near each other: queries from points in this order keep their
+ * hint tight), into order (b->nfacets entries, caller-allocated). */
+void geo_surface_facet_order(const geo_surface *s, uint32_t *order);
+
 /* Squared distance from p to the surface. *hint (UINT32_MAX at first) is
  * the previous query's nearest piece: queries in surface order start from
  * a tight bound. facet (may be NULL) receives the index in b of the

@@ -18,6 +18,7 @@
 #include "correct.h"
 #include "correct_json.h"
 #include "cut.h"
+#include "cut_shapes.h"
 #include "edit.h"
 #include "frep_json.h"
 #include "hausdorff.h"
@@ -26,6 +27,7 @@
 #include "merge_shapes.h"
 #include "model_cmp.h"
 #include "stone_sim.h"
+#include "surface.h"
 #include "triangulate.h"
 #include "tu_load.h"
 
@@ -549,6 +551,54 @@ static void test_hausdorff_of_two_boxes(void **state)
     geo_poly_free(b);
 }
 
+/* The symmetric estimate queries each side's samples in the other's leaf
+ * order: the maximum cannot depend on the order, so it is bit for bit the
+ * larger directed estimate (queried in file order) — here a scan and its
+ * correction, whose facets in file order jump across the stone. */
+static void test_hausdorff_is_the_larger_directed_estimate(void **state)
+{
+    (void)state;
+    geo_poly *scan = tu_load_model("brilliant.scan-k100.json");
+    geo_poly *q = geo_poly_copy(scan);
+    assert_non_null(q);
+    assert_int_equal(geo_correct(q, NULL, NULL, NULL, NULL), 0);
+    double h, ab, ba;
+    assert_int_equal(geo_hausdorff(scan, q, &h, NULL), 0);
+    assert_int_equal(geo_hausdorff_directed(scan, q, &ab, NULL), 0);
+    assert_int_equal(geo_hausdorff_directed(q, scan, &ba, NULL), 0);
+    assert_true(h > 0);
+    assert_true(h == fmax(ab, ba));
+    geo_poly_free(q);
+    geo_poly_free(scan);
+}
+
+/* The leaf order names every facet once, also where large facets are
+ * searched as their fans (a 40-gon prism: its caps are fanned). */
+static void test_surface_facet_order_is_a_permutation(void **state)
+{
+    (void)state;
+    double xy[40][2];
+    for (int i = 0; i < 40; i++) {
+        xy[i][0] = cos(2 * M_PI * i / 40);
+        xy[i][1] = sin(2 * M_PI * i / 40);
+    }
+    geo_poly *p = cs_prism((const double(*)[2])xy, 40, 0, 1);
+    assert_non_null(p);
+    geo_surface *s;
+    assert_int_equal(geo_surface_new(p, &s, NULL), 0);
+    uint32_t order[42], seen[42] = {0};
+    assert_int_equal(p->nfacets, 42);
+    geo_surface_facet_order(s, order);
+    for (uint32_t i = 0; i < p->nfacets; i++) {
+        assert_true(order[i] < p->nfacets);
+        seen[order[i]]++;
+    }
+    for (uint32_t f = 0; f < p->nfacets; f++)
+        assert_int_equal(seen[f], 1);
+    geo_surface_free(s);
+    geo_poly_free(p);
+}
+
 static void test_report_json_has_the_documented_keys(void **state)
 {
     (void)state;
@@ -640,6 +690,8 @@ int main(void)
         cmocka_unit_test(test_small_facet_beyond_the_bevel_depth_stays),
         cmocka_unit_test(test_collapse_joins_vertices_of_short_edges),
         cmocka_unit_test(test_hausdorff_of_two_boxes),
+        cmocka_unit_test(test_hausdorff_is_the_larger_directed_estimate),
+        cmocka_unit_test(test_surface_facet_order_is_a_permutation),
         cmocka_unit_test(test_report_json_has_the_documented_keys),
         cmocka_unit_test(test_correction_of_a_torus_keeps_its_volume),
     };
