@@ -120,6 +120,58 @@ static bool mom_plane(const mom *m, const double o[3], const double orient[3],
     return true;
 }
 
+static double angle_of(const double a[3], const double b[3])
+{
+    double c[3];
+    geo_vcross(a, b, c);
+    return atan2(geo_vlen(c), geo_vdot(a, b));
+}
+
+/* The least-squares plane of a group whose slivers form a thin strip
+ * (two long slivers side by side) is ill-conditioned: any plane through
+ * the strip's axis fits it about as well, and rounding picks one, up to
+ * 70° off every member (a princess at K = 800: a plane cutting 0.44 mm
+ * into the scan). The slivers of a facet are tilted about its hinges by
+ * at most a few view steps, so its true normal lies within their cone:
+ * a fitted normal farther from the group's mean normal than every member
+ * (by more than a view step) gives way to the mean normal through the
+ * group's centroid. 0 or -ENOMEM. */
+static int within_cone(const geo_poly *p, const uint32_t *group,
+                       const double *farea, uint32_t ng, const double o[3],
+                       double step, const mom *gm, double (*apl)[4])
+{
+    double (*mean)[3] = calloc((size_t)ng + 1, sizeof *mean);
+    double *spread = malloc(((size_t)ng + 1) * sizeof *spread);
+    if (!mean || !spread) {
+        free(mean), free(spread);
+        return -ENOMEM;
+    }
+    for (uint32_t h = 0; h < p->nfacets; h++)
+        geo_vmadd(mean[group[h]], farea[h], p->planes[h], mean[group[h]]);
+    for (uint32_t g = 0; g < ng; g++) {
+        spread[g] = 0;
+        if (geo_vlen(mean[g]) > 0)
+            geo_vnormalize(mean[g]);
+    }
+    for (uint32_t h = 0; h < p->nfacets; h++) {
+        uint32_t g = group[h];
+        double a = angle_of(p->planes[h], mean[g]);
+        spread[g] = a > spread[g] ? a : spread[g];
+    }
+    for (uint32_t g = 0; g < ng; g++) {
+        if (!(geo_vlen(mean[g]) > 0) || !(gm[g].a > 0) ||
+            angle_of(apl[g], mean[g]) <= spread[g] + step)
+            continue;
+        double x[3];
+        for (int k = 0; k < 3; k++)
+            x[k] = o[k] + gm[g].s[k] / gm[g].a;
+        memcpy(apl[g], mean[g], sizeof mean[g]);
+        apl[g][3] = -geo_vdot(mean[g], x);
+    }
+    free(mean), free(spread);
+    return 0;
+}
+
 /* Area RMS distance from pl of the surface whose moments about o are m. */
 static double mom_rms(const mom *m, const double o[3], const double pl[4])
 {
@@ -306,12 +358,6 @@ static int cmp_gpair(const void *x, const void *y)
     return (s->b > t->b) - (s->b < t->b);
 }
 
-static double angle_of(const double a[3], const double b[3])
-{
-    double c[3];
-    geo_vcross(a, b, c);
-    return atan2(geo_vlen(c), geo_vdot(a, b));
-}
 
 static int join_groups(finder *f, uint32_t *ng)
 {
@@ -729,6 +775,10 @@ int geo_convex_planes_find_topo(const geo_poly *p, const geo_topo *t,
             if (!mom_plane(&gm[g], f.o, p->planes[h], apl[g], NULL))
                 memcpy(apl[g], p->planes[h], sizeof apl[0]);
         }
+    }
+    if (within_cone(p, f.group, f.farea, ng, f.o, f.step, gm, apl) < 0) {
+        free(apl);
+        goto done;
     }
     /* step 2: the hinge fit over each group's boundary */
     uint32_t ns = 0;

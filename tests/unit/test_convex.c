@@ -449,6 +449,37 @@ static void test_a_plane_pushed_in_is_held(void **state)
     geo_poly_free(stone);
 }
 
+/* Scan 29 of the fixed suite (a princess, K = 800, 2.1 µm): two long
+ * slivers side by side at the girdle made a group whose least-squares
+ * plane was ill-conditioned, 70° off both of them; that plane cut
+ * 0.44 mm into the scan, the stone was declined and the merge took over
+ * (43 facets for 29). The plane now keeps within its slivers' cone and
+ * the convex path passes, nearer the stone than the scan. */
+static void test_a_thin_groups_plane_stays_within_its_slivers(void **state)
+{
+    (void)state;
+    geo_poly *stone = sim_stone(SIM_PRINCESS, 29);
+    sim_rotate_z(stone, 5.962054783797807);
+    geo_poly *scan = sim_scan_phase(stone, 800, 0.0021494486857574287,
+                                    0.521468838428742, 29);
+    assert_non_null(scan);
+    geo_convex_report rep;
+    geo_poly *q = convex_correct(scan, GEO_CONVEX_FIT_SILHOUETTE, &rep);
+    const char *bad = ms_invalid(q);
+    if (bad)
+        fail_msg("result not valid: %s", bad);
+    if (q->nfacets > 1.15 * stone->nfacets)
+        fail_msg("%u facets for %u", q->nfacets, stone->nfacets);
+    double hs = sim_hausdorff(scan, stone, 2000),
+           hq = sim_hausdorff(q, stone, 2000);
+    if (hq > hs)
+        fail_msg("Hausdorff to the stone %.2f µm, the scan's %.2f µm",
+                 hq * 1e3, hs * 1e3);
+    geo_poly_free(q);
+    geo_poly_free(scan);
+    geo_poly_free(stone);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -465,6 +496,7 @@ int main(void)
         cmocka_unit_test(test_a_small_culet_comes_back),
         cmocka_unit_test(test_fitted_planes_get_a_second_look),
         cmocka_unit_test(test_a_plane_pushed_in_is_held),
+        cmocka_unit_test(test_a_thin_groups_plane_stays_within_its_slivers),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
