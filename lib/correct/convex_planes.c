@@ -362,7 +362,6 @@ static int cmp_gpair(const void *x, const void *y)
     return (s->b > t->b) - (s->b < t->b);
 }
 
-
 static int join_groups(finder *f, uint32_t *ng)
 {
     const geo_poly *p = f->p;

@@ -80,17 +80,17 @@ static int directed_to(const geo_poly *a, const uint32_t *order,
     return rc;
 }
 
-static int no_facets(geo_err *err)
+static int no_facets(const char *which, geo_err *err)
 {
-    return geo_err_set(err, -EINVAL, "hausdorff: the second surface has no "
-                       "facets");
+    return geo_err_set(err, -EINVAL, "hausdorff: the %s surface has no "
+                       "facets", which);
 }
 
 int geo_hausdorff_directed(const geo_poly *a, const geo_poly *b, double *ret,
                            geo_err *err)
 {
     if (b->nfacets == 0)
-        return no_facets(err);
+        return no_facets("second", err);
     geo_surface *s;
     int r = geo_surface_new(b, &s, err);
     if (r == 0)
@@ -106,8 +106,8 @@ int geo_hausdorff_directed(const geo_poly *a, const geo_poly *b, double *ret,
 int geo_hausdorff_ctx(const geo_poly *a, const geo_poly *b,
                       const geo_ctx *ctx, double *ret, geo_err *err)
 {
-    if (b->nfacets == 0 || a->nfacets == 0)
-        return no_facets(err);
+    if (a->nfacets == 0 || b->nfacets == 0)
+        return no_facets(a->nfacets == 0 ? "first" : "second", err);
     geo_surface *sa = NULL, *sb = NULL;
     uint32_t *oa = malloc(((size_t)a->nfacets + 1) * sizeof *oa);
     uint32_t *ob = malloc(((size_t)b->nfacets + 1) * sizeof *ob);
