@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "ascent.h"
 #include "halfspace.h"
 #include "plane.h"
 #include "ptree.h"
@@ -405,21 +406,13 @@ static int reach_by_ascent(const geo_poly *p, const geo_poly *q, double *ret)
         free(start), free(adj);
         return 1;
     }
-    double out = 0;
+    double out = 0, h;
     uint32_t top = 0;
     for (uint32_t f = 0; f < p->nfacets; f++) {
         const double *pl = p->planes[f];
+        top = geo_ascent_top(start, adj, (const double(*)[3])q->verts, pl,
+                             top, &h);
         double s = geo_plane_eval(pl, q->verts[top]);
-        for (uint32_t at = GEO_NONE; at != top;) {
-            at = top;
-            for (uint32_t a = start[at]; a < start[at + 1]; a++) {
-                double t = geo_plane_eval(pl, q->verts[adj[a]]);
-                if (t > s) {
-                    s = t;
-                    top = adj[a];
-                }
-            }
-        }
         if (s > out)
             out = s;
     }

@@ -37,6 +37,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "ascent.h"
 #include "select.h"
 #include "spchol.h"
 #include "topo.h"
@@ -144,20 +145,8 @@ static void span_of(const geo_poly *scan, uint32_t j, const double (*x)[3],
                     uint32_t *cand, double *ch, uint32_t ret[2])
 {
     const double *m = scan->planes[j];
-    /* the highest vertex by ascent along the edges (on a convex
-     * polytope a linear function has no other local maximum) */
-    uint32_t top = hint;
-    double s1 = geo_vdot(m, x[top]);
-    for (uint32_t at = GEO_NONE; at != top;) {
-        at = top;
-        for (uint32_t a = adj_start[at]; a < adj_start[at + 1]; a++) {
-            double s = geo_vdot(m, x[adj[a]]);
-            if (s > s1) {
-                s1 = s;
-                top = adj[a];
-            }
-        }
-    }
+    double s1;
+    uint32_t top = geo_ascent_top(adj_start, adj, x, m, hint, &s1);
     /* those within tau of it: the vertices above a plane form a
      * connected part of the graph, grown from the top */
     uint32_t nc = 0, second = GEO_NONE;
