@@ -25,8 +25,8 @@
  * deviation bound, whichever is more. */
 #define OUTSIDE_FACTOR 3.0
 
-/* A scan vertex may lie outside the result by its group's allowance
- * (the noise bound and the roof) times this. */
+/* A scan vertex may lie outside the result by the noise bound plus the
+ * roof at it (geo_convex_roof_at) times this. */
 #define ROOF_FACTOR 3.0
 
 /* Facets narrower (twice the area over the perimeter) than NARROW noise
@@ -305,9 +305,9 @@ static int drop_unneeded(const geo_poly *p, geo_convex_planes *cp,
     return r;
 }
 
-/* *dst = a copy of src's planes, allowances, groups and spares (nf: the
- * scan's facets; the area is not copied), with room for extra more
- * planes. 0 or -ENOMEM (dst zeroed). */
+/* *dst = a copy of src's planes, allowances, groups, spares and spans
+ * (nf: the scan's facets; the area is not copied), with room for extra
+ * more planes. 0 or -ENOMEM (dst zeroed). */
 static int planes_copy_room(geo_convex_planes *dst,
                             const geo_convex_planes *src, uint32_t nf,
                             uint32_t extra)
@@ -321,8 +321,9 @@ static int planes_copy_room(geo_convex_planes *dst,
     dst->kept = malloc(ng * sizeof *dst->kept);
     dst->group = malloc(((size_t)nf + 1) * sizeof *dst->group);
     dst->spare = malloc(ns * sizeof *dst->spare);
+    dst->span = malloc(ng * sizeof *dst->span);
     if (!dst->planes || !dst->allow || !dst->kept || !dst->group ||
-        !dst->spare) {
+        !dst->spare || !dst->span) {
         geo_convex_planes_clear(dst);
         return -ENOMEM;
     }
@@ -331,6 +332,12 @@ static int planes_copy_room(geo_convex_planes *dst,
     memcpy(dst->kept, src->kept, src->ngroups * sizeof *dst->kept);
     memcpy(dst->group, src->group, nf * sizeof *dst->group);
     memcpy(dst->spare, src->spare, src->nspare * sizeof *dst->spare);
+    /* a group with an empty extent has no roof */
+    for (uint32_t g = 0; g < src->ngroups; g++) {
+        static const double none[4] = {1, 0, 0, 0};
+        memcpy(dst->span[g], src->span ? src->span[g] : none,
+               sizeof dst->span[0]);
+    }
     return 0;
 }
 
@@ -560,55 +567,72 @@ static int check_result(const geo_poly *p, const geo_poly *q,
     if (out > allow)
         return decline(rep, "the result reaches %.2g mm outside the scan "
                        "(bound %.2g mm)", out, allow);
-    /* how far a scan vertex may lie outside a result plane: by the
-     * allowance (noise bound and roof) of its own facets' groups — the
-     * least of them — or of that plane, whichever is more: a vertex near
-     * an edge lies on the slivers of either facet, and the slivers of the
-     * plane's own facet rise above it by that plane's roof */
+    /* how far a scan vertex may lie outside a result plane: by the noise
+     * bound and the roof the view step leaves over its own facets' groups
+     * at that vertex — the least of them — or over that plane's group,
+     * whichever is more: a vertex near an edge lies on the slivers of
+     * either facet, and the slivers of the plane's own facet rise above
+     * it. The roof is the one at the vertex (geo_convex_roof_at): high
+     * in the middle of a long facet, nothing where its slivers touch it,
+     * so a plane pushed in at a stone's corner shows there */
     double *own = malloc(((size_t)p->nverts + 1) * sizeof *own);
     if (!own)
         return -ENOMEM;
     for (uint32_t v = 0; v < p->nverts; v++)
         own[v] = INFINITY;
     for (uint32_t f = 0; f < p->nfacets; f++) {
-        uint32_t k = cp->kept[cp->group[f]];
-        double a = k == GEO_NONE ? cp->dev0 + cp->cut_min : cp->allow[k];
+        uint32_t g = cp->group[f], k = cp->kept[g];
         uint32_t n = geo_poly_facet_size(p, f);
         const uint32_t *fv = geo_poly_facet(p, f);
-        for (uint32_t i = 0; i < n; i++)
+        for (uint32_t i = 0; i < n; i++) {
+            const double *x = p->verts[fv[i]];
+            double roof = k == GEO_NONE
+                              ? cp->cut_min
+                              : geo_convex_roof_at(cp, g, cp->planes[k], x);
+            double a = cp->dev0 + roof;
             own[fv[i]] = fmin(own[fv[i]], a);
+        }
     }
-    double *ag = malloc(((size_t)q->nfacets + 1) * sizeof *ag);
-    if (!ag) {
+    /* the group of each plane (none for a silhouette clip_to_scan added) */
+    uint32_t *pg = malloc(((size_t)cp->nplanes + 1) * sizeof *pg);
+    if (!pg) {
         free(own);
         return -ENOMEM;
     }
-    for (uint32_t g = 0; g < q->nfacets; g++)
-        ag[g] = cp->allow[src[g]];
+    for (uint32_t i = 0; i < cp->nplanes; i++)
+        pg[i] = GEO_NONE;
+    for (uint32_t g = 0; g < cp->ngroups; g++)
+        if (cp->kept[g] < cp->nplanes)
+            pg[cp->kept[g]] = g;
     /* the pair (scan vertex, result plane) farthest beyond its bound,
      * the first in vertex order (then plane order) among equals; a plane
      * is tested only at the vertices that may lie above its bound (the
-     * bound is at least its own allowance) */
+     * bound is at least the noise bound) */
     geo_ptree *t = NULL;
     uint32_t *near = malloc(((size_t)p->nverts + 1) * sizeof *near);
     if (!near || geo_ptree_build((const double(*)[3])p->verts, p->nverts,
                                  &t) < 0) {
-        free(own), free(ag), free(near);
+        free(own), free(pg), free(near);
         return -ENOMEM;
     }
     double worst = 0, worst_allow = 0, margin = 0;
     uint32_t wv = 0, wg = 0;
     for (uint32_t g = 0; g < q->nfacets; g++) {
-        double lift = ROOF_FACTOR * ag[g] + margin;
+        double lift = ROOF_FACTOR * cp->dev0 + margin;
         uint32_t nn = geo_ptree_above(t, q->planes[g],
                                       lift - 1e-9 * (1 + fabs(lift)), near);
+        uint32_t k = src[g];
         for (uint32_t i = 0; i < nn; i++) {
             uint32_t v = near[i];
             double ov = own[v];
             if (ov == INFINITY)
                 continue;
             double e = geo_plane_eval(q->planes[g], p->verts[v]);
-            double a = ag[g] > ov ? ag[g] : ov;
+            double ag = cp->dev0;
+            if (pg[k] != GEO_NONE)
+                ag += geo_convex_roof_at(cp, pg[k], cp->planes[k],
+                                         p->verts[v]);
+            double a = ag > ov ? ag : ov;
             double m = e - ROOF_FACTOR * a;
             if (m > margin ||
                 (m == margin && m > 0 && (v < wv || (v == wv && g < wg)))) {
@@ -622,7 +646,7 @@ static int check_result(const geo_poly *p, const geo_poly *q,
     geo_ptree_free(t);
     free(near);
     free(own);
-    free(ag);
+    free(pg);
     if (worst > worst_allow && ret_cutting)
         *ret_cutting = src[wg];
     if (worst > worst_allow)

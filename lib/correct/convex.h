@@ -60,6 +60,13 @@ typedef struct geo_convex_planes {
                              roof the view step leaves over a group that
                              wide and inclined, mm */
     double dev0;          /* the noise bound alone, mm */
+    double step;          /* the view step, rad (0: views not known) */
+    double (*span)[4];    /* ngroups: each group's horizontal direction
+                             (x, y; unit, z × its fitted normal) and the
+                             extent (lo, hi) of its scan vertices along
+                             it, mm: the slivers over a facet rise with
+                             the horizontal distance from where they
+                             touch it (geo_convex_roof_at) */
     double hinge_noise;   /* the hinges' scatter about their planes, mm */
     double cut_min;       /* the deepest cut a dropped group made, mm */
     uint32_t ngroups;     /* groups found (kept or not) */
@@ -72,6 +79,20 @@ typedef struct geo_convex_planes {
 
 /* Releases the arrays and zeroes r; accepts NULL. */
 void geo_convex_planes_clear(geo_convex_planes *r);
+
+/* How high the scan may rise above the true plane n (unit outward) of
+ * group g at x, by the view step alone (mm): a sliver of view k contains
+ * d_k, so it is the facet turned about a line of steepest descent by
+ * β · sin a (β its azimuth off the edge-on view, a the facet's
+ * inclination) and rises in proportion to the horizontal distance from
+ * where it touches; the two views around the edge-on one, touching at
+ * the group's two horizontal ends, meet under
+ *     step · sin a · u₁ u₂ / (u₁ + u₂)
+ * (u₁, u₂ the horizontal distances of x from those ends): 0 at the ends,
+ * step · sin a · w / 4 in the middle of a group w wide. 0 outside the
+ * group's extent. */
+double geo_convex_roof_at(const geo_convex_planes *cp, uint32_t g,
+                          const double n[3], const double x[3]);
 
 /* The plane each group gets (step 2). */
 enum geo_convex_fit {

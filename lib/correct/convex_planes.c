@@ -572,7 +572,49 @@ void geo_convex_planes_clear(geo_convex_planes *r)
     free(r->group);
     free(r->kept);
     free(r->spare);
+    free(r->span);
     memset(r, 0, sizeof *r);
+}
+
+double geo_convex_roof_at(const geo_convex_planes *cp, uint32_t g,
+                          const double n[3], const double x[3])
+{
+    if (!cp->span || g >= cp->ngroups)
+        return 0;
+    const double *s = cp->span[g];
+    double u = s[0] * x[0] + s[1] * x[1];
+    double u1 = u - s[2], u2 = s[3] - u;
+    if (!(u1 > 0 && u2 > 0))
+        return 0;
+    return cp->step * hypot(n[0], n[1]) * u1 * u2 / (u1 + u2);
+}
+
+/* Each group's horizontal direction (from its plane) and the extent of
+ * its scan vertices along it (geo_convex_planes.span). */
+static void group_spans(const geo_poly *p, const uint32_t *group,
+                        const double (*gpl)[4], uint32_t ng,
+                        double (*span)[4])
+{
+    for (uint32_t g = 0; g < ng; g++) {
+        double hl = hypot(gpl[g][0], gpl[g][1]);
+        span[g][0] = hl > 0 ? -gpl[g][1] / hl : 1;
+        span[g][1] = hl > 0 ? gpl[g][0] / hl : 0;
+        span[g][2] = INFINITY;
+        span[g][3] = -INFINITY;
+    }
+    for (uint32_t h = 0; h < p->nfacets; h++) {
+        uint32_t g = group[h];
+        if (g >= ng)
+            continue;
+        uint32_t n = geo_poly_facet_size(p, h);
+        const uint32_t *fv = geo_poly_facet(p, h);
+        for (uint32_t i = 0; i < n; i++) {
+            double u = span[g][0] * p->verts[fv[i]][0] +
+                       span[g][1] * p->verts[fv[i]][1];
+            span[g][2] = fmin(span[g][2], u);
+            span[g][3] = fmax(span[g][3], u);
+        }
+    }
 }
 
 /* Neighbour lists of the groups (CSR, distinct, from the scan's edges). */
@@ -889,11 +931,15 @@ int geo_convex_planes_find_topo(const geo_poly *p, const geo_topo *t,
     ret->area = malloc(((size_t)ng + 1) * sizeof *ret->area);
     ret->allow = malloc(((size_t)ng + 1) * sizeof *ret->allow);
     ret->spare = malloc(((size_t)ng + 1) * sizeof *ret->spare);
-    if (!ret->planes || !ret->area || !ret->allow || !ret->spare) {
+    ret->span = malloc(((size_t)ng + 1) * sizeof *ret->span);
+    if (!ret->planes || !ret->area || !ret->allow || !ret->spare ||
+        !ret->span) {
         free(groof);
         goto done;
     }
     ret->dev0 = f.dev0;
+    ret->step = f.step;
+    group_spans(p, ret->group, (const double(*)[4])gpl, ng, ret->span);
     for (uint32_t g = 0; g < ng; g++) {
         double q[4], width = 0;
         if (!mom_plane(&gm[g], f.o, gpl[g], q, &width))
