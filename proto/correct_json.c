@@ -199,6 +199,7 @@ static json_t *convex_to_json(const geo_correct_report *r)
     put(o, "narrow", json_integer(c->narrow), &ok);
     put(o, "readmitted", json_integer(c->readmitted), &ok);
     put(o, "held", json_integer(c->held), &ok);
+    put(o, "turned", json_integer(c->turned), &ok);
     put(o, "unneeded", json_integer(c->unneeded), &ok);
     put(o, "clipped", json_integer(c->clipped), &ok);
     put(o, "adjusted", json_boolean(c->adjusted), &ok);

@@ -65,6 +65,15 @@ static inline double geo_vlen(const double a[3])
     return sqrt(geo_vdot(a, a));
 }
 
+/* The angle between a and b (radians, 0..π; accurate near 0 and π,
+ * where acos of the dot product is not). */
+static inline double geo_vangle(const double a[3], const double b[3])
+{
+    double c[3];
+    geo_vcross(a, b, c);
+    return atan2(geo_vlen(c), geo_vdot(a, b));
+}
+
 /* |a| without overflow or underflow of the squares (gradients of F-rep
  * functions range from 1e-300 to 1e300): scaled by the largest
  * component first. 0 for a zero vector, NaN/inf propagate. */

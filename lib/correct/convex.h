@@ -166,6 +166,10 @@ typedef struct geo_convex_report {
     uint32_t held;       /* planes the adjustment pushed into the scan,
                             held at their fitted place while the others
                             were adjusted again (convex.c, rescue) */
+    uint32_t turned;     /* planes the adjustment turned out of their
+                            slivers' cone (a wrong spanning pair), held
+                            at their fitted place while the others were
+                            adjusted again (convex.c, turned_out) */
     bool adjusted;       /* the planes are the ones adjusted to the
                             silhouettes (else the fitted ones: the
                             adjusted did not pass the checks) */

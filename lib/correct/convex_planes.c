@@ -120,13 +120,6 @@ static bool mom_plane(const mom *m, const double o[3], const double orient[3],
     return true;
 }
 
-static double angle_of(const double a[3], const double b[3])
-{
-    double c[3];
-    geo_vcross(a, b, c);
-    return atan2(geo_vlen(c), geo_vdot(a, b));
-}
-
 /* The least-squares plane of a group whose slivers form a thin strip
  * (two long slivers side by side) is ill-conditioned: any plane through
  * the strip's axis fits it about as well, and rounding picks one, up to
@@ -158,12 +151,12 @@ static int within_cone(const geo_poly *p, const uint32_t *group,
     }
     for (uint32_t h = 0; h < p->nfacets; h++) {
         uint32_t g = group[h];
-        double a = angle_of(p->planes[h], mean[g]);
+        double a = geo_vangle(p->planes[h], mean[g]);
         spread[g] = a > spread[g] ? a : spread[g];
     }
     for (uint32_t g = 0; g < ng; g++) {
         if (!(geo_vlen(mean[g]) > 0) || !(gm[g].a > 0) ||
-            angle_of(apl[g], mean[g]) <=
+            geo_vangle(apl[g], mean[g]) <=
                 spread[g] + step + CONE_MIN_DEG * M_PI / 180)
             continue;
         double x[3];
@@ -398,7 +391,7 @@ static int join_groups(finder *f, uint32_t *ng)
             uint32_t b = geo_uf_find(par, f->group[h]);
             if (a >= b)
                 continue;
-            double ang = angle_of(pl[a], pl[b]);
+            double ang = geo_vangle(pl[a], pl[b]);
             double sin_incl = fmax(hypot(pl[a][0], pl[a][1]), hypot(pl[b][0], pl[b][1]));
             double amin = fmin(gm[a].a, gm[b].a);
             double bound = JOIN_STEP * f->step * sin_incl + JOIN_MIN_DEG * M_PI / 180 +

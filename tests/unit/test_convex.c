@@ -397,22 +397,46 @@ static void test_a_small_culet_comes_back(void **state)
     geo_poly_free(stone);
 }
 
-/* When the adjustment is declined and cannot be rescued (on this heart
- * at K = 400 its planes hold no fewer facets than the fitted ones), the
- * fitted planes are finished — and used to be without a second look:
- * the small crown facets at the girdle's corners stayed dropped, and the
- * corners they cut reached far outside the scan, 2.1 times the scan's
- * distance from the stone. The true stone lies inside the scan to the
- * noise, so a corner that far out is a facet missing: the dropped groups
- * come back on that reach alone (now 1.04 times). */
+/* When the adjustment is declined and cannot be rescued, the fitted
+ * planes are finished — and used to be without a second look: on
+ * heart-random-1 at K = 400 the small crown facets at the girdle's
+ * corners stayed dropped and the corners they cut reached far outside
+ * the scan. The true stone lies inside the scan to the noise, so a corner
+ * that far out is a facet missing: the dropped groups come back on that
+ * reach alone (1.04 times the scan's distance from the stone, 2.1
+ * without). That heart now keeps its adjusted planes (the next test). At
+ * K = 100 (seed 1) its adjustment is still declined and the second look
+ * on its fitted planes brings a group back; the result is still 2.2
+ * times as far from the stone as the scan (girdle corners lost), so the
+ * bound here only guards against worse. */
 static void test_fitted_planes_get_a_second_look(void **state)
 {
     (void)state;
     geo_convex_report rep;
     geo_poly *stone, *q;
-    check_design("heart-random-1.asc", 400, 1, 1.5, &rep, &stone, &q);
+    check_design("heart-random-1.asc", 100, 1, 2.5, &rep, &stone, &q);
     assert_false(rep.adjusted);
-    assert_true(rep.readmitted >= 2);
+    assert_true(rep.readmitted >= 1);
+    geo_poly_free(q);
+    geo_poly_free(stone);
+}
+
+/* The adjustment takes, for each scan facet, the two stone vertices that
+ * span it; a wrong pair can turn a plane far. On heart-random-1 at K =
+ * 400 it turned a small crown facet's plane by 16.4°, out of the 4.3°
+ * cone of its slivers, and the stone reached 16 µm outside the scan: the
+ * adjusted planes were declined and the fitted ones given (1.04 times the
+ * scan's distance from the stone, 21 % of the facets recovered). That
+ * plane is now held at its fitted place while the others are adjusted
+ * again, and the adjusted stone stands (1.17 times, 25 %). */
+static void test_a_plane_turned_out_of_its_cone_is_held(void **state)
+{
+    (void)state;
+    geo_convex_report rep;
+    geo_poly *stone, *q;
+    check_design("heart-random-1.asc", 400, 1, 1.5, &rep, &stone, &q);
+    assert_true(rep.adjusted);
+    assert_true(rep.turned >= 1);
     geo_poly_free(q);
     geo_poly_free(stone);
 }
@@ -536,6 +560,7 @@ int main(void)
         cmocka_unit_test(test_small_facets_between_large_ones_come_back),
         cmocka_unit_test(test_a_small_culet_comes_back),
         cmocka_unit_test(test_fitted_planes_get_a_second_look),
+        cmocka_unit_test(test_a_plane_turned_out_of_its_cone_is_held),
         cmocka_unit_test(test_a_plane_pushed_in_is_held),
         cmocka_unit_test(test_a_thin_groups_plane_stays_within_its_slivers),
         cmocka_unit_test(test_the_roof_rises_from_the_groups_ends),
