@@ -332,12 +332,7 @@ static int planes_copy_room(geo_convex_planes *dst,
     memcpy(dst->kept, src->kept, src->ngroups * sizeof *dst->kept);
     memcpy(dst->group, src->group, nf * sizeof *dst->group);
     memcpy(dst->spare, src->spare, src->nspare * sizeof *dst->spare);
-    /* a group with an empty extent has no roof */
-    for (uint32_t g = 0; g < src->ngroups; g++) {
-        static const double none[4] = {1, 0, 0, 0};
-        memcpy(dst->span[g], src->span ? src->span[g] : none,
-               sizeof dst->span[0]);
-    }
+    memcpy(dst->span, src->span, src->ngroups * sizeof *dst->span);
     return 0;
 }
 
