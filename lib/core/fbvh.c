@@ -127,6 +127,28 @@ static inline uint32_t qbox_meets_mask(const geo_fbvh *h, const geo_qbox *box,
     return m;
 }
 
+/* Of the slots lo + k (bit k of m), those whose tags share none with
+ * slot i's; all of m without tags. Without branches per slot: whether two
+ * neighbours share a tag follows no pattern a predictor learns. */
+static inline uint32_t untagged(const geo_fbvh *h, uint32_t i, uint32_t lo,
+                                uint32_t m)
+{
+    if (!h->tags || !m)
+        return m;
+    const uint32_t x0 = h->tags[i][0], x1 = h->tags[i][1],
+                   x2 = h->tags[i][2];
+    uint32_t keep = 0;
+    for (; m; m &= m - 1) {
+        unsigned k = (unsigned)__builtin_ctz(m);
+        const uint32_t *y = h->tags[lo + k];
+        unsigned s = (x0 == y[0]) | (x0 == y[1]) | (x0 == y[2]) |
+                     (x1 == y[0]) | (x1 == y[1]) | (x1 == y[2]) |
+                     (x2 == y[0]) | (x2 == y[1]) | (x2 == y[2]);
+        keep |= (uint32_t)(s ^ 1u) << k;
+    }
+    return keep;
+}
+
 /* The sum of the sides, in cells (cubic cells: as the sum in mm). */
 static inline int32_t qbox_extent(const geo_qbox *b)
 {
@@ -367,8 +389,10 @@ bool geo_fbvh_pairs(const geo_fbvh *h, uint32_t na, uint32_t nb,
         if (a->count) {
             uint32_t end = a->child + a->count;
             for (uint32_t i = a->child; i + 1 < end; i++)
-                for (uint32_t m = qbox_meets_mask(h, &h->boxes[i], i + 1,
-                                                  end - i - 1);
+                for (uint32_t m = untagged(
+                         h, i, i + 1,
+                         qbox_meets_mask(h, &h->boxes[i], i + 1,
+                                         end - i - 1));
                      m; m &= m - 1)
                     if (!visit(user, h->items[i],
                                h->items[i + 1 + __builtin_ctz(m)]))
@@ -385,8 +409,9 @@ bool geo_fbvh_pairs(const geo_fbvh *h, uint32_t na, uint32_t nb,
         for (uint32_t ma = qbox_meets_mask(h, &b->box, a->child, a->count);
              ma; ma &= ma - 1) {
             uint32_t i = a->child + __builtin_ctz(ma);
-            for (uint32_t m = qbox_meets_mask(h, &h->boxes[i], b->child,
-                                              b->count);
+            for (uint32_t m = untagged(h, i, b->child,
+                                       qbox_meets_mask(h, &h->boxes[i],
+                                                       b->child, b->count));
                  m; m &= m - 1)
                 if (!visit(user, h->items[i],
                            h->items[b->child + __builtin_ctz(m)]))

@@ -57,6 +57,11 @@ typedef struct geo_fbvh {
     geo_qbox *boxes;      /* nitems: boxes[k] is the box of items[k];
                              then a spare slot (an empty box) */
     double origin[3], scale; /* the grid: g(x) = (x − origin)·scale */
+    /* Optional, the caller's (NULL: none): three tags per item slot, in
+     * leaf order (tags[k] for items[k]); a pair of items with a tag in
+     * common is not reported. The caller gives each item's tags values no
+     * other item can hold where a pair must be reported. */
+    const uint32_t (*tags)[3];
 } geo_fbvh;
 
 /* The grid box of b in h's grid (as the build stores an item's). */
@@ -74,8 +79,9 @@ geo_fbvh *geo_fbvh_build_facets(const geo_poly *p, geo_err *err);
 geo_fbvh *geo_fbvh_free(geo_fbvh *h);
 
 /* Visits every unordered pair (a, b), a ≠ b, of items whose stored boxes
- * overlap, below node pair (na, nb); na == nb enumerates the pairs within
- * one subtree. Each pair is reported once. As geo_bvh_pairs. */
+ * overlap and (with tags) which share no tag, below node pair (na, nb);
+ * na == nb enumerates the pairs within one subtree. Each pair is reported
+ * once. As geo_bvh_pairs. */
 bool geo_fbvh_pairs(const geo_fbvh *h, uint32_t na, uint32_t nb,
                     geo_bvh_pair_fn visit, void *user);
 

@@ -1454,6 +1454,32 @@ static int sort_large_facets(const geo_poly *p, const uint64_t ***sorted,
     return 0;
 }
 
+/* The tree's tags (fbvh.h) for a mesh of triangles: a slot's tags are its
+ * triangle's vertices whose fans are simple, and values no vertex holds
+ * (2^31 + the slot) in place of the others. So the tree does not report
+ * a pair sharing a simple fan's vertex: visit_pair's first test, decided
+ * before the visit (a pair sharing all three vertices, which that test
+ * leaves to pair_test, has no simple fan among them: each such vertex has
+ * both triangles on the same two spokes, a fan of two triangles or an
+ * edge of more than two). NULL when the indices do not leave room, or
+ * out of memory: the visits then decide, as without tags. */
+static uint32_t (*fan_tags(const geo_poly *p, const geo_fbvh *h,
+                           const uint8_t *fans))[3]
+{
+    uint32_t n = h->nitems;
+    if (p->nverts > UINT32_C(1) << 31 || n > UINT32_C(1) << 31)
+        return NULL;
+    uint32_t (*t)[3] = malloc(((size_t)n + 1) * sizeof *t);
+    if (!t)
+        return NULL;
+    for (uint32_t k = 0; k < n; k++) {
+        const uint32_t *v = p->fidx + 3 * (size_t)h->items[k];
+        for (int c = 0; c < 3; c++)
+            t[k][c] = fans[v[c]] ? v[c] : UINT32_C(1) << 31 | k;
+    }
+    return t;
+}
+
 static void run_task(void *arg, size_t i)
 {
     search *s = arg;
@@ -1563,7 +1589,7 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     uint32_t *ta = malloc((size_t)o.max_tasks * sizeof *ta);
     uint32_t *tb = malloc((size_t)o.max_tasks * sizeof *tb);
     task_out *out = NULL;
-    uint32_t ntasks = 0;
+    uint32_t ntasks = 0, (*tags)[3] = NULL;
     pair_list all = {0};
     if ((maxn > 3 && (!shapes || !masks)) || !flags || !plain || !ta ||
         !tb || sort_large_facets(p, &sorted, &keys) < 0)
@@ -1582,6 +1608,9 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
     }
     if ((rc = geo_ctx_progress(ctx, 0.15)) < 0)
         goto fail;
+    if (own && maxn == 3 && o.simple_fans &&
+        (tags = fan_tags(p, own, o.simple_fans)))
+        own->tags = (const uint32_t (*)[3])tags;
 
     ntasks = own ? geo_fbvh_pair_tasks(own, ta, tb, o.max_tasks)
                  : geo_bvh_pair_tasks(bvh, ta, tb, o.max_tasks);
@@ -1674,6 +1703,7 @@ done:
     free(out);
     free(all.v);
     geo_fbvh_free(own);
+    free(tags);
     free(shapes);
     free(masks);
     free(sorted);

@@ -279,6 +279,57 @@ static void test_grid_tree_pairs(void **state)
     free(b);
 }
 
+/* With tags, exactly the overlapping pairs that share no tag: each item
+ * tagged with three of 40 values (some repeated within an item), so that
+ * about half the overlapping pairs share one, in both leaf loops. */
+static void test_grid_tree_pairs_without_shared_tags(void **state)
+{
+    (void)state;
+    const uint32_t n = 800;
+    geo_bbox *b = random_boxes(n, 4);
+    geo_fbvh *h = geo_fbvh_build(b, n, NULL);
+    assert_non_null(h);
+    uint32_t (*tags)[3] = malloc(n * sizeof *tags), (*by_item)[3] =
+                                                       malloc(n * sizeof *by_item);
+    uint32_t *slot = malloc(n * sizeof *slot);
+    uint64_t r = 12345;
+    for (uint32_t i = 0; i < n; i++)
+        for (int c = 0; c < 3; c++) {
+            r = r * 6364136223846793005u + 1442695040888963407u;
+            by_item[i][c] = (uint32_t)(r >> 33) % 40;
+        }
+    for (uint32_t k = 0; k < n; k++) {
+        slot[h->items[k]] = k;
+        memcpy(tags[k], by_item[h->items[k]], sizeof tags[k]);
+    }
+    h->tags = (const uint32_t (*)[3])tags;
+    uint32_t shared = 0, reported = 0;
+    for (uint32_t cap = 1; cap <= 512; cap *= 8) {
+        uint32_t ta[512], tb[512];
+        uint32_t nt = geo_fbvh_pair_tasks(h, ta, tb, cap);
+        pairs p = {n, calloc((size_t)n * n, 1)};
+        for (uint32_t t = 0; t < nt; t++)
+            geo_fbvh_pairs(h, ta[t], tb[t], count_pair, &p);
+        for (uint32_t i = 0; i < n; i++)
+            for (uint32_t j = i + 1; j < n; j++) {
+                bool common = false;
+                for (int x = 0; x < 3; x++)
+                    for (int y = 0; y < 3; y++)
+                        common |= by_item[i][x] == by_item[j][y];
+                bool f = qbox_overlap(&h->boxes[slot[i]], &h->boxes[slot[j]]);
+                shared += f && common;
+                reported += p.count[(size_t)i * n + j];
+                assert_int_equal(p.count[(size_t)i * n + j],
+                                 f && !common ? 1 : 0);
+            }
+        free(p.count);
+    }
+    assert_true(shared > 100 && reported > 100);
+    free(tags), free(by_item), free(slot);
+    geo_fbvh_free(h);
+    free(b);
+}
+
 static void test_grid_tree_of_equal_and_nan_boxes(void **state)
 {
     (void)state;
@@ -419,6 +470,7 @@ int main(void)
         cmocka_unit_test(test_pair_tasks_report_each_overlap_once),
         cmocka_unit_test(test_empty_and_single),
         cmocka_unit_test(test_grid_tree_pairs),
+        cmocka_unit_test(test_grid_tree_pairs_without_shared_tags),
         cmocka_unit_test(test_grid_tree_of_equal_and_nan_boxes),
         cmocka_unit_test(test_grid_tree_rounds_outward),
         cmocka_unit_test(test_grid_tree_over_facets),
