@@ -166,14 +166,49 @@ static double cached_normal(const geo_poly *p, normal_cache *c, uint32_t f,
     return c->n[k][3];
 }
 
-/* Adjacent facet pairs (each once) whose normals are within each
- * threshold; facets winding against their plane; the total area.
- * Each facet's neighbours above it are gathered through its corners with
- * a stamp per facet, so a pair sharing several edges counts once (as
- * agreeing when any of its edges agrees). A neighbour's normal is
- * computed again where it is needed (the same bits; cached_normal keeps
- * the last ones) rather than kept for every facet: 24 bytes per facet. */
-static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
+/* Facet f's largest distance from its plane (geo_poly_max_nonplanarity's
+ * term), given its unit Newell normal nrm of length len. A triangle
+ * without a stored plane is on the plane geo_poly_facet_plane would fit:
+ * nrm itself through the centroid (the zero plane when len is not
+ * positive), the same operations, so the same bits, without forming the
+ * normal again. */
+static double facet_nonplanarity(const geo_poly *p, uint32_t f,
+                                 const double nrm[3], double len)
+{
+    uint32_t n = geo_poly_facet_size(p, f);
+    const uint32_t *v = geo_poly_facet(p, f);
+    double pl[4] = {0, 0, 0, 0};
+    if (p->planes || n != 3) {
+        geo_poly_facet_plane(p, f, pl);
+    } else if (len > 0) {
+        double c[3];
+        geo_poly_facet_center(p, f, c);
+        memcpy(pl, nrm, 3 * sizeof *pl);
+        pl[3] = -geo_vdot(nrm, c);
+        for (int k = 0; k < 4; k++)
+            pl[k] += 0.0; /* as geo_poly_facet_plane returns it */
+    }
+    double m = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        double d = fabs(geo_plane_eval(pl, p->verts[v[i]]));
+        if (d > m)
+            m = d;
+    }
+    return m;
+}
+
+/* One pass over the facets, in order: the total area, the volume (about
+ * o, as geo_poly_volume sums it) and the largest nonplanarity, from the
+ * Newell vectors the pass forms anyway; facets winding against their
+ * plane; adjacent facet pairs (each once) whose normals are within each
+ * threshold. Each facet's neighbours above it are gathered through its
+ * corners with a stamp per facet, so a pair sharing several edges counts
+ * once (as agreeing when any of its edges agrees). A neighbour's normal
+ * is computed again where it is needed (the same bits; cached_normal
+ * keeps the last ones) rather than kept for every facet: 24 bytes per
+ * facet. */
+static int facet_pass(const geo_poly *p, const geo_topo *t,
+                      const double o[3], geo_stats *s)
 {
     uint32_t nf = p->nfacets;
     uint32_t *stamp = malloc(((size_t)nf + 1) * sizeof *stamp);
@@ -206,9 +241,17 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
     }
     for (uint32_t k = 0; k < NORMAL_CACHE; k++)
         nc->f[k] = GEO_NONE;
+    double vol = 0;
+    s->max_nonplanarity = 0;
     for (uint32_t f = 0; f < nf; f++) {
-        double nrm[3];
-        s->area += 0.5 * cached_normal(p, nc, f, nrm);
+        double nrm[3], len = cached_normal(p, nc, f, nrm);
+        s->area += 0.5 * len;
+        vol = geo_fan_volume6(vol, (const double(*)[3])p->verts,
+                              geo_poly_facet(p, f), geo_poly_facet_size(p, f),
+                              o);
+        double np = facet_nonplanarity(p, f, nrm, len);
+        if (np > s->max_nonplanarity)
+            s->max_nonplanarity = np;
         /* an implicit plane's normal is nrm itself, bit for bit (the
          * same Newell vector normalised by the same geo_vnormalize), and
          * a dot product of a vector with itself is never negative: no
@@ -263,6 +306,7 @@ static int neighbours(const geo_poly *p, const geo_topo *t, geo_stats *s)
                     s->near_coplanar[k]++;
         }
     }
+    s->volume = vol / 6.0;
     free(stamp), free(agree), free(list), free(nc);
     return 0;
 }
@@ -395,15 +439,19 @@ int geo_inspect(const geo_poly *p, const geo_inspect_opts *opts,
         goto oom;
     ret->holes = nloops;
 
-    ret->volume = geo_poly_volume(p);
-    ret->max_nonplanarity = geo_poly_max_nonplanarity(p);
-    /* geo_poly_eps's and the radius' common size, taken once */
-    double size = geo_poly_size(p);
+    /* the box once: geo_poly_size (geo_poly_eps's and the radius'
+     * common size) and geo_poly_volume's centre */
+    double lo[3], hi[3], d[3], mid[3];
+    geo_poly_bbox(p, lo, hi);
+    geo_vsub(hi, lo, d);
+    double size = geo_vlen(d);
+    geo_vadd(lo, hi, mid);
+    geo_vscale(mid, 0.5, mid);
     ret->eps = o.eps > 0 ? o.eps : geo_eps_of_size(size);
     memcpy(ret->coplanar_deg, o.coplanar_deg, sizeof ret->coplanar_deg);
     ret->short_edge_radius =
         o.short_edge_radius > 0 ? o.short_edge_radius : 1e-3 * size;
-    if (degrees(p, t, ret) < 0 || neighbours(p, t, ret) < 0 ||
+    if (degrees(p, t, ret) < 0 || facet_pass(p, t, mid, ret) < 0 ||
         clusters(p, t, ret) < 0)
         goto oom;
     /* a mesh of triangles: the vertices whose fans need no pair test
