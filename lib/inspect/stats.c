@@ -181,12 +181,20 @@ static double facet_nonplanarity(const geo_poly *p, uint32_t f,
     if (p->planes || n != 3) {
         geo_poly_facet_plane(p, f, pl);
     } else if (len > 0) {
+        /* each term + 0.0, as geo_poly_facet_plane returns it; held in
+         * scalars, not written piecewise into pl and read back whole (a
+         * store the processor cannot forward) */
         double c[3];
         geo_poly_facet_center(p, f, c);
-        memcpy(pl, nrm, 3 * sizeof *pl);
-        pl[3] = -geo_vdot(nrm, c);
-        for (int k = 0; k < 4; k++)
-            pl[k] += 0.0; /* as geo_poly_facet_plane returns it */
+        double a = nrm[0] + 0.0, b = nrm[1] + 0.0, e = nrm[2] + 0.0,
+               d = -geo_vdot(nrm, c) + 0.0, m = 0;
+        for (uint32_t i = 0; i < 3; i++) {
+            const double *x = p->verts[v[i]];
+            double r = fabs(a * x[0] + b * x[1] + e * x[2] + d);
+            if (r > m)
+                m = r;
+        }
+        return m;
     }
     double m = 0;
     for (uint32_t i = 0; i < n; i++) {
