@@ -24,6 +24,7 @@ enum {
     NZ = 720,         /* azimuth bins of 0.5° */
     SUB_MAX = 256,    /* largest facets used while choosing the rotation */
     MAX_PEAKS = 16,   /* turns refined per axis pair */
+    MAX_TURNS = 6 * MAX_PEAKS, /* per comparison: 2 + 2 × 2 axis pairs */
     STANDOUT_TRIES = 64, /* largest facets whose groups are measured */
     MEAN_SAMPLES = 2000, /* per surface, for the mean distance */
 };
@@ -668,27 +669,51 @@ static double coverage(const model *A, const model *B, double R[3][3],
     return (covered(A, B, R, true, all, c1) + covered(B, A, R, false, all, c1)) / 2;
 }
 
+/* A symmetric stone's equal turns cover the same share of the surfaces
+ * but for the noise of a few small facets at the 1° test: on a K = 800
+ * scan against its design, 0.22 % apart for the turns of 0° and 45°. A
+ * wrong turn of an asymmetric stone leaves most facets unmatched. */
+#define COVER_TIE 0.01
+
+/* The refined turns and their coverage; the winner is picked when all
+ * are in (pick_turn), so that it does not depend on their order. */
 typedef struct best_rot {
     bool found;
     double R[3][3], score, angle;
+    uint32_t n;
+    struct {
+        double R[3][3], score, angle;
+    } turn[MAX_TURNS];
 } best_rot;
 
-/* Keeps R when it covers more, or as much (a symmetric stone's equal
- * turns) with a smaller angle. */
 static void consider(best_rot *b, double R[3][3], double score)
 {
-    double axis[3], def[3] = {0, 0, 1};
-    double angle = mat_angle(R, def, axis);
-    bool better = !b->found || score > b->score + 1e-3 ||
-                  (score > b->score - 1e-3 && angle < b->angle - 1e-9);
-    if (!better)
+    if (b->n == MAX_TURNS)
         return;
-    if (b->found && score < b->score) /* a tie: keep the better score */
-        score = b->score;
+    double axis[3], def[3] = {0, 0, 1};
+    memcpy(b->turn[b->n].R, R, sizeof b->turn[b->n].R);
+    b->turn[b->n].score = score;
+    b->turn[b->n].angle = mat_angle(R, def, axis);
+    if (!b->found || score > b->score)
+        b->score = score;
     b->found = true;
-    memcpy(b->R, R, sizeof b->R);
-    b->score = score;
-    b->angle = angle;
+    b->n++;
+}
+
+/* Of the turns within COVER_TIE of the best coverage, the smallest
+ * rotation (the equal turns of a symmetric stone: two models in one
+ * frame stay as they are); b->score stays the best coverage. */
+static void pick_turn(best_rot *b)
+{
+    uint32_t k = UINT32_MAX;
+    for (uint32_t i = 0; i < b->n; i++)
+        if (b->turn[i].score >= b->score - COVER_TIE &&
+            (k == UINT32_MAX || b->turn[i].angle < b->turn[k].angle - 1e-9))
+            k = i;
+    if (k == UINT32_MAX)
+        return;
+    memcpy(b->R, b->turn[k].R, sizeof b->R);
+    b->angle = b->turn[k].angle;
 }
 
 /* Every turn about A's axis the histograms suggest (peaks at least
@@ -1163,6 +1188,7 @@ int geo_compare(const geo_poly *a, const geo_poly *b,
         geo_err_set(err, r, "compare: canceled");
         goto out;
     }
+    pick_turn(&best);
     double R[3][3], t[3] = {0, 0, 0};
     mat_identity(R);
     ret->aligned = best.found && best.score >= 0.5;
