@@ -199,8 +199,30 @@ typedef struct finder {
     bool canceled;
 } finder;
 
+/* The extent of the surface of moments m along the horizontal direction
+ * z × n of the plane q (n its unit normal, not vertical): the uniform
+ * strip's width of the same variance, √12·σ. 0 for a horizontal plane. */
+static double horizontal_width(const mom *m, const double q[4])
+{
+    double s = hypot(q[0], q[1]);
+    if (!(s > 0) || !(m->a > 0))
+        return 0;
+    double h[3] = {-q[1] / s, q[0] / s, 0}, mh = 0, hh = 0;
+    for (int i = 0; i < 3; i++) {
+        mh += h[i] * m->s[i] / m->a;
+        for (int j = 0; j < 3; j++)
+            hh += h[i] * h[j] * (i <= j ? m->ss[i][j] : m->ss[j][i]) / m->a;
+    }
+    return sqrt(12 * fmax(hh - mh * mh, 0));
+}
+
 /* Would facet h fit the group of moments m, vertices f->vs and plane pl?
- * On success ret gets the plane with h. */
+ * On success ret gets the plane with h. The roof allowed over the group
+ * is the one its slivers make: each is hinged on the true facet's edge
+ * and contains its view's direction, so it rises along the facet's
+ * horizontal direction (geo_convex_roof_at) — over the group's extent
+ * that way, not its narrower in-plane width (a girdle facet is three
+ * times as wide as it is high, and its slivers stood in two groups). */
 static bool fits(finder *f, const mom *m, const double pl[4], uint32_t h,
                  double cosmax, double ret[4])
 {
@@ -223,13 +245,13 @@ static bool fits(finder *f, const mom *m, const double pl[4], uint32_t h,
     }
     mom m2 = *m;
     mom_add(&m2, &f->fm[h]);
-    double q[4], width;
-    if (!mom_plane(&m2, f->o, pl, q, &width))
+    double q[4];
+    if (!mom_plane(&m2, f->o, pl, q, NULL))
         return false;
     if (geo_vdot(p->planes[h], q) < cosmax)
         return false;
-    double sin_incl = hypot(q[0], q[1]);
-    double dmax = f->dev0 + ROOF * width * f->step * sin_incl;
+    double dmax = f->dev0 + ROOF * horizontal_width(&m2, q) * f->step *
+                                hypot(q[0], q[1]);
     for (uint32_t i = 0; i < n; i++)
         if (fabs(geo_plane_eval(q, p->verts[v[i]])) > dmax)
             return false;
