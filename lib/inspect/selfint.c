@@ -1067,17 +1067,30 @@ enum { FAN_MAX = 64 };
  * sector other than the first and the last (each spans less than a
  * half-turn; a spoke opposite r_1 bounds sectors that cannot hold it): so
  * no such sector containing r_1 means w = 1. */
-/* a, b on one line through o in the projection dropping drop (their
- * orient2d 0, neither at o): whether they lie on the same side of o.
- * A difference of doubles has the sign of the exact one. */
-static bool along(const double o[3], const double a[3], const double b[3],
-                  int drop)
+/* a, b on one line through o in the fan's projection (their orient2d 0,
+ * neither at o): whether they lie on the same side of o. A difference of
+ * doubles has the sign of the exact one. */
+static bool along(const double o[2], const double a[2], const double b[2])
 {
-    int u = drop == 2 ? 0 : drop + 1, w = drop == 0 ? 2 : drop - 1;
-    double au = a[u] - o[u], bu = b[u] - o[u];
+    double au = a[0] - o[0], bu = b[0] - o[0];
     if (au != 0)
         return (au > 0) == (bu > 0);
-    return (a[w] - o[w] > 0) == (b[w] - o[w] > 0);
+    return (a[1] - o[1] > 0) == (b[1] - o[1] > 0);
+}
+
+/* geo_orient2d with its filter inline (the fan test's dozen signs a
+ * vertex); the same exact sign. */
+static inline int orient2d_inline(const double a[2], const double b[2],
+                                  const double c[2])
+{
+    double left = (a[0] - c[0]) * (b[1] - c[1]);
+    double right = (a[1] - c[1]) * (b[0] - c[0]);
+    double det = left - right;
+    double bound = (3.0 + 16.0 * 0x1.0p-53) * 0x1.0p-53 *
+                   (fabs(left) + fabs(right));
+    if (fabs(det) > bound && fabs(det) > 0x1.0p-900)
+        return det > 0 ? 1 : -1;
+    return geo_orient2d(a, b, c);
 }
 
 static bool fan_is_simple(const geo_poly *p, const geo_topo *t, uint32_t v)
@@ -1086,9 +1099,11 @@ static bool fan_is_simple(const geo_poly *p, const geo_topo *t, uint32_t v)
     if (t->vertex_kind[v] != GEO_VERTEX_INTERIOR || k < 3 || k > FAN_MAX)
         return false;
     const uint32_t *cs = t->vcorners + c0;
-    /* every facet a triangle: corner c's facet holds corners 3⌊c/3⌋..+2 */
-#define NEXT(c) (p->fidx[(c) - (c) % 3 + ((c) % 3 + 1) % 3])
-#define PREV(c) (p->fidx[(c) - (c) % 3 + ((c) % 3 + 2) % 3])
+    /* every facet a triangle: corner c's facet holds corners 3⌊c/3⌋..+2;
+     * the offsets of the next and previous corners by c mod 3 */
+    static const int8_t next_off[3] = {1, 1, -2}, prev_off[3] = {2, -1, -1};
+#define NEXT(c) (p->fidx[(c) + next_off[(c) % 3]])
+#define PREV(c) (p->fidx[(c) + prev_off[(c) % 3]])
     uint32_t r[FAN_MAX + 1];
     /* the fan's order as the topology stores it, either way round */
     bool fwd = NEXT(cs[0]) == PREV(cs[1]);
@@ -1115,22 +1130,28 @@ static bool fan_is_simple(const geo_poly *p, const geo_topo *t, uint32_t v)
     }
     int drop = fabs(n[0]) >= fabs(n[1]) ? (fabs(n[0]) >= fabs(n[2]) ? 0 : 2)
                                         : (fabs(n[1]) >= fabs(n[2]) ? 1 : 2);
-    const double *r1 = p->verts[r[0]];
-    int sg = geo_orient2d_proj(o, r1, p->verts[r[1]], drop);
+    /* the projection (the kept axes in cyclic order, as
+     * geo_orient2d_proj takes them): the same numbers, so the same signs */
+    int u = (drop + 1) % 3, w = (drop + 2) % 3;
+    double o2[2] = {o[u], o[w]}, q[FAN_MAX + 1][2];
+    for (uint32_t i = 0; i <= k; i++) {
+        q[i][0] = p->verts[r[i]][u];
+        q[i][1] = p->verts[r[i]][w];
+    }
+    int sg = orient2d_inline(o2, q[0], q[1]);
     if (sg == 0)
         return false;
     /* side: of spoke i from r_1 */
     int prev_side = 0;
     for (uint32_t i = 1; i <= k; i++) {
-        const double *a = p->verts[r[i - 1]], *b = p->verts[r[i]];
-        if (i > 1 && geo_orient2d_proj(o, a, b, drop) != sg)
+        if (i > 1 && orient2d_inline(o2, q[i - 1], q[i]) != sg)
             return false;
         if (i == k)
             break;
-        int side = sg * geo_orient2d_proj(o, r1, b, drop);
+        int side = sg * orient2d_inline(o2, q[0], q[i]);
         /* a spoke along r_1: away from it only (a flat fan's opposite
          * spoke; the signs of the exact differences tell the way) */
-        if (side == 0 && along(o, r1, b, drop))
+        if (side == 0 && along(o2, q[0], q[i]))
             return false;
         /* sector i−1 (from r_i−1 to r_i), not the first: r_1 strictly
          * inside it when r_i−1 lies clockwise of r_1 and r_i
