@@ -1297,6 +1297,40 @@ static inline bool shares_simple_fan(const uint8_t *fans, const uint32_t *x,
     return hit & (s0 + s1 + s2 != 3);
 }
 
+/* Whether the closed triangles a and b, sharing no vertex, each strictly
+ * across the other's plane (sa: the signs of a's vertices against b's
+ * plane, sb of b's against a's, none 0), meet. Each meets the planes'
+ * common line in a segment; they meet exactly when the segments overlap,
+ * which two signs decide once each triangle is turned so that its lone
+ * vertex (the one on its own side of the other's plane) comes first and
+ * lies on the other's positive side (Guigue and Devillers 2003, their
+ * canonical form and their two orientation tests, with exact signs). */
+static bool straddling_meet(const geo_poly *p, const uint32_t *a,
+                            const uint32_t *b, const int sa[3],
+                            const int sb[3])
+{
+    /* a's lone vertex first, the order kept (a cyclic turn); flip = b's
+     * order reversed so that the lone vertex lies on b's positive side */
+    int la = sa[1] == sa[2] ? 0 : sa[0] == sa[2] ? 1 : 2;
+    const double *p1 = V(p, a[la]), *q1 = V(p, a[(la + 1) % 3]),
+                 *r1 = V(p, a[(la + 2) % 3]);
+    bool flip_b = sa[la] < 0;
+    uint32_t bb[3] = {b[0], flip_b ? b[2] : b[1], flip_b ? b[1] : b[2]};
+    int sbb[3] = {sb[0], flip_b ? sb[2] : sb[1], flip_b ? sb[1] : sb[2]};
+    /* the same for b against a (whose order is now p1, q1, r1) */
+    int lb = sbb[1] == sbb[2] ? 0 : sbb[0] == sbb[2] ? 1 : 2;
+    const double *p2 = V(p, bb[lb]), *q2 = V(p, bb[(lb + 1) % 3]),
+                 *r2 = V(p, bb[(lb + 2) % 3]);
+    if (sbb[lb] < 0) {
+        const double *t = q1;
+        q1 = r1;
+        r1 = t;
+    }
+    /* the segments overlap unless b's ends lie beyond a's on either side */
+    return geo_orient3d(q1, p2, p1, q2) <= 0 &&
+           geo_orient3d(p1, p2, r1, r2) <= 0;
+}
+
 /* Two triangles x, y (distinct, non-degenerate): false when one or two
  * exact signs show them apart, true when pair_test must decide. A
  * triangle is exactly planar and its reference plane is its own, so:
@@ -1334,6 +1368,8 @@ static bool triangles_need_test(const geo_poly *p, const uint32_t *x,
         return true;
     geo_orient3d_plane pl;
     bool straddle = true;
+    int sgn[2][3] = {{0}}; /* [0]: y's vertices against x's plane, [1]: x's
+                              against y's */
     for (int pass = 0; pass < 2; pass++) {
         const uint32_t *f = pass ? y : x, *g = pass ? x : y;
         unsigned shared = pass ? in_y : in_x; /* g's vertices f lists */
@@ -1343,6 +1379,7 @@ static bool triangles_need_test(const geo_poly *p, const uint32_t *x,
             if (shared >> j & 1)
                 continue; /* the shared vertex: on the plane */
             int sg = geo_orient3d_plane_sign(&pl, V(p, g[j]));
+            sgn[pass][j] = sg;
             pos |= sg > 0;
             neg |= sg < 0;
             zero |= sg == 0;
@@ -1351,8 +1388,10 @@ static bool triangles_need_test(const geo_poly *p, const uint32_t *x,
             return false; /* strictly on one side */
         straddle &= !zero;
     }
-    if (nshared == 0 || !straddle)
+    if (!straddle)
         return true;
+    if (nshared == 0)
+        return straddling_meet(p, x, y, sgn[1], sgn[0]);
     /* one shared vertex v, each triangle's free edge strictly across the
      * other's plane: each meets the planes' common line (through v) in a
      * segment from v, and they overlap beyond v exactly when the shorter

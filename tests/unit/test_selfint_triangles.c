@@ -3,11 +3,13 @@
  * gives the general test's answer on every pair: random triangles on a
  * 3×3×3 grid sharing no vertex, one, two (an edge, either direction) or
  * all three, so that coplanar, touching, folded and crossing pairs all
- * occur many times. */
+ * occur many times; and pairs each across the other's plane sharing no
+ * vertex (real and grid coordinates), the case two signs decide. */
 #include "testutil.h"
 
 #include <stdlib.h>
 
+#include "predicates.h"
 #include "selfint.h"
 
 /* The pair answer of the search (its shortcut, then pair_test). */
@@ -81,10 +83,68 @@ static void test_triangle_pairs_agree_with_the_general_test(void **state)
         assert_true(by_shared[s] > 500);
 }
 
+/* Whether each of the two triangles of p has its vertices strictly on
+ * both sides of the other's plane. */
+static bool both_straddle(const geo_poly *p)
+{
+    for (int t = 0; t < 2; t++) {
+        const uint32_t *f = p->fidx + 3 * t, *g = p->fidx + 3 * (1 - t);
+        int pos = 0, neg = 0;
+        for (int j = 0; j < 3; j++) {
+            int s = geo_orient3d(p->verts[f[0]], p->verts[f[1]],
+                                 p->verts[f[2]], p->verts[g[j]]);
+            pos += s > 0;
+            neg += s < 0;
+        }
+        if (!pos || !neg || pos + neg != 3)
+            return false;
+    }
+    return true;
+}
+
+/* Two triangles sharing no vertex, each across the other's plane (the
+ * canonical form and two signs of the search decide): random real
+ * coordinates and a 5×5×5 grid, the second triangle moved about the
+ * first so that crossing, apart and (on the grid) touching pairs all
+ * occur many times, in every vertex order. */
+static void test_straddling_pairs_agree_with_the_general_test(void **state)
+{
+    (void)state;
+    uint64_t rng = 7;
+    uint32_t tested = 0, hits = 0;
+    for (int trial = 0; trial < 60000; trial++) {
+        bool grid = trial % 2;
+        double v[6][3];
+        for (int i = 0; i < 6; i++)
+            for (int k = 0; k < 3; k++)
+                v[i][k] = grid ? (double)(geo_rand_next(&rng) % 5)
+                               : geo_rand_unit(&rng) * 4;
+        uint32_t fstart[3] = {0, 3, 6}, fidx[6] = {0, 1, 2, 3, 4, 5};
+        geo_poly *p = geo_poly_from_arrays(6, &v[0][0], 2, fstart, fidx, NULL,
+                                           NULL);
+        assert_non_null(p);
+        geo_facet_shape s0, s1;
+        geo_facet_shape_of(p, 0, &s0);
+        geo_facet_shape_of(p, 1, &s1);
+        if (!s0.degenerate && !s1.degenerate && both_straddle(p)) {
+            bool want = general_says(p), got = search_says(p);
+            if (want != got)
+                fail_msg("trial %d: general %d, search %d", trial, want, got);
+            tested++;
+            hits += want;
+        }
+        geo_poly_free(p);
+    }
+    assert_true(tested > 5000);
+    print_message("# %u straddling pairs, %u meeting\n", tested, hits);
+    assert_true(hits > 1000 && hits < tested - 1000);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_triangle_pairs_agree_with_the_general_test),
+        cmocka_unit_test(test_straddling_pairs_agree_with_the_general_test),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
