@@ -1053,6 +1053,7 @@ void geo_selfint_opts_default(geo_selfint_opts *o)
     o->max_pairs = 1000;
     o->max_tasks = 1024;
     o->simple_fans = NULL;
+    o->indices_checked = false;
 }
 
 /* Fans of more triangles than this are left to the pair tests. */
@@ -1622,7 +1623,7 @@ int geo_selfint_find(const geo_poly *p, const geo_bvh *bvh,
         geo_selfint_opts_default(&o);
     if (o.max_tasks < 8)
         o.max_tasks = 8;
-    int rc = geo_poly_validate_indices(p, err);
+    int rc = o.indices_checked ? 0 : geo_poly_validate_indices(p, err);
     if (rc < 0)
         return rc;
     uint32_t nf = p->nfacets;

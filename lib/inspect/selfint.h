@@ -126,6 +126,9 @@ typedef struct geo_selfint_opts {
                            pairs of triangles that share a vertex marked
                            there are known to meet only where they share
                            and are not tested */
+    bool indices_checked; /* false (default), or the caller has just
+                           had geo_poly_validate_indices pass on p (the
+                           search does not check them again) */
 } geo_selfint_opts;
 
 /* Fills the defaults. */

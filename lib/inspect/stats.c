@@ -473,6 +473,8 @@ int geo_inspect(const geo_poly *p, const geo_inspect_opts *opts,
     }
     geo_topo_free(t);
     t = NULL;
+    /* the topology's build checked them */
+    o.selfint.indices_checked = true;
     if ((rc = geo_ctx_progress(ctx, 0.1)) < 0)
         goto fail;
 
