@@ -35,6 +35,22 @@ static bool general_says(const geo_poly *p)
     return r == 1;
 }
 
+/* Triangles fidx[0..2] and fidx[3..5] over the vertices v; *ok when
+ * neither is degenerate (the pairs both tests answer). */
+static geo_poly *two_triangles(double v[6][3], const uint32_t fidx[6],
+                               bool *ok)
+{
+    uint32_t fstart[3] = {0, 3, 6};
+    geo_poly *p = geo_poly_from_arrays(6, &v[0][0], 2, fstart, fidx, NULL,
+                                       NULL);
+    assert_non_null(p);
+    geo_facet_shape s0, s1;
+    geo_facet_shape_of(p, 0, &s0);
+    geo_facet_shape_of(p, 1, &s1);
+    *ok = !s0.degenerate && !s1.degenerate;
+    return p;
+}
+
 static void test_triangle_pairs_agree_with_the_general_test(void **state)
 {
     (void)state;
@@ -57,15 +73,10 @@ static void test_triangle_pairs_agree_with_the_general_test(void **state)
             b[0] = b[2];
             b[2] = t;
         }
-        uint32_t fstart[3] = {0, 3, 6}, fidx[6] = {a[0], a[1], a[2],
-                                                   b[0], b[1], b[2]};
-        geo_poly *p = geo_poly_from_arrays(6, &v[0][0], 2, fstart, fidx, NULL,
-                                           NULL);
-        assert_non_null(p);
-        geo_facet_shape s0, s1;
-        geo_facet_shape_of(p, 0, &s0);
-        geo_facet_shape_of(p, 1, &s1);
-        if (!s0.degenerate && !s1.degenerate) {
+        uint32_t fidx[6] = {a[0], a[1], a[2], b[0], b[1], b[2]};
+        bool ok;
+        geo_poly *p = two_triangles(v, fidx, &ok);
+        if (ok) {
             bool want = general_says(p), got = search_says(p);
             if (want != got)
                 fail_msg("trial %d (%u shared): general %d, search %d", trial,
@@ -119,14 +130,10 @@ static void test_straddling_pairs_agree_with_the_general_test(void **state)
             for (int k = 0; k < 3; k++)
                 v[i][k] = grid ? (double)(geo_rand_next(&rng) % 5)
                                : geo_rand_unit(&rng) * 4;
-        uint32_t fstart[3] = {0, 3, 6}, fidx[6] = {0, 1, 2, 3, 4, 5};
-        geo_poly *p = geo_poly_from_arrays(6, &v[0][0], 2, fstart, fidx, NULL,
-                                           NULL);
-        assert_non_null(p);
-        geo_facet_shape s0, s1;
-        geo_facet_shape_of(p, 0, &s0);
-        geo_facet_shape_of(p, 1, &s1);
-        if (!s0.degenerate && !s1.degenerate && both_straddle(p)) {
+        static const uint32_t fidx[6] = {0, 1, 2, 3, 4, 5};
+        bool ok;
+        geo_poly *p = two_triangles(v, fidx, &ok);
+        if (ok && both_straddle(p)) {
             bool want = general_says(p), got = search_says(p);
             if (want != got)
                 fail_msg("trial %d: general %d, search %d", trial, want, got);
