@@ -17,8 +17,9 @@
  * smaller area; 2° down to 0.1°), axis included.
  * Every promising turn is refined; the one whose normals cover the most
  * of both surfaces wins, and among those within 1 % of it (the equal
- * turns of a symmetric stone, set apart by noise) the smallest rotation. The translation solves, by least squares over
- * the matched facets, for B's planes passing through A's facet centres,
+ * turns of a symmetric stone, set apart by noise) the smallest rotation.
+ * The translation solves, by least squares over the matched facets, for
+ * B's planes passing through A's facet centres,
  * twice rejecting pairs beyond 3 robust deviations (from the volume
  * centroids when fewer than three independent normals are matched).
  *

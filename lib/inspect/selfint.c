@@ -1340,10 +1340,12 @@ static bool straddling_meet(const geo_poly *p, const uint32_t *a,
  * sharing one vertex v, or none, with the other's remaining vertices
  * strictly on one side of a triangle's plane, they can meet only at v —
  * a shared vertex — or not at all; sharing v and each across the other's
- * plane, by where their free edges cross (free_edge_misses). These are
- * pair_test's own answers, reached without its general bookkeeping;
- * every other case (coplanar, touching a plane, straddling without a
- * shared vertex, a triangle listed twice) goes to it. */
+ * plane, by where their free edges cross (free_edge_misses); sharing none
+ * and each strictly across the other's plane, by where their segments on
+ * the planes' common line lie (straddling_meet: true only when they
+ * meet, and pair_test then records it). These are pair_test's own
+ * answers, reached without its general bookkeeping; every other case
+ * (coplanar, touching a plane, a triangle listed twice) goes to it. */
 static bool triangles_need_test(const geo_poly *p, const uint32_t *x,
                                 const uint32_t *y)
 {
