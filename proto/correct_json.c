@@ -206,6 +206,8 @@ static json_t *convex_to_json(const geo_correct_report *r)
     put(o, "concavity", num(c->concavity), &ok);
     put(o, "deviation", num(c->deviation), &ok);
     put(o, "bound", num(c->bound), &ok);
+    put(o, "silhouette_scale", num(c->silhouette_scale), &ok);
+    put(o, "regrouped", json_boolean(c->regrouped), &ok);
     return finish(o, ok);
 }
 

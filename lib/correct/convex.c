@@ -976,6 +976,7 @@ static int adjust(const geo_poly *p, geo_convex_planes *ca,
         return 1;
     /* the silhouettes' own noise, when the adjustment measured it */
     *need = fmax(*need, NEED_FACTOR * sc);
+    rep->silhouette_scale = fmax(rep->silhouette_scale, sc);
     return intersect(ca, tol, "the adjusted planes", 170, ret_q, ret_src, rep,
                      err);
 }

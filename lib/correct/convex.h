@@ -177,6 +177,13 @@ typedef struct geo_convex_report {
     double bound;      /* the deviation the result may have from the
                           scan, mm */
     double deviation;  /* the result's Hausdorff distance to the scan, mm */
+    double silhouette_scale; /* the robust scale (1.4826 × median) of the
+                          silhouettes' residuals at the adjusted stone's
+                          vertices, mm: the scanner's noise as the
+                          adjustment measures it; 0 when none ran */
+    bool regrouped;    /* the groups were found again with the noise unit
+                          that scale gives (geo_correct: the scan's surface
+                          estimate was short of it) */
     char reason[200];  /* why the convex path was not taken ("" if it was) */
 } geo_convex_report;
 

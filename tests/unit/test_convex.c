@@ -545,6 +545,45 @@ static void test_the_roof_is_where_the_vertex_is(void **state)
     assert_true(rep.adjusted);
 }
 
+/* Scan 194 of the fixed suite (an emerald, K = 400, 3.0 µm): the scan's
+ * surface estimate of its noise is 0.79 µm where the adjustment measures
+ * the silhouettes' residuals at 2.15 µm, and the long step facets stayed
+ * in pieces: 83 facets for 43. geo_correct finds the groups again with
+ * half that scale as their noise unit: 56 facets, the stone valid and
+ * no farther from the true one than the scan. */
+static void test_groups_found_again_at_the_measured_noise(void **state)
+{
+    (void)state;
+    geo_poly *stone = sim_stone(SIM_EMERALD, 194);
+    sim_rotate_z(stone, 5.7847798885694566);
+    geo_poly *scan = sim_scan_phase(stone, 400, 0.0029652465662865792,
+                                    0.83861817994882626, 194);
+    assert_non_null(scan);
+    geo_poly *raw = geo_poly_copy(scan);
+    geo_correct_opts o;
+    geo_correct_opts_default(&o);
+    geo_correct_report rep;
+    geo_err err;
+    assert_int_equal(geo_correct(scan, &o, NULL, &rep, &err), 0);
+    assert_true(rep.convex);
+    assert_true(rep.convex_report.regrouped);
+    assert_true(rep.noise > 0.001); /* the estimate: 0.79 µm */
+    assert_true(rep.after.valid);
+    print_message("# %u facets for %u, noise unit %.2f um, silhouette scale "
+                  "%.2f um\n", scan->nfacets, stone->nfacets, rep.noise * 1e3,
+                  rep.convex_report.silhouette_scale * 1e3);
+    assert_true(scan->nfacets <= 1.35 * stone->nfacets);
+    double hs = sim_hausdorff(raw, stone, 2000),
+           hq = sim_hausdorff(scan, stone, 2000);
+    if (hq > hs)
+        fail_msg("Hausdorff to the stone %.2f µm, the scan's %.2f µm",
+                 hq * 1e3, hs * 1e3);
+    geo_correct_report_clear(&rep);
+    geo_poly_free(raw);
+    geo_poly_free(scan);
+    geo_poly_free(stone);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -565,6 +604,7 @@ int main(void)
         cmocka_unit_test(test_a_thin_groups_plane_stays_within_its_slivers),
         cmocka_unit_test(test_the_roof_rises_from_the_groups_ends),
         cmocka_unit_test(test_the_roof_is_where_the_vertex_is),
+        cmocka_unit_test(test_groups_found_again_at_the_measured_noise),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
