@@ -13,7 +13,6 @@
 #include <math.h>
 
 #define EPS 0x1.0p-53 /* half an ulp of 1: the unit roundoff */
-#define O2D_BOUND ((3.0 + 16.0 * EPS) * EPS)
 #define O3D_BOUND ((7.0 + 56.0 * EPS) * EPS)
 /* a·x+b·y+c·z+d: three products and three sums, γ4 with slack */
 #define PLANE_BOUND ((5.0 + 64.0 * EPS) * EPS)
@@ -183,14 +182,9 @@ static int orient2d_exact(const double a[2], const double b[2],
     return expansion_sign(n, det);
 }
 
-int geo_orient2d(const double a[2], const double b[2], const double c[2])
+int geo_orient2d_exact(const double a[2], const double b[2],
+                       const double c[2])
 {
-    double left = (a[0] - c[0]) * (b[1] - c[1]);
-    double right = (a[1] - c[1]) * (b[0] - c[0]);
-    double det = left - right;
-    double bound = O2D_BOUND * (fabs(left) + fabs(right));
-    if (fabs(det) > bound && fabs(det) > TINY)
-        return sign_of(det);
     return orient2d_exact(a, b, c);
 }
 

@@ -84,10 +84,28 @@ static inline int geo_orient3d_plane_sign(const geo_orient3d_plane *pl,
     return geo_orient3d(pl->a, pl->b, pl->c, d);
 }
 
+/* The exact path of geo_orient2d (expansion arithmetic), for its inline
+ * filter below; callers use geo_orient2d. */
+int geo_orient2d_exact(const double a[2], const double b[2],
+                       const double c[2]);
+
 /* Sign of (b − a) × (c − a) in the plane: +1 when a, b, c turn
  * counter-clockwise (c left of the directed line a→b), −1 clockwise,
- * 0 when exactly collinear. Only [0] and [1] of each point are read. */
-int geo_orient2d(const double a[2], const double b[2], const double c[2]);
+ * 0 when exactly collinear. Only [0] and [1] of each point are read.
+ * Inline: Shewchuk's filter (3 + 16u)u on the sum of the two products'
+ * magnitudes; the exact path out of line. */
+static inline int geo_orient2d(const double a[2], const double b[2],
+                               const double c[2])
+{
+    double left = (a[0] - c[0]) * (b[1] - c[1]);
+    double right = (a[1] - c[1]) * (b[0] - c[0]);
+    double det = left - right;
+    double bound = (3.0 + 16.0 * 0x1.0p-53) * 0x1.0p-53 *
+                   (fabs(left) + fabs(right));
+    if (fabs(det) > bound && fabs(det) > 0x1.0p-900)
+        return det > 0 ? 1 : -1;
+    return geo_orient2d_exact(a, b, c);
+}
 
 /* The exact path of geo_orient2d_proj (expansion arithmetic), for its
  * inline filter below; callers use geo_orient2d_proj. */

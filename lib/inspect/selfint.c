@@ -1079,21 +1079,6 @@ static bool along(const double o[2], const double a[2], const double b[2])
     return (a[1] - o[1] > 0) == (b[1] - o[1] > 0);
 }
 
-/* geo_orient2d with its filter inline (the fan test's dozen signs a
- * vertex); the same exact sign. */
-static inline int orient2d_inline(const double a[2], const double b[2],
-                                  const double c[2])
-{
-    double left = (a[0] - c[0]) * (b[1] - c[1]);
-    double right = (a[1] - c[1]) * (b[0] - c[0]);
-    double det = left - right;
-    double bound = (3.0 + 16.0 * 0x1.0p-53) * 0x1.0p-53 *
-                   (fabs(left) + fabs(right));
-    if (fabs(det) > bound && fabs(det) > 0x1.0p-900)
-        return det > 0 ? 1 : -1;
-    return geo_orient2d(a, b, c);
-}
-
 static bool fan_is_simple(const geo_poly *p, const geo_topo *t, uint32_t v)
 {
     uint32_t c0 = t->vstart[v], k = t->vstart[v + 1] - c0;
@@ -1139,17 +1124,17 @@ static bool fan_is_simple(const geo_poly *p, const geo_topo *t, uint32_t v)
         q[i][0] = p->verts[r[i]][u];
         q[i][1] = p->verts[r[i]][w];
     }
-    int sg = orient2d_inline(o2, q[0], q[1]);
+    int sg = geo_orient2d(o2, q[0], q[1]);
     if (sg == 0)
         return false;
     /* side: of spoke i from r_1 */
     int prev_side = 0;
     for (uint32_t i = 1; i <= k; i++) {
-        if (i > 1 && orient2d_inline(o2, q[i - 1], q[i]) != sg)
+        if (i > 1 && geo_orient2d(o2, q[i - 1], q[i]) != sg)
             return false;
         if (i == k)
             break;
-        int side = sg * orient2d_inline(o2, q[0], q[i]);
+        int side = sg * geo_orient2d(o2, q[0], q[i]);
         /* a spoke along r_1: away from it only (a flat fan's opposite
          * spoke; the signs of the exact differences tell the way) */
         if (side == 0 && along(o2, q[0], q[i]))
