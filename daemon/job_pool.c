@@ -51,7 +51,8 @@ struct job_pool {
     pthread_mutex_t lock;
     pthread_cond_t wake;   /* work may be available, or stopping */
     pthread_cond_t idle;   /* a worker finished a job */
-    pthread_cond_t tick;   /* the monitor's sleep */
+    pthread_cond_t tick;   /* the monitor's sleep while jobs run */
+    pthread_cond_t armed;  /* the monitor's sleep while none runs */
     bool stopping;
     bool paused;
     unsigned pending;      /* wake-ups not yet consumed */
@@ -231,7 +232,8 @@ static void run_job(slot *sl, job_rec *job)
     sl->limit_ms = limit;
     atomic_store(&sl->cancel, 0);
     atomic_store(&sl->reason, R_NONE);
-    p->busy++;
+    if (++p->busy == 1)
+        pthread_cond_signal(&p->armed);
     pthread_mutex_unlock(&p->lock);
     sl->last_report = t0;
     log_msg(LOG_INFO, job->id, "started (attempt %d, source %s)",
@@ -442,13 +444,19 @@ static void *worker(void *arg)
     return NULL;
 }
 
-/* Every 100 ms: time limits. Every second: cancel flags in the store. */
+/* Every 100 ms while a job runs: time limits; every second: cancel flags
+ * in the store. With no job running it sleeps until one starts, so an
+ * idle daemon does not wake ten times a second. */
 static void *monitor(void *arg)
 {
     job_pool *p = arg;
     int tick = 0;
     pthread_mutex_lock(&p->lock);
     while (!p->stopping || p->busy) {
+        if (!p->busy && !p->stopping) {
+            pthread_cond_wait(&p->armed, &p->lock);
+            continue;
+        }
         timed_wait(&p->tick, &p->lock, 100);
         int64_t now = job_mono_ms();
         bool poll_store = ++tick % 10 == 0;
@@ -518,6 +526,7 @@ job_pool *job_pool_start(store *s, const job_pool_config *c, geo_err *err)
     pthread_cond_init(&p->wake, &ca);
     pthread_cond_init(&p->idle, &ca);
     pthread_cond_init(&p->tick, &ca);
+    pthread_cond_init(&p->armed, &ca);
     pthread_condattr_destroy(&ca);
     for (unsigned i = 0; i < p->nslots; i++) {
         slot *sl = &p->slots[i];
@@ -636,12 +645,14 @@ job_pool *job_pool_stop(job_pool *p, uint64_t grace_ms)
     if (p->monitor_started) {
         pthread_mutex_lock(&p->lock);
         pthread_cond_broadcast(&p->tick);
+        pthread_cond_broadcast(&p->armed);
         pthread_mutex_unlock(&p->lock);
         pthread_join(p->monitor, NULL);
     }
     pthread_cond_destroy(&p->wake);
     pthread_cond_destroy(&p->idle);
     pthread_cond_destroy(&p->tick);
+    pthread_cond_destroy(&p->armed);
     pthread_mutex_destroy(&p->lock);
     pthread_mutex_destroy(&p->err_lock);
     while (p->nprimed > 0)
