@@ -55,6 +55,13 @@
 #define DAMP_REL 1e-9
 /* The damping of a held plane, relative to the incidences' weight. */
 #define HOLD_REL 1e6
+/* A step whose planes' Schur complement the rounding left indefinite
+ * (a vertex where nearly parallel planes meet is held along their line by
+ * the damping alone, and eliminating it cancels terms 10^15 times the
+ * damping) is solved again with the damping DAMP_GROW times larger, up
+ * to DAMP_RETRIES times: a shorter step, not a failed adjustment. */
+#define DAMP_GROW 1e3
+#define DAMP_RETRIES 3
 /* A spanning vertex lies at most this many residual scales below the
  * highest (before the first residuals: the cluster radius). */
 #define SPAN_SCALES 6.0
@@ -223,6 +230,82 @@ static void span_of(const geo_poly *scan, uint32_t j, const double (*x)[3],
     }
 }
 
+/* Adds to B's diagonal: hold on the planes held (their vertices follow
+ * them: damped far above the incidences), damp everywhere else. */
+static void add_damping(blocks *B, uint32_t nplanes, const uint8_t *held,
+                        double hold, double damp)
+{
+    for (uint32_t i = 0; i < B->n; i++) {
+        double (*d)[3] = block_at(B, i, i);
+        double di = i < nplanes && held && held[i] ? hold : damp;
+        for (int k = 0; k < 3; k++)
+            d[k][k] += di;
+    }
+}
+
+/* One step's system B (planes first, then the ncl vertices) reduced to
+ * the planes: each vertex couples only to its planes, so it is eliminated
+ * (its inverse block kept in vinv for the back-substitution), leaving the
+ * planes' Schur complement in S and the planes' rows of rhs, which is
+ * factored into *fac (its analysis reused while the pattern holds; rp,
+ * ci and val are S in scalars). 0, -EDOM when the rounding left a vertex
+ * block or S not positive definite, -ENOMEM. */
+static int schur_factor(blocks *B, blocks *S, uint32_t nplanes, uint32_t ncl,
+                        double (*vinv)[3][3], double (*rhs)[3], uint32_t *rp,
+                        uint32_t *ci, double *val, geo_spchol **fac)
+{
+    memset(S->v, 0, (size_t)S->rp[S->n] * sizeof *S->v);
+    for (uint32_t p = 0; p < nplanes; p++)
+        memcpy(block_at(S, p, p), block_at(B, p, p), sizeof S->v[0]);
+    for (uint32_t cv = 0; cv < ncl; cv++) {
+        uint32_t row = nplanes + cv;
+        double mi[3][3];
+        if (!inv3(block_at(B, row, row), mi))
+            return -EDOM;
+        memcpy(vinv[cv], mi, sizeof mi);
+        for (uint32_t ia = B->rp[row]; ia < B->rp[row + 1]; ia++) {
+            uint32_t p = B->ci[ia];
+            if (p >= nplanes)
+                continue;
+            double g[3][3]; /* A_pc · A_cc⁻¹ */
+            mul3(block_at(B, p, row), mi, g);
+            for (int k = 0; k < 3; k++)
+                for (int l = 0; l < 3; l++)
+                    rhs[3 * p + k][0] -= g[k][l] * rhs[3 * row + l][0];
+            for (uint32_t ib = B->rp[row]; ib < B->rp[row + 1]; ib++) {
+                uint32_t q = B->ci[ib];
+                if (q >= nplanes)
+                    continue;
+                double h[3][3];
+                mul3(g, B->v[ib], h);
+                double (*s)[3] = block_at(S, p, q);
+                for (int k = 0; k < 3; k++)
+                    for (int l = 0; l < 3; l++)
+                        s[k][l] -= h[k][l];
+            }
+        }
+    }
+    uint32_t z = 0, np3 = 3 * nplanes;
+    for (uint32_t i = 0; i < nplanes; i++)
+        for (int rI = 0; rI < 3; rI++) {
+            rp[3 * i + rI] = z;
+            for (uint32_t a = S->rp[i]; a < S->rp[i + 1]; a++)
+                for (int k = 0; k < 3; k++) {
+                    ci[z] = 3 * S->ci[a] + k;
+                    val[z++] = S->v[a][rI][k];
+                }
+        }
+    rp[np3] = z;
+    int r = *fac ? geo_spchol_refactor(*fac, np3, rp, ci, val, NULL) : -EINVAL;
+    if (r == -EINVAL) {
+        *fac = geo_spchol_free(*fac);
+        r = geo_spchol_factor(np3, rp, ci, val, GEO_SPCHOL_MIN_DEGREE, 0,
+                              NULL, fac);
+    }
+    return r == -ENOMEM ? r : r < 0 ? -EDOM : 0;
+}
+
+
 int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
                       const uint32_t *src, double cluster,
                       double (*planes)[4], uint32_t nplanes,
@@ -246,7 +329,7 @@ int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
     double (*vinv)[3][3] = NULL;
     uint32_t *adj_start = NULL, *adj = NULL, *stamp = NULL;
     uint32_t *rp = NULL, *ci = NULL;
-    double *val = NULL, (*rhs)[3] = NULL;
+    double *val = NULL, (*rhs)[3] = NULL, (*rhs0)[3] = NULL;
     geo_spchol *fac = NULL;
     if (!par || !cl || !x || !cand || !ch || !inc || !t1 || !t2 || !res ||
         !pair || !pl)
@@ -350,7 +433,8 @@ int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
     uint32_t nb = B.rp[B.n], n = 3 * B.n;
     B.v = malloc(((size_t)nb + 1) * sizeof *B.v);
     rhs = malloc(((size_t)n + 1) * sizeof *rhs);
-    if (!B.v || !rhs)
+    rhs0 = malloc(((size_t)n + 1) * sizeof *rhs0);
+    if (!B.v || !rhs || !rhs0)
         goto done;
 
     /* the planes' Schur complement: planes meeting at a vertex */
@@ -459,69 +543,18 @@ int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
                 rhs[3 * (nplanes + c) + k][0] -= W * g[3 + k] * rr;
             }
         }
-        double damp = DAMP_REL * W + 1e-12;
-        for (uint32_t i = 0; i < B.n; i++) {
-            double (*d)[3] = block_at(&B, i, i);
-            /* a held plane: damped far above the incidences, so its
-             * vertices follow it and it does not move */
-            double di = i < nplanes && held && held[i] ? HOLD_REL * W : damp;
-            for (int k = 0; k < 3; k++)
-                d[k][k] += di;
-        }
-        /* the vertices eliminated (each couples only to its planes):
-         * the planes' Schur complement S, factored, then each vertex
-         * back-substituted */
-        memset(S.v, 0, (size_t)S.rp[S.n] * sizeof *S.v);
-        for (uint32_t p = 0; p < nplanes; p++)
-            memcpy(block_at(&S, p, p), block_at(&B, p, p), sizeof S.v[0]);
-        for (uint32_t cv = 0; cv < ncl; cv++) {
-            uint32_t row = nplanes + cv;
-            double mi[3][3];
-            if (!inv3(block_at(&B, row, row), mi)) {
-                r = -EINVAL;
-                goto done;
-            }
-            memcpy(vinv[cv], mi, sizeof mi);
-            for (uint32_t ia = B.rp[row]; ia < B.rp[row + 1]; ia++) {
-                uint32_t p = B.ci[ia];
-                if (p >= nplanes)
-                    continue;
-                double g[3][3]; /* A_pc · A_cc⁻¹ */
-                mul3(block_at(&B, p, row), mi, g);
-                for (int k = 0; k < 3; k++)
-                    for (int l = 0; l < 3; l++)
-                        rhs[3 * p + k][0] -= g[k][l] * rhs[3 * row + l][0];
-                for (uint32_t ib = B.rp[row]; ib < B.rp[row + 1]; ib++) {
-                    uint32_t q = B.ci[ib];
-                    if (q >= nplanes)
-                        continue;
-                    double h[3][3];
-                    mul3(g, B.v[ib], h);
-                    double (*s)[3] = block_at(&S, p, q);
-                    for (int k = 0; k < 3; k++)
-                        for (int l = 0; l < 3; l++)
-                            s[k][l] -= h[k][l];
-                }
-            }
-        }
-        /* scalar CSR from S's blocks */
-        uint32_t z = 0, np3 = 3 * nplanes;
-        for (uint32_t i = 0; i < nplanes; i++)
-            for (int rI = 0; rI < 3; rI++) {
-                rp[3 * i + rI] = z;
-                for (uint32_t a = S.rp[i]; a < S.rp[i + 1]; a++)
-                    for (int s = 0; s < 3; s++) {
-                        ci[z] = 3 * S.ci[a] + s;
-                        val[z++] = S.v[a][rI][s];
-                    }
-            }
-        rp[np3] = z;
-        /* every step has the same pattern: its analysis is reused */
-        r = fac ? geo_spchol_refactor(fac, np3, rp, ci, val, NULL) : -EINVAL;
-        if (r == -EINVAL) {
-            fac = geo_spchol_free(fac);
-            r = geo_spchol_factor(np3, rp, ci, val, GEO_SPCHOL_MIN_DEGREE, 0,
-                                  NULL, &fac);
+        double damp = DAMP_REL * W + 1e-12, added = 0;
+        memcpy(rhs0, rhs, (size_t)n * sizeof *rhs);
+        for (int attempt = 0;; attempt++) {
+            add_damping(&B, nplanes, held, attempt ? 0 : HOLD_REL * W,
+                        damp - added);
+            added = damp;
+            memcpy(rhs, rhs0, (size_t)n * sizeof *rhs);
+            r = schur_factor(&B, &S, nplanes, ncl, vinv, rhs, rp, ci, val,
+                             &fac);
+            if (r != -EDOM || attempt == DAMP_RETRIES)
+                break;
+            damp *= DAMP_GROW;
         }
         if (r < 0) {
             r = r == -ENOMEM ? r : -EINVAL;
@@ -569,6 +602,6 @@ done:
     free(pair), free(pl), free(B.rp), free(B.ci), free(B.v);
     free(S.rp), free(S.ci), free(S.v), free(vinv);
     free(adj_start), free(adj), free(stamp);
-    free(rp), free(ci), free(val), free(rhs);
+    free(rp), free(ci), free(val), free(rhs), free(rhs0);
     return r;
 }
