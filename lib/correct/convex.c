@@ -1264,6 +1264,10 @@ int geo_correct_convex(const geo_poly *p, const geo_topo *t,
          * needs to stay within the scan's bounds, or the fitted one
          * does not pass */
         if (r != 0 || rescued) {
+            /* the noise the adjustment measured stands, whatever its
+             * planes: the residuals' median, not one plane pushed in */
+            rep->silhouette_scale =
+                fmax(rep->silhouette_scale, ra.silhouette_scale);
             r = readmit(p, &cp, false, &q, &src, max_dev, need, merge_tol,
                         rep, err);
             if (r == 1)

@@ -180,7 +180,8 @@ typedef struct geo_convex_report {
     double silhouette_scale; /* the robust scale (1.4826 × median) of the
                           silhouettes' residuals at the adjusted stone's
                           vertices, mm: the scanner's noise as the
-                          adjustment measures it; 0 when none ran */
+                          adjustment measures it, also when its planes
+                          were declined; 0 when none ran */
     bool regrouped;    /* the groups were found again with the noise unit
                           that scale gives (geo_correct: the scan's surface
                           estimate was short of it) */
