@@ -1,8 +1,9 @@
 /* decimal.c — exact decimal ↔ double conversions (decimal.h).
  *
  * Invariant of both directions: a result comes from exact integer
- * arithmetic or from the C library (strtod, snprintf); no step rounds
- * twice. The 128-bit integers are GCC's unsigned __int128. */
+ * arithmetic (Eisel–Lemire's product decides exactly in its range) or
+ * from the C library (strtod, snprintf); no step rounds twice. The
+ * 128-bit integers are GCC's unsigned __int128. */
 #include "decimal.h"
 
 #include <errno.h>
@@ -25,11 +26,41 @@ __extension__ typedef unsigned __int128 u128;
     X(59604644775390625) X(298023223876953125) X(1490116119384765625)       \
     X(7450580596923828125)
 #define AS_U64(v) UINT64_C(v),
-#define AS_RECIP(v) (~(u128)0 / UINT64_C(v)),
 static const uint64_t POW5[28] = {POW5_LIST(AS_U64)};
-/* floor(2^128 / 5^k) (5^k does not divide 2^128): division by 5^k as
- * two products (parse_exact) */
-static const u128 RECIP5[28] = {POW5_LIST(AS_RECIP)};
+
+/* Eisel–Lemire's table for 5^q, q = −27 .. −1 (entry q + 27), as
+ * fast_float generates it: floor(2^b / 5^−q) + 1 with b = 127 + the bit
+ * length of 5^−q, a 128-bit number with its top bit set, high word
+ * first. */
+static const uint64_t POW5_INV[27][2] = {
+    {UINT64_C(0x9e74d1b791e07e48), UINT64_C(0x775ea264cf55347e)},
+    {UINT64_C(0xc612062576589dda), UINT64_C(0x95364afe032a819e)},
+    {UINT64_C(0xf79687aed3eec551), UINT64_C(0x3a83ddbd83f52205)},
+    {UINT64_C(0x9abe14cd44753b52), UINT64_C(0xc4926a9672793543)},
+    {UINT64_C(0xc16d9a0095928a27), UINT64_C(0x75b7053c0f178294)},
+    {UINT64_C(0xf1c90080baf72cb1), UINT64_C(0x5324c68b12dd6339)},
+    {UINT64_C(0x971da05074da7bee), UINT64_C(0xd3f6fc16ebca5e04)},
+    {UINT64_C(0xbce5086492111aea), UINT64_C(0x88f4bb1ca6bcf585)},
+    {UINT64_C(0xec1e4a7db69561a5), UINT64_C(0x2b31e9e3d06c32e6)},
+    {UINT64_C(0x9392ee8e921d5d07), UINT64_C(0x3aff322e62439fd0)},
+    {UINT64_C(0xb877aa3236a4b449), UINT64_C(0x09befeb9fad487c3)},
+    {UINT64_C(0xe69594bec44de15b), UINT64_C(0x4c2ebe687989a9b4)},
+    {UINT64_C(0x901d7cf73ab0acd9), UINT64_C(0x0f9d37014bf60a11)},
+    {UINT64_C(0xb424dc35095cd80f), UINT64_C(0x538484c19ef38c95)},
+    {UINT64_C(0xe12e13424bb40e13), UINT64_C(0x2865a5f206b06fba)},
+    {UINT64_C(0x8cbccc096f5088cb), UINT64_C(0xf93f87b7442e45d4)},
+    {UINT64_C(0xafebff0bcb24aafe), UINT64_C(0xf78f69a51539d749)},
+    {UINT64_C(0xdbe6fecebdedd5be), UINT64_C(0xb573440e5a884d1c)},
+    {UINT64_C(0x89705f4136b4a597), UINT64_C(0x31680a88f8953031)},
+    {UINT64_C(0xabcc77118461cefc), UINT64_C(0xfdc20d2b36ba7c3e)},
+    {UINT64_C(0xd6bf94d5e57a42bc), UINT64_C(0x3d32907604691b4d)},
+    {UINT64_C(0x8637bd05af6c69b5), UINT64_C(0xa63f9a49c2c1b110)},
+    {UINT64_C(0xa7c5ac471b478423), UINT64_C(0x0fcf80dc33721d54)},
+    {UINT64_C(0xd1b71758e219652b), UINT64_C(0xd3c36113404ea4a9)},
+    {UINT64_C(0x83126e978d4fdf3b), UINT64_C(0x645a1cac083126ea)},
+    {UINT64_C(0xa3d70a3d70a3d70a), UINT64_C(0x3d70a3d70a3d70a4)},
+    {UINT64_C(0xcccccccccccccccc), UINT64_C(0xcccccccccccccccd)},
+};
 
 /* 10^0 .. 10^22: every one is a double exactly. */
 static const double POW10D[23] = {
@@ -57,18 +88,13 @@ static int clz128(u128 v)
     return hi ? __builtin_clzll(hi) : 64 + __builtin_clzll((uint64_t)v);
 }
 
-/* The double nearest to (n + f)·2^e2, ties to even, where f is 0 when
- * sticky is false and strictly between 0 and 1 (in units of n's last bit)
- * otherwise. False when the result would not be a normal double (the
- * caller then asks strtod, which handles subnormals and overflow).
- * n ≠ 0; sticky needs n ≥ 2^54 so that f lies below the rounding bit. */
-static bool round_to_double(u128 n, int e2, bool sticky, double *ret)
+/* The double nearest to n·2^e2 (n ≠ 0), ties to even; the caller's
+ * range keeps it normal (w·10^q for q in 0..27: at most 2^64 · 10^27). */
+static double round_to_double(u128 n, int e2)
 {
     int bits = 128 - clz128(n);
     uint64_t m;
     if (bits <= 53) {
-        if (sticky)
-            return false;
         m = (uint64_t)n << (53 - bits);
         e2 -= 53 - bits;
     } else {
@@ -76,7 +102,7 @@ static bool round_to_double(u128 n, int e2, bool sticky, double *ret)
         m = (uint64_t)(n >> sh);
         u128 rest = n & (((u128)1 << sh) - 1);
         u128 half = (u128)1 << (sh - 1);
-        if (rest > half || (rest == half && (sticky || (m & 1))))
+        if (rest > half || (rest == half && (m & 1)))
             m++;
         e2 += sh;
         if (m >> 53) {
@@ -84,12 +110,49 @@ static bool round_to_double(u128 n, int e2, bool sticky, double *ret)
             e2++;
         }
     }
-    int be = e2 + 52 + 1023;
-    if (be < 1 || be > 2046)
-        return false;
-    uint64_t b = (uint64_t)be << 52 | (m & MANT_MASK);
-    memcpy(ret, &b, sizeof b);
-    return true;
+    uint64_t b = (uint64_t)(e2 + 52 + 1023) << 52 | (m & MANT_MASK);
+    double d;
+    memcpy(&d, &b, sizeof d);
+    return d;
+}
+
+/* w·10^q for w ≠ 0 and −27 ≤ q ≤ −1 by Eisel–Lemire (Lemire, "Number
+ * parsing at a gigabyte per second", 2021, as fast_float does it): w
+ * normalised times the top 64 bits of 5^q, the next 64 bits added only
+ * when the product's rounding bits are all ones; then the 54 top bits
+ * rounded, ties to even where the product was exact. In this range
+ * 5^−q < 2^64, so the 128-bit product decides every rounding (fast_float's
+ * "safe exponents": no fallback; tests/unit/test_decimal.c against
+ * strtod), and the result is a normal double (1e-27 ≤ w·10^q < 2^64). */
+static double eisel_lemire(uint64_t w, int q)
+{
+    int lz = __builtin_clzll(w);
+    w <<= lz;
+    const uint64_t *t = POW5_INV[q + 27];
+    u128 z = (u128)w * t[0];
+    uint64_t hi = (uint64_t)(z >> 64), lo = (uint64_t)z;
+    if ((hi & 0x1FF) == 0x1FF) {
+        uint64_t h2 = (uint64_t)(((u128)w * t[1]) >> 64);
+        lo += h2;
+        hi += lo < h2;
+    }
+    int upper = (int)(hi >> 63), shift = upper + 9;
+    uint64_t m = hi >> shift;
+    /* floor(q · log2 10) + 63, the division rounding −q's product up */
+    int p2 = -((-(152170 + 65536) * q + 65535) / 65536) + 63 + upper - lz +
+             1023;
+    if (lo <= 1 && q >= -4 && (m & 3) == 1 && (m << shift) == hi)
+        m &= ~UINT64_C(1); /* exactly halfway: to even */
+    m += m & 1;
+    m >>= 1;
+    if (m >= UINT64_C(2) << 52) {
+        m = UINT64_C(1) << 52;
+        p2++;
+    }
+    uint64_t b = (uint64_t)p2 << 52 | (m & MANT_MASK);
+    double d;
+    memcpy(&d, &b, sizeof d);
+    return d;
 }
 
 /* w·10^q (w ≠ 0) when exact integer arithmetic decides it. */
@@ -100,26 +163,13 @@ static bool parse_exact(uint64_t w, int64_t q, double *ret)
         *ret = q < 0 ? d / POW10D[-q] : d * POW10D[q];
         return true;
     }
-    if (q >= 0 && q <= 27)
-        return round_to_double((u128)w * POW5[q], (int)q, false, ret);
+    if (q >= 0 && q <= 27) {
+        *ret = round_to_double((u128)w * POW5[q], (int)q);
+        return true;
+    }
     if (q < 0 && q >= -27) {
-        /* w·10^q = (w·2^(64+l) / 5^k) · 2^(q−64−l) with k = −q; the
-         * quotient has more than 64 bits, the remainder is the sticky
-         * part */
-        int l = __builtin_clzll(w);
-        uint64_t h = w << l, den = POW5[-q];
-        u128 num = (u128)h << 64, r = RECIP5[-q];
-        /* num·r / 2^128 lies in (num/den − 1, num/den]: its floor, formed
-         * exactly from h·r's two halves, is the quotient or one less, and
-         * the remainder says which */
-        u128 quo = (u128)h * (uint64_t)(r >> 64) +
-                   (((u128)h * (uint64_t)r) >> 64);
-        u128 rem = num - quo * den;
-        while (rem >= den) {
-            quo++;
-            rem -= den;
-        }
-        return round_to_double(quo, (int)q - 64 - l, rem != 0, ret);
+        *ret = eisel_lemire(w, (int)q);
+        return true;
     }
     return false;
 }

@@ -6,10 +6,10 @@
  * arithmetic decides most numbers without strtod: Clinger's fast path (at
  * most 2^53 in the digits, |exponent| ≤ 22: one correctly rounded IEEE
  * operation on exact operands), else the digits as a 64-bit integer w
- * (≤ 19 significant digits) times 10^q with |q| ≤ 27, rounded from a
- * 128-bit product w·5^q or quotient w·2^s / 5^−q whose remainder decides
- * the rounding. Anything else (more digits, larger exponents, results
- * outside the normal range) goes to strtod.
+ * (≤ 19 significant digits) times 10^q with |q| ≤ 27, rounded from the
+ * exact 128-bit product w·5^q (q ≥ 0) or, for q < 0, by Eisel–Lemire: w
+ * times a 128-bit 5^q, which for 5^−q < 2^64 decides every rounding.
+ * Anything else (more digits, larger exponents) goes to strtod.
  *
  * Writing: proto_decimal_format prints the same text as the loop
  * "%.15g, %.16g, %.17g — the first that strtod reads back as x", so files

@@ -161,6 +161,24 @@ static void test_parse_matches_strtod_on_random_decimals(void **state)
     }
 }
 
+/* The Eisel–Lemire range: up to 19 significant digits times 10^q, q from
+ * −27 to −1 (a scanner's 17-digit coordinates are all there), the
+ * digits random in value and in length. */
+static void test_parse_matches_strtod_on_digits_times_negative_powers(void **state)
+{
+    (void)state;
+    char s[48];
+    for (int i = 0; i < 400000; i++) {
+        uint64_t w = next64() % UINT64_C(10000000000000000000);
+        w >>= next64() % 64;
+        if (w == 0)
+            w = 1;
+        int q = -1 - (int)(next64() % 27);
+        snprintf(s, sizeof s, "%llue%d", (unsigned long long)w, q);
+        check_parse(s);
+    }
+}
+
 static void test_parse_matches_on_printed_doubles(void **state)
 {
     (void)state;
@@ -290,6 +308,7 @@ int main(void)
         cmocka_unit_test(test_format_matches_on_scanner_like_values),
         cmocka_unit_test(test_format_matches_on_short_and_boundary_values),
         cmocka_unit_test(test_parse_matches_strtod_on_random_decimals),
+        cmocka_unit_test(test_parse_matches_strtod_on_digits_times_negative_powers),
         cmocka_unit_test(test_parse_matches_on_printed_doubles),
         cmocka_unit_test(test_parse_rounds_halfway_cases_to_even),
         cmocka_unit_test(test_negative_zero_and_overflow),
