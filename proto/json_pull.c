@@ -29,6 +29,7 @@
 #include <string.h>
 
 #include "decimal.h"
+#include "json_digits.h"
 
 enum {
     TK_FAILED = -1, /* the lexer reported an error */
@@ -420,42 +421,10 @@ static bool is_digit(unsigned c)
     return c - '0' < 10;
 }
 
-/* Eight bytes at p as a little-endian word. */
-static uint64_t load8(const unsigned char *p)
-{
-    uint64_t v;
-    memcpy(&v, p, 8);
-#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
-    v = __builtin_bswap64(v);
-#endif
-    return v;
-}
-
-/* Non-zero in each byte of v that is no ASCII digit, at least up to the
- * first such byte (a carry of the +6 moves only bytes above a byte of
- * 0xFA or more, itself no digit). */
-static uint64_t nondigits(uint64_t v)
-{
-    return ((v & 0xF0F0F0F0F0F0F0F0u) ^ 0x3030303030303030u) |
-           (((v + 0x0606060606060606u) & 0xF0F0F0F0F0F0F0F0u) ^
-            0x3030303030303030u);
-}
-
 /* True when all eight bytes of v are ASCII digits. */
 static bool eight_digits(uint64_t v)
 {
-    return nondigits(v) == 0;
-}
-
-/* The value of eight digit bytes, first byte most significant. */
-static uint32_t eight_digits_value(uint64_t v)
-{
-    v -= 0x3030303030303030u;
-    v = v * 10 + (v >> 8);
-    v = ((v & 0x000000FF000000FFu) * (100 + (UINT64_C(1000000) << 32)) +
-         ((v >> 16 & 0x000000FF000000FFu) * (1 + (UINT64_C(10000) << 32)))) >>
-        32;
-    return (uint32_t)v;
+    return proto_nondigits(v) == 0;
 }
 
 /* What scan_number found. */
@@ -491,8 +460,8 @@ scan_number(const unsigned char *d, size_t n, size_t start, number_scan *ret)
     } else if (p < n && is_digit(d[p])) {
         /* eight digits at a time while they fit in w's 19 */
         uint64_t v;
-        while (nd <= 11 && n - p >= 8 && eight_digits(v = load8(d + p))) {
-            w = w * 100000000 + eight_digits_value(v);
+        while (nd <= 11 && n - p >= 8 && eight_digits(v = proto_load8(d + p))) {
+            w = w * 100000000 + proto_eight_digits_value(v);
             nd += 8;
             p += 8;
         }
@@ -530,8 +499,8 @@ scan_number(const unsigned char *d, size_t n, size_t start, number_scan *ret)
             return;
         }
         uint64_t v;
-        while (nd <= 11 && n - p >= 8 && eight_digits(v = load8(d + p))) {
-            uint32_t x = eight_digits_value(v);
+        while (nd <= 11 && n - p >= 8 && eight_digits(v = proto_load8(d + p))) {
+            uint32_t x = proto_eight_digits_value(v);
             /* leading zeros of the fraction are not significant: the
              * first byte that is no '0' (v's lowest) starts the digits */
             uint64_t z = v ^ 0x3030303030303030u;
@@ -622,25 +591,11 @@ bool proto_json_number(const void *data, size_t len, size_t start,
     const unsigned char *d = data;
     if (start >= len || (d[start] != '-' && !is_digit(d[start])))
         return false;
-    /* A short integer — 1 to 7 digits, no leading zero, then a byte that
-     * continues no number: a model's indices, two numbers in three —
-     * read from one word, without a branch per digit: the first byte of
-     * the word that is no digit ends it; the digits, moved to the word's
-     * top with '0's below them, are its value. */
-    if (len - start >= 8) {
-        uint64_t v = load8(d + start);
-        uint64_t bad = nondigits(v);
-        unsigned nd = bad ? (unsigned)__builtin_ctzll(bad) / 8 : 8;
-        unsigned next = nd < 8 ? (unsigned)(v >> 8 * nd) & 0xFF : 0;
-        if (nd >= 1 && nd < 8 && (nd == 1 || (v & 0xFF) != '0') &&
-            next != '.' && next != 'e' && next != 'E' && next < 0x80) {
-            unsigned sh = 8 * (8 - nd);
-            *ret_end = start + nd;
-            *ret_is_int = true;
-            *ret_integer = eight_digits_value(
-                v << sh | UINT64_C(0x3030303030303030) >> (64 - sh));
-            return true;
-        }
+    uint32_t u;
+    if (proto_json_short_uint(d, len, start, ret_end, &u)) {
+        *ret_is_int = true;
+        *ret_integer = u;
+        return true;
     }
     number_scan sc;
     scan_number(d, len, start, &sc);

@@ -23,6 +23,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "json_digits.h"
 #include "model_codec.h"
 
 #define FORMAT_NAME "facet-model/1"
@@ -620,10 +621,12 @@ static bool f_number(fast *f, double *ret)
     return true;
 }
 
-/* An index: a non-negative integer of 32 bits. */
+/* An index: a non-negative integer of 32 bits (a short one inline). */
 static bool f_index(fast *f, uint32_t *ret)
 {
     f_space(f);
+    if (proto_json_short_uint(f->d, f->n, f->p, &f->p, ret))
+        return true;
     bool is_int;
     int64_t i;
     double r;
