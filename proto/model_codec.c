@@ -411,6 +411,9 @@ static int fit_failed(uint32_t f, geo_err *err)
 static int check_coordinates(const geo_poly *p, geo_err *err)
 {
     double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    if (p->nverts > 0)
+        for (int k = 0; k < 3; k++)
+            lo[k] = hi[k] = p->verts[0][k];
     for (uint32_t v = 0; v < p->nverts; v++)
         for (int k = 0; k < 3; k++) {
             double x = p->verts[v][k];
@@ -419,8 +422,9 @@ static int check_coordinates(const geo_poly *p, geo_err *err)
                                    "vertices[%u][%d]: %g mm is beyond the "
                                    "±%g mm a model may span", v, k, x,
                                    PROTO_MAX_COORD);
-            lo[k] = v ? fmin(lo[k], x) : x;
-            hi[k] = v ? fmax(hi[k], x) : x;
+            /* x is finite: comparisons, not fmin/fmax's calls */
+            lo[k] = x < lo[k] ? x : lo[k];
+            hi[k] = x > hi[k] ? x : hi[k];
         }
     double extent = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
     if (extent > 0 && extent < PROTO_MIN_EXTENT)
