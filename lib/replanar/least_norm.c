@@ -114,6 +114,25 @@ static int cmp_u32(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+/* v[0..k) ascending: a row's columns are a facet's corners and a
+ * vertex's, mostly a dozen, where qsort's calls cost more than the sort;
+ * qsort beyond SMALL_SORT. */
+#define SMALL_SORT 32
+
+static void sort_u32(uint32_t *v, uint32_t k)
+{
+    if (k > SMALL_SORT) {
+        qsort(v, k, sizeof *v, cmp_u32);
+        return;
+    }
+    for (uint32_t i = 1; i < k; i++) {
+        uint32_t x = v[i], j = i;
+        for (; j > 0 && v[j - 1] > x; j--)
+            v[j] = v[j - 1];
+        v[j] = x;
+    }
+}
+
 /* M's pattern and values; wt and ws are the inverse weights of a turn and
  * a shift. Each row's columns are sorted and unique (a vertex twice in one
  * facet would otherwise repeat one). */
@@ -151,7 +170,7 @@ static int build_matrix(sys *s, const geo_poly *p, const uint8_t *fixed,
         if (!fixed[v])
             for (uint32_t j = s->vstart[v]; j < s->vstart[v + 1]; j++)
                 col[k++] = s->vrows[j];
-        qsort(col, k, sizeof *col, cmp_u32);
+        sort_u32(col, k);
         for (uint32_t i = 0; i < k; i++) {
             uint32_t q = col[i];
             if (i > 0 && q == col[i - 1])
