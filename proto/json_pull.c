@@ -460,7 +460,8 @@ scan_number(const unsigned char *d, size_t n, size_t start, number_scan *ret)
     } else if (p < n && is_digit(d[p])) {
         /* eight digits at a time while they fit in w's 19 */
         uint64_t v;
-        while (nd <= 11 && n - p >= 8 && eight_digits(v = proto_load8(d + p))) {
+        while (nd <= 11 && n - p >= 8 &&
+               eight_digits(v = proto_load8(d + p))) {
             w = w * 100000000 + proto_eight_digits_value(v);
             nd += 8;
             p += 8;
@@ -499,7 +500,8 @@ scan_number(const unsigned char *d, size_t n, size_t start, number_scan *ret)
             return;
         }
         uint64_t v;
-        while (nd <= 11 && n - p >= 8 && eight_digits(v = proto_load8(d + p))) {
+        while (nd <= 11 && n - p >= 8 &&
+               eight_digits(v = proto_load8(d + p))) {
             uint32_t x = proto_eight_digits_value(v);
             /* leading zeros of the fraction are not significant: the
              * first byte that is no '0' (v's lowest) starts the digits */

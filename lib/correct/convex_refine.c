@@ -305,7 +305,6 @@ static int schur_factor(blocks *B, blocks *S, uint32_t nplanes, uint32_t ncl,
     return r == -ENOMEM ? r : r < 0 ? -EDOM : 0;
 }
 
-
 int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
                       const uint32_t *src, double cluster,
                       double (*planes)[4], uint32_t nplanes,
