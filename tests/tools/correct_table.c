@@ -6,7 +6,8 @@
  *
  *   correct_table [--cuts brilliant,princess,...] [--seeds 1,2,3]
  *                 [--ks 100,400,800] [--noise 1,...]  (µm)
- *                 [--suite N [--first I]] [--method auto|merge|planes]
+ *                 [--suite N [--first I]]
+ *                 [--method auto|merge|planes|groups]
  *                 [--fit area|hinge|silhouette] [--rows] [--models DIR]
  *                 [--write DIR]
  *
@@ -16,7 +17,9 @@
  * uniform in 0–3 µm, a random view phase and stone azimuth. --method:
  * auto = geo_correct as it defaults (the convex path on), merge =
  * the convex path off (the Palachev 2012 merge only), planes = geo_convex_planes_find
- * intersected by the simulator (the planes alone, no checks); --fit
+ * intersected by the simulator (the planes alone, no checks), groups =
+ * the true grouping given and the rest as geo_correct's silhouette fit
+ * (correct_known_groups: what the grouping costs); --fit
  * the convex path's plane fit (convex.h; geo_correct's by default; with
  * --method planes the silhouette fit adjusts the planes, still without
  * the checks). --write: each row's stone, scan and result also go to
@@ -44,6 +47,7 @@
 #include <time.h>
 
 #include "convex.h"
+#include "vec.h"
 #include "correct.h"
 #include "fidelity.h"
 #include "halfspace.h"
@@ -58,7 +62,7 @@ static double now(void)
     return (double)t.tv_sec + (double)t.tv_nsec * 1e-9;
 }
 
-enum method { M_AUTO, M_MERGE, M_PLANES };
+enum method { M_AUTO, M_MERGE, M_PLANES, M_GROUPS };
 
 #define MAX_CUTS 16
 #define NKS 4
@@ -117,12 +121,96 @@ static void note_worst(totals *t, const char *name, double rec)
 /* The correction by the chosen method; a new model or NULL (msg set). */
 static enum geo_convex_fit fit; /* geo_correct's unless --fit */
 
-static geo_poly *correct(const geo_poly *scan, enum method m, bool *valid,
-                         char *msg, size_t len)
+/* --method groups: the grouping known, the rest as geo_correct's
+ * silhouette fit does it. Each scan facet goes to the true plane its
+ * vertices lie nearest (the largest distance of its vertices the least);
+ * a group's plane is the sum of its facets' area vectors, through their
+ * area-weighted centroid (the area fit's normal and offset), a true facet
+ * no scan facet went to keeps its true plane; the planes are then
+ * adjusted to the silhouettes (geo_convex_refine from their intersection)
+ * and intersected. What the correction could give back were its groups
+ * right: its recovered % against auto's says how much of the gap to the
+ * bound the grouping makes. A new model or NULL (msg set). */
+static geo_poly *correct_known_groups(const geo_poly *scan,
+                                      const geo_poly *truth, char *msg,
+                                      size_t len)
+{
+    uint32_t n = truth->nfacets;
+    double(*pl)[4] = malloc(((size_t)n + 1) * sizeof *pl);
+    double(*acc)[4] = calloc((size_t)n + 1, sizeof *acc);
+    if (!pl || !acc) {
+        free(pl), free(acc);
+        snprintf(msg, len, "out of memory");
+        return NULL;
+    }
+    for (uint32_t f = 0; f < n; f++)
+        geo_poly_facet_plane(truth, f, pl[f]);
+    for (uint32_t g = 0; g < scan->nfacets; g++) {
+        uint32_t nv = geo_poly_facet_size(scan, g);
+        const uint32_t *v = geo_poly_facet(scan, g);
+        double best = INFINITY, av[3], c[3] = {0, 0, 0};
+        uint32_t bf = 0;
+        for (uint32_t f = 0; f < n; f++) {
+            double d = 0;
+            for (uint32_t i = 0; i < nv; i++)
+                d = fmax(d, fabs(geo_vdot(pl[f], scan->verts[v[i]]) + pl[f][3]));
+            if (d < best)
+                best = d, bf = f;
+        }
+        geo_poly_facet_area_vector(scan, g, av);
+        for (uint32_t i = 0; i < nv; i++)
+            for (int k = 0; k < 3; k++)
+                c[k] += scan->verts[v[i]][k] / nv;
+        for (int k = 0; k < 3; k++)
+            acc[bf][k] += av[k];
+        acc[bf][3] += geo_vdot(av, c); /* area × the offset along av */
+    }
+    for (uint32_t f = 0; f < n; f++) {
+        double a = sqrt(geo_vdot(acc[f], acc[f]));
+        if (!(a > 0))
+            continue;
+        for (int k = 0; k < 3; k++)
+            pl[f][k] = acc[f][k] / a;
+        pl[f][3] = -acc[f][3] / a;
+    }
+    free(acc);
+    geo_err err;
+    double noise = 0, sc;
+    geo_merge_opts mo;
+    geo_merge_opts_default(&mo);
+    geo_poly *est = NULL;
+    uint32_t *src = NULL;
+    enum geo_halfspace_status st;
+    if (geo_merge_surface_noise(scan, NULL, &mo, NULL, &noise, &err) == 0 &&
+        geo_halfspace_intersect(&pl[0][0], n,
+                                GEO_HALFSPACE_MERGE * geo_poly_size(scan),
+                                &est, &src, &st, &err) == 0)
+        geo_convex_refine(scan, est, src, GEO_CONVEX_REFINE_CLUSTER * noise,
+                          pl, n, NULL, &sc);
+    geo_poly_free(est);
+    free(src);
+    geo_poly *p = sim_halfspace_intersection(&pl[0][0], n, 10.0);
+    free(pl);
+    if (!p)
+        snprintf(msg, len, "empty intersection");
+    return p;
+}
+
+static geo_poly *correct(const geo_poly *scan, const geo_poly *truth,
+                         enum method m, bool *valid, char *msg, size_t len)
 {
     geo_err err;
-    geo_poly *p = geo_poly_copy(scan);
     *valid = false;
+    if (m == M_GROUPS) {
+        geo_poly *q = correct_known_groups(scan, truth, msg, len);
+        geo_stats st;
+        if (q && geo_inspect(q, NULL, NULL, &st, &err) == 0)
+            *valid = st.valid;
+        if (q)
+            geo_stats_clear(&st);
+        return q;
+    }
+    geo_poly *p = geo_poly_copy(scan);
     if (m == M_PLANES) {
         uint32_t views = 0;
         double noise = 0;
@@ -216,7 +304,7 @@ static void row(const char *cut, int ci, unsigned seed, unsigned k,
     char msg[600] = "";
     bool valid;
     double t0 = now();
-    geo_poly *p = correct(scan, m, &valid, msg, sizeof msg);
+    geo_poly *p = correct(scan, truth, m, &valid, msg, sizeof msg);
     double ms = (now() - t0) * 1e3;
     t->rows++;
     char file[96];
@@ -345,12 +433,29 @@ int main(int argc, char **argv)
             suite = (unsigned)strtoul(v, NULL, 10);
         else if (strcmp(a, "--first") == 0)
             first = (unsigned)strtoul(v, NULL, 10);
-        else if (strcmp(a, "--method") == 0)
-            m = strcmp(v, "merge") == 0 ? M_MERGE : strcmp(v, "planes") == 0 ? M_PLANES : M_AUTO;
-        else if (strcmp(a, "--fit") == 0)
-            fit = strcmp(v, "hinge") == 0        ? GEO_CONVEX_FIT_HINGE
-                  : strcmp(v, "silhouette") == 0 ? GEO_CONVEX_FIT_SILHOUETTE
-                                                 : GEO_CONVEX_FIT_AREA;
+        else if (strcmp(a, "--method") == 0) {
+            static const char *names[] = {"auto", "merge", "planes", "groups"};
+            int k = 0;
+            while (k < 4 && strcmp(v, names[k]) != 0)
+                k++;
+            if (k == 4) {
+                fprintf(stderr, "correct_table: --method: unknown '%s' "
+                        "(auto, merge, planes, groups)\n", v);
+                return 2;
+            }
+            m = (enum method)k;
+        } else if (strcmp(a, "--fit") == 0) {
+            static const char *names[] = {"area", "hinge", "silhouette"};
+            int k = 0;
+            while (k < 3 && strcmp(v, names[k]) != 0)
+                k++;
+            if (k == 3) {
+                fprintf(stderr, "correct_table: --fit: unknown '%s' "
+                        "(area, hinge, silhouette)\n", v);
+                return 2;
+            }
+            fit = (enum geo_convex_fit)k;
+        }
         else if (strcmp(a, "--models") == 0)
             models = v;
         else if (strcmp(a, "--write") == 0)
