@@ -951,8 +951,8 @@ static bool pair_test(const geo_poly *p, const facet_ref *F,
     uint64_t common = F->mask & G->mask;
     bool pos = false, neg = false;
     geo_orient3d_plane pl;
-    plane_of(p, F, &pl);
     if (!common) {
+        plane_of(p, F, &pl);
         /* no vertex in common (most pairs that are not neighbours): G
          * strictly on one side of π_F is apart, as touching_hits would
          * find with no side 0; anything else takes the general path */
@@ -994,6 +994,9 @@ static bool pair_test(const geo_poly *p, const facet_ref *F,
             separated_by_shared_edge(p, F, G, gpos, iu, iw))
             return false;
     }
+    /* after the shared-edge shortcut, which most neighbours in a
+     * polygon mesh take without F's plane */
+    plane_of(p, F, &pl);
     for (uint32_t j = 0; j < G->n; j++) {
         sg[j] = (int8_t)(gpos[j] >= 0
                              ? 0
