@@ -148,6 +148,16 @@ int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
                       double (*planes)[4], uint32_t nplanes,
                       const uint8_t *held, double *ret_scale);
 
+/* The view that cut each facet of a raw scan, as an integer key (the
+ * facets of one view share it), into key (room for scan->nfacets; scan
+ * must have planes). A side view looks along a horizontal direction,
+ * which lies in the facet's plane: z × its normal, keyed by azimuth
+ * modulo 180°. A vertical facet's plane contains z as well: the top
+ * view's (key −1) unless a facet that is not vertical has its side key.
+ * A horizontal facet does not say its azimuth: a key of its own
+ * (−2 − its index). Returns 0 or -ENOMEM. */
+int geo_convex_view_keys(const geo_poly *scan, int64_t *key);
+
 /* What geo_correct_convex did. */
 typedef struct geo_convex_report {
     uint32_t groups, planes, dropped; /* see geo_convex_planes */

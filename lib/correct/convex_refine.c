@@ -9,6 +9,12 @@
  *
  *     m_j · x_a + d_j = noise,   m_j · x_b + d_j = noise.
  *
+ * Two facets of one view that share a spanning vertex are the two edges
+ * at one corner of its silhouette: they pass through the same noisy
+ * point, so together they measure that vertex once in both directions
+ * across the view (corner), not twice along their normals with
+ * independent noise.
+ *
  * The unknowns are the stone's planes (each a tilt in two directions and
  * an offset) and its vertices (three coordinates each), tied by the
  * incidences: a vertex lies on every plane of its facets, so where four
@@ -65,6 +71,10 @@
 /* A spanning vertex lies at most this many residual scales below the
  * highest (before the first residuals: the cluster radius). */
 #define SPAN_SCALES 6.0
+/* The least sine between a corner's two normals (corner): the residual
+ * along the silhouette is the planes' residuals over it, 200 times at
+ * this limit. */
+#define CORNER_MIN_SIN 0.005
 
 static int cmp_u64(const void *a, const void *b)
 {
@@ -105,6 +115,49 @@ static void add_outer(blocks *b, const uint32_t *ti, const double *g,
                 for (int s = 0; s < 3; s++)
                     m[r][s] += w * g[3 * a + r] * g[3 * c + s];
         }
+}
+
+/* Two planes m1, m2 of one view through one spanning vertex x. A
+ * silhouette edge joins two noisy projected vertices and the edges on
+ * either side of a corner share it (Palachev 2012, §1.2: the silhouette
+ * is the hull of the projected vertices), so the two planes measure one
+ * noisy point: x's two components across the view direction d = m1 × m2,
+ * each with the silhouette noise once — not two independent measurements
+ * along m1 and m2, which count the noise along them twice and leave out
+ * the component along the silhouette. Adds the corner's residual ρ (x's
+ * offset from the planes' common line, across d), Huber-weighted at huber
+ * on its length, to vertex block ti of b and to its right-hand side r.
+ * False, nothing added (the caller takes the planes one by one), when the
+ * normals are within CORNER_MIN_SIN of parallel or the line passes
+ * farther than reject from x (not this vertex's corner: a pair the
+ * estimate took wrongly). */
+static bool corner(const double m1[4], const double m2[4], const double x[3],
+                   double huber, double reject, blocks *b, uint32_t ti,
+                   double (*r)[3])
+{
+    double d[3];
+    geo_vcross(m1, m2, d);
+    double sn = sqrt(geo_vdot(d, d));
+    if (!(sn > CORNER_MIN_SIN))
+        return false;
+    geo_vscale(d, 1 / sn, d);
+    double c = geo_vdot(m1, m2), den = 1 - c * c;
+    double r1 = geo_vdot(m1, x) + m1[3], r2 = geo_vdot(m2, x) + m2[3];
+    double al = (r1 - c * r2) / den, be = (r2 - c * r1) / den;
+    double rho[3];
+    for (int k = 0; k < 3; k++)
+        rho[k] = al * m1[k] + be * m2[k];
+    double len = sqrt(geo_vdot(rho, rho));
+    if (len > reject)
+        return false;
+    double w = len <= huber ? 1 : huber / len;
+    double (*blk)[3] = block_at(b, ti, ti);
+    for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 3; k++)
+            blk[i][k] += w * ((i == k) - d[i] * d[k]);
+    for (int k = 0; k < 3; k++)
+        r[k][0] -= w * rho[k];
+    return true;
 }
 
 /* c = a · b (3×3). */
@@ -305,6 +358,65 @@ static int schur_factor(blocks *B, blocks *S, uint32_t nplanes, uint32_t ncl,
     return r == -ENOMEM ? r : r < 0 ? -EDOM : 0;
 }
 
+/* One measurement: vertex c (of x) by scan facet j, j's view keyed key. */
+typedef struct meas {
+    int64_t key;
+    uint32_t c, j;
+} meas;
+
+static int cmp_meas(const void *x, const void *y)
+{
+    const meas *a = x, *b = y;
+    if (a->key != b->key)
+        return a->key < b->key ? -1 : 1;
+    if (a->c != b->c)
+        return a->c < b->c ? -1 : 1;
+    return (a->j > b->j) - (a->j < b->j);
+}
+
+static int cmp_i64(const void *x, const void *y)
+{
+    int64_t a = *(const int64_t *)x, b = *(const int64_t *)y;
+    return (a > b) - (a < b);
+}
+
+/* A side view's key for plane m (convex.h, geo_convex_view_keys): the
+ * views lie at least 0.2° apart and a plane's rounding moves the azimuth
+ * by 1e-15, so units of 1e-9 rad part them. */
+static int64_t side_key(const double m[3], uint32_t j)
+{
+    double h = hypot(m[0], m[1]);
+    if (!(h > 1e-12))
+        return -2 - (int64_t)j;
+    double a = atan2(m[0], -m[1]);
+    if (a < 0)
+        a += M_PI;
+    if (a >= M_PI - 5e-10)
+        a = 0;
+    return (int64_t)llround(a * 1e9);
+}
+
+int geo_convex_view_keys(const geo_poly *scan, int64_t *key)
+{
+    uint32_t n = scan->nfacets;
+    int64_t *side = malloc(((size_t)n + 1) * sizeof *side);
+    if (!side)
+        return -ENOMEM;
+    size_t ns = 0;
+    for (uint32_t j = 0; j < n; j++) {
+        key[j] = side_key(scan->planes[j], j);
+        if (fabs(scan->planes[j][2]) > 1e-12)
+            side[ns++] = key[j];
+    }
+    qsort(side, ns, sizeof *side, cmp_i64);
+    for (uint32_t j = 0; j < n; j++)
+        if (fabs(scan->planes[j][2]) <= 1e-12 && key[j] >= 0 &&
+            !bsearch(&key[j], side, ns, sizeof *side, cmp_i64))
+            key[j] = -1;
+    free(side);
+    return 0;
+}
+
 int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
                       const uint32_t *src, double cluster,
                       double (*planes)[4], uint32_t nplanes,
@@ -323,15 +435,17 @@ int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
     double (*t2)[3] = malloc(((size_t)nplanes + 1) * sizeof *t2);
     double *res = malloc((2 * (size_t)scan->nfacets + 1) * sizeof *res);
     uint32_t (*pair)[2] = malloc(((size_t)scan->nfacets + 1) * sizeof *pair);
+    int64_t *vkey = malloc(((size_t)scan->nfacets + 1) * sizeof *vkey);
+    meas *ms = malloc((2 * (size_t)scan->nfacets + 1) * sizeof *ms);
     double (*pl)[4] = malloc(((size_t)nplanes + 1) * sizeof *pl);
     blocks B = {0}, S = {0};
     double (*vinv)[3][3] = NULL;
-    uint32_t *adj_start = NULL, *adj = NULL, *stamp = NULL;
+    uint32_t *adj_start = NULL, *adj = NULL, *stamp = NULL, *mstart = NULL;
     uint32_t *rp = NULL, *ci = NULL;
     double *val = NULL, (*rhs)[3] = NULL, (*rhs0)[3] = NULL;
     geo_spchol *fac = NULL;
     if (!par || !cl || !x || !cand || !ch || !inc || !t1 || !t2 || !res ||
-        !pair || !pl)
+        !pair || !pl || !vkey || !ms || geo_convex_view_keys(scan, vkey) < 0)
         goto done;
     memcpy(pl, planes, nplanes * sizeof *pl);
 
@@ -367,9 +481,10 @@ int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
 
     /* the vertices' neighbours across the estimate's edges */
     adj_start = calloc((size_t)ncl + 2, sizeof *adj_start);
+    mstart = malloc(((size_t)ncl + 2) * sizeof *mstart);
     adj = malloc(((size_t)nc + 1) * sizeof *adj);
     stamp = calloc((size_t)ncl + 1, sizeof *stamp);
-    if (!adj_start || !adj || !stamp)
+    if (!adj_start || !adj || !stamp || !mstart)
         goto done;
     /* each facet edge once per side: its corner's vertex to the next */
     for (int pass = 0; pass < 2; pass++) {
@@ -509,16 +624,41 @@ int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
         scale = fmax(nr ? 1.4826 * geo_select_kth(res, nr, nr / 2) : 0, 1e-7);
         *ret_scale = scale;
         double dmax = 0;
-        for (uint32_t j = 0; j < scan->nfacets; j++) {
-            const double *mj = scan->planes[j];
-            for (int e = 0; e < 2; e++) {
-                uint32_t c = pair[j][e];
-                if (c == GEO_NONE)
-                    continue;
+        /* the measurements by vertex (counting), each vertex's by view
+         * and facet (insertion: a vertex has a few dozen at most) */
+        size_t nm = 0;
+        memset(mstart, 0, ((size_t)ncl + 2) * sizeof *mstart);
+        for (uint32_t j = 0; j < scan->nfacets; j++)
+            for (int e = 0; e < 2; e++)
+                if (pair[j][e] != GEO_NONE)
+                    mstart[pair[j][e] + 2]++, nm++;
+        for (uint32_t c = 0; c < ncl; c++)
+            mstart[c + 2] += mstart[c + 1];
+        for (uint32_t j = 0; j < scan->nfacets; j++)
+            for (int e = 0; e < 2; e++)
+                if (pair[j][e] != GEO_NONE)
+                    ms[mstart[pair[j][e] + 1]++] = (meas){vkey[j], pair[j][e], j};
+        for (uint32_t c = 0; c < ncl; c++)
+            for (uint32_t i = mstart[c] + 1; i < mstart[c + 1]; i++)
+                for (uint32_t k = i; k > mstart[c] && cmp_meas(&ms[k - 1], &ms[k]) > 0; k--) {
+                    meas t = ms[k];
+                    ms[k] = ms[k - 1];
+                    ms[k - 1] = t;
+                }
+        for (size_t a = 0, b; a < nm; a = b) {
+            for (b = a + 1; b < nm && ms[b].key == ms[a].key && ms[b].c == ms[a].c;)
+                b++;
+            uint32_t c = ms[a].c, ti = nplanes + c;
+            if (b - a == 2 && corner(scan->planes[ms[a].j],
+                                     scan->planes[ms[a + 1].j], x[c],
+                                     HUBER * scale, SPAN_SCALES * scale, &B,
+                                     ti, &rhs[3 * ti]))
+                continue;
+            for (size_t i = a; i < b; i++) {
+                const double *mj = scan->planes[ms[i].j];
                 double rr = geo_vdot(mj, x[c]) + mj[3];
                 double w = fabs(rr) <= HUBER * scale ? 1
                                                       : HUBER * scale / fabs(rr);
-                uint32_t ti = nplanes + c;
                 add_outer(&B, &ti, mj, 1, w);
                 for (int k = 0; k < 3; k++)
                     rhs[3 * ti + k][0] -= w * mj[k] * rr;
@@ -599,6 +739,7 @@ done:
     free(par), free(cl), free(x), free(cand), free(ch), free(inc);
     free(t1), free(t2), free(res);
     free(pair), free(pl), free(B.rp), free(B.ci), free(B.v);
+    free(vkey), free(ms), free(mstart);
     free(S.rp), free(S.ci), free(S.v), free(vinv);
     free(adj_start), free(adj), free(stamp);
     free(rp), free(ci), free(val), free(rhs), free(rhs0);

@@ -20,6 +20,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "convex.h"
 #include "spchol.h"
 #include "stone_sim.h"
 #include "vec.h"
@@ -200,19 +201,41 @@ done:
     return r;
 }
 
+/* One measurement of the scan: stone vertex v measured along the normal
+ * of scan facet j, from the view keyed key. */
+typedef struct span_rec {
+    int64_t key;
+    uint32_t v, j;
+} span_rec;
+
+static int cmp_span_rec(const void *x, const void *y)
+{
+    const span_rec *a = x, *b = y;
+    if (a->key != b->key)
+        return a->key < b->key ? -1 : 1;
+    if (a->v != b->v)
+        return a->v < b->v ? -1 : 1;
+    return (a->j > b->j) - (a->j < b->j);
+}
+
 int sim_scan_bound_of_scan(const geo_poly *stone, const geo_poly *scan,
                            double sigma, double tol_deg, double *facet_sd_deg,
                            sim_scan_bound *ret)
 {
     if (!(sigma > 0))
         return bound_of(stone, NULL, sigma, tol_deg, facet_sd_deg, ret);
-    uint32_t nv = stone->nverts;
+    uint32_t nv = stone->nverts, nj = scan->nfacets;
     double (*q)[3][3] = calloc((size_t)nv + 1, sizeof *q);
-    if (!q)
+    span_rec *rec = malloc((2 * (size_t)nj + 1) * sizeof *rec);
+    int64_t *key = malloc(((size_t)nj + 1) * sizeof *key);
+    if (!q || !rec || !key || geo_convex_view_keys(scan, key) < 0) {
+        free(q), free(rec), free(key);
         return -ENOMEM;
+    }
     /* each scan facet measures, along its normal, the two stone vertices
      * that span it: the two highest in its direction */
-    for (uint32_t j = 0; j < scan->nfacets; j++) {
+    size_t nr = 0;
+    for (uint32_t j = 0; j < nj; j++) {
         const double *m = scan->planes[j];
         uint32_t top[2] = {UINT32_MAX, UINT32_MAX};
         double s1 = -INFINITY, s2 = -INFINITY;
@@ -227,12 +250,32 @@ int sim_scan_bound_of_scan(const geo_poly *stone, const geo_poly *scan,
         }
         for (int e = 0; e < 2; e++)
             if (top[e] != UINT32_MAX)
-                for (int a = 0; a < 3; a++)
-                    for (int c = 0; c < 3; c++)
-                        q[top[e]][a][c] += m[a] * m[c];
+                rec[nr++] = (span_rec){key[j], top[e], j};
+    }
+    /* The planes of one view through one vertex measure the same noisy
+     * projected point (consecutive edges of a silhouette share their
+     * corner): together they observe its components along their normals,
+     * with one noise, so the information is the projection onto the span
+     * of those normals (both image directions once two of them differ),
+     * not the sum of one term per plane. */
+    qsort(rec, nr, sizeof *rec, cmp_span_rec);
+    for (size_t a = 0, b; a < nr; a = b) {
+        for (b = a + 1; b < nr && rec[b].key == rec[a].key && rec[b].v == rec[a].v;)
+            b++;
+        const double *m1 = scan->planes[rec[a].j];
+        double d[3] = {0, 0, 0}, dl = 0;
+        for (size_t i = a + 1; i < b && !(dl > 1e-9); i++) {
+            geo_vcross(m1, scan->planes[rec[i].j], d);
+            dl = sqrt(geo_vdot(d, d));
+        }
+        double (*qv)[3] = q[rec[a].v];
+        for (int r = 0; r < 3; r++)
+            for (int c = 0; c < 3; c++)
+                qv[r][c] += dl > 1e-9 ? (r == c) - d[r] * d[c] / (dl * dl)
+                                      : m1[r] * m1[c];
     }
     int r = bound_of(stone, (const double(*)[3][3])q, sigma, tol_deg,
                      facet_sd_deg, ret);
-    free(q);
+    free(q), free(rec), free(key);
     return r;
 }

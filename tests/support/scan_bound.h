@@ -46,7 +46,10 @@ int sim_scan_bound_measure(const geo_poly *stone, uint32_t k, double sigma,
 /* The same bound with only what the scanned model keeps: each facet of
  * scan (sim_scan_phase of stone, noise sigma in mm) is one silhouette
  * edge, and measures the two stone vertices that span it along its
- * normal; the silhouette planes the intersection cut away measure
+ * normal — but two facets of one view (geo_convex_view_keys) through one
+ * vertex are the edges at one corner of its silhouette, one noisy point:
+ * together they measure the vertex in both directions across the view,
+ * once. The silhouette planes the intersection cut away measure
  * nothing. A correction sees the scan, not the silhouettes, so this is
  * its bound (still optimistic: the surviving planes are the innermost,
  * a bias the bound does not model). */
