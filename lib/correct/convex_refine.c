@@ -380,9 +380,10 @@ static int cmp_i64(const void *x, const void *y)
     return (a > b) - (a < b);
 }
 
-/* A side view's key for plane m (convex.h, geo_convex_view_keys): the
- * views lie at least 0.2° apart and a plane's rounding moves the azimuth
- * by 1e-15, so units of 1e-9 rad part them. */
+/* A side view's key for plane m (convex.h, geo_convex_view_keys): views
+ * lie far more than 1e-9 rad apart (K = 2400: 1.3e-3 rad) and a plane's
+ * rounding moves the azimuth by about 1e-15, so units of 1e-9 rad part
+ * them. */
 static int64_t side_key(const double m[3], uint32_t j)
 {
     double h = hypot(m[0], m[1]);
@@ -637,16 +638,19 @@ int geo_convex_refine(const geo_poly *scan, const geo_poly *est,
         for (uint32_t j = 0; j < scan->nfacets; j++)
             for (int e = 0; e < 2; e++)
                 if (pair[j][e] != GEO_NONE)
-                    ms[mstart[pair[j][e] + 1]++] = (meas){vkey[j], pair[j][e], j};
+                    ms[mstart[pair[j][e] + 1]++] =
+                        (meas){vkey[j], pair[j][e], j};
         for (uint32_t c = 0; c < ncl; c++)
             for (uint32_t i = mstart[c] + 1; i < mstart[c + 1]; i++)
-                for (uint32_t k = i; k > mstart[c] && cmp_meas(&ms[k - 1], &ms[k]) > 0; k--) {
+                for (uint32_t k = i;
+                     k > mstart[c] && cmp_meas(&ms[k - 1], &ms[k]) > 0; k--) {
                     meas t = ms[k];
                     ms[k] = ms[k - 1];
                     ms[k - 1] = t;
                 }
         for (size_t a = 0, b; a < nm; a = b) {
-            for (b = a + 1; b < nm && ms[b].key == ms[a].key && ms[b].c == ms[a].c;)
+            for (b = a + 1;
+                 b < nm && ms[b].key == ms[a].key && ms[b].c == ms[a].c;)
                 b++;
             uint32_t c = ms[a].c, ti = nplanes + c;
             if (b - a == 2 && corner(scan->planes[ms[a].j],

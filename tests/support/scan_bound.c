@@ -260,7 +260,8 @@ int sim_scan_bound_of_scan(const geo_poly *stone, const geo_poly *scan,
      * not the sum of one term per plane. */
     qsort(rec, nr, sizeof *rec, cmp_span_rec);
     for (size_t a = 0, b; a < nr; a = b) {
-        for (b = a + 1; b < nr && rec[b].key == rec[a].key && rec[b].v == rec[a].v;)
+        for (b = a + 1;
+             b < nr && rec[b].key == rec[a].key && rec[b].v == rec[a].v;)
             b++;
         const double *m1 = scan->planes[rec[a].j];
         double d[3] = {0, 0, 0}, dl = 0;

@@ -153,7 +153,8 @@ static geo_poly *correct_known_groups(const geo_poly *scan,
         for (uint32_t f = 0; f < n; f++) {
             double d = 0;
             for (uint32_t i = 0; i < nv; i++)
-                d = fmax(d, fabs(geo_vdot(pl[f], scan->verts[v[i]]) + pl[f][3]));
+                d = fmax(d, fabs(geo_vdot(pl[f], scan->verts[v[i]]) +
+                                 pl[f][3]));
             if (d < best)
                 best = d, bf = f;
         }

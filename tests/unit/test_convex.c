@@ -714,7 +714,8 @@ static void test_a_silhouette_corner_is_one_measurement(void **state)
         assert_int_equal(geo_correct(scan, &o, NULL, &rep, &err), 0);
         assert_true(rep.after.valid);
         sim_fidelity fd;
-        assert_int_equal(sim_fidelity_measure(stone, scan, 0.25, 0.005, &fd), 0);
+        assert_int_equal(
+            sim_fidelity_measure(stone, scan, 0.25, 0.005, &fd), 0);
         truth += fd.truth;
         rec += fd.recovered;
         geo_correct_report_clear(&rep);

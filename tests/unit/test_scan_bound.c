@@ -167,9 +167,10 @@ static void test_bound_scales_with_the_noise(void **state)
     geo_poly_free(stone);
 }
 
-/* The scanned model keeps a part of the silhouettes' measurements (one
- * direction of two vertices per surviving plane), so what it holds is
- * less: per facet and in all. */
+/* The scanned model keeps a part of the silhouettes' measurements (two
+ * vertices per surviving plane, along its normal, or across the view at
+ * a corner two planes of one view share), so what it holds is less: in
+ * all, and per facet to within the noise-free hull's omissions. */
 static void test_the_scan_holds_less_than_its_silhouettes(void **state)
 {
     (void)state;
