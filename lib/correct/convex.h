@@ -135,10 +135,11 @@ int geo_convex_planes_find_topo(const geo_poly *p, const geo_topo *t,
  * their intersection (geo_halfspace_intersect) and src its facets'
  * planes; vertices of est closer than cluster (mm) are one vertex.
  * held (may be NULL): per plane, nonzero for one that stays where it is
- * while the others and all vertices move. *ret_scale gets the robust scale of the residuals at the last step
- * (the planes adjusted by the steps before it): the silhouettes' own
- * noise, mm. Returns 0, -EINVAL (the normal equations not positive
- * definite: planes unchanged), -ENOMEM. */
+ * while the others and all vertices move. *ret_scale gets the robust
+ * scale of the residuals at the planes returned: the silhouettes' own
+ * noise, mm. A Gauss–Newton step that raises that scale is not taken
+ * (the planes before it are returned). Returns 0, -EINVAL (the normal
+ * equations not positive definite: planes unchanged), -ENOMEM. */
 /* The cluster radius geo_correct_convex passes, in noise bounds (the
  * larger of geo_convex_planes' dev0 and hinge_noise). */
 #define GEO_CONVEX_REFINE_CLUSTER 3.0
