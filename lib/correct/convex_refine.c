@@ -367,13 +367,11 @@ typedef struct meas {
     uint32_t c, j;
 } meas;
 
-static int cmp_meas(const void *x, const void *y)
+/* The order within one vertex's measurements: by view, then facet. */
+static int cmp_meas(const meas *a, const meas *b)
 {
-    const meas *a = x, *b = y;
     if (a->key != b->key)
         return a->key < b->key ? -1 : 1;
-    if (a->c != b->c)
-        return a->c < b->c ? -1 : 1;
     return (a->j > b->j) - (a->j < b->j);
 }
 
